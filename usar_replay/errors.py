@@ -1,0 +1,61 @@
+"""The one error hierarchy of usar-replay.
+
+Every error a *user* can cause (a bad file, a bad scenario, a bad option) is a :class:`UsarError`;
+the CLI prints its message as one line and exits with its ``exit_code``. Anything else is a bug
+and is allowed to raise with a traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "UsarError",
+    "UsageError",
+    "InvalidScenario",
+    "LogError",
+    "NotAnMcapFile",
+    "IncompleteLog",
+    "MissingTopic",
+    "NotBuiltYet",
+]
+
+
+class UsarError(Exception):
+    """Base of user-facing errors: ``str(err)`` is one line saying what is wrong and what to do."""
+
+    exit_code: int = 2
+
+
+class UsageError(UsarError):
+    """A command line that cannot be acted on (bad option value, conflicting options)."""
+
+    exit_code = 2
+
+
+class InvalidScenario(UsarError):
+    """A scenario file or value that fails validation; the message names the field."""
+
+    exit_code = 2
+
+
+class LogError(UsarError):
+    """A recording that cannot be read as a usar-replay log."""
+
+    exit_code = 3
+
+
+class NotAnMcapFile(LogError):
+    """The path is missing, empty, or not an MCAP file."""
+
+
+class IncompleteLog(LogError):
+    """The log ends early (truncated or interrupted); what could be read is still usable."""
+
+
+class MissingTopic(LogError):
+    """A topic the job needs is absent from the log."""
+
+
+class NotBuiltYet(UsarError):
+    """A command that is planned but not implemented in this version."""
+
+    exit_code = 2
