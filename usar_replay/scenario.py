@@ -113,12 +113,8 @@ class Scenario:
     spheres: tuple[Sphere, ...] = ()
     markers: tuple[Marker, ...] = ()
     targets: tuple[tuple[float, float], ...] = ()
-    explorer: RobotStart = field(
-        default_factory=lambda: RobotStart(name="explorer", x=-4.0, y=2.5)
-    )
-    follower: RobotStart = field(
-        default_factory=lambda: RobotStart(name="follower", x=-4.0, y=3.5)
-    )
+    explorer: RobotStart = field(default_factory=lambda: RobotStart(name="explorer", x=-4.0, y=2.5))
+    follower: RobotStart = field(default_factory=lambda: RobotStart(name="follower", x=-4.0, y=3.5))
     camera: CameraSettings = field(default_factory=CameraSettings)
     time_limit_s: float = 600.0
     seed: int | None = None
@@ -162,8 +158,16 @@ def course_world() -> Scenario:
     )
     boxes = (
         Box(name="box_a", x=-3.487, y=-1.494, z=0.5, size_x=1.0, size_y=1.0, size_z=1.0),
-        Box(name="box_b", x=0.099, y=2.673, z=0.328, size_x=1.0, size_y=0.437, size_z=0.657,
-            yaw=2.031),
+        Box(
+            name="box_b",
+            x=0.099,
+            y=2.673,
+            z=0.328,
+            size_x=1.0,
+            size_y=0.437,
+            size_z=0.657,
+            yaw=2.031,
+        ),
     )
     cyl_r, cyl_h = 0.2821, 0.5851
     cylinders = tuple(
