@@ -1,0 +1,91 @@
+"""The `usar` command as a user runs it: help, not-yet-built commands, `usar info`, exit codes."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from usar_replay import bag, msgs
+from usar_replay.cli import main
+
+T0 = 1_000_000_000
+
+
+def _usar(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "usar_replay.cli", *args],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+
+
+def _log(path: Path, *, interrupted: bool = False) -> None:
+    w = bag.BagWriter(path)
+    w.add_metadata(bag.RUN_METADATA, {"camera": "640x480@10"})
+    for i in range(30):
+        t = T0 + i * 100_000_000
+        w.write("/explorer/cmd_vel", msgs.Twist(angular=msgs.Vector3(z=0.1)), t)
+        w.write("/rosout", msgs.Log(stamp=msgs.Time.from_ns(t), level=20, msg=f"tick {i}"), t)
+    w.close("interrupted" if interrupted else "complete")
+
+
+def test_help_lists_every_command() -> None:
+    out = _usar("--help")
+    assert out.returncode == 0
+    for name in ("record", "replay", "grade", "view", "info"):
+        assert name in out.stdout
+
+
+def test_info_reports_topics_counts_duration(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "run.mcap"
+    _log(path)
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "/explorer/cmd_vel" in out and "geometry_msgs/msg/Twist" in out
+    assert "/rosout" in out and "rcl_interfaces/msg/Log" in out
+    assert "Duration:      2.900 s" in out
+    assert "Status:        complete" in out
+    assert "camera = 640x480@10" in out
+
+
+def test_info_on_an_interrupted_log_exits_3(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "run.mcap"
+    _log(path, interrupted=True)
+    assert main(["info", str(path)]) == 3
+    assert "interrupted" in capsys.readouterr().out
+
+
+def test_info_on_a_truncated_log_says_how_far(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    _log(path)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[:-300])
+    out = _usar("info", str(cut))
+    assert out.returncode == 3
+    assert "INCOMPLETE" in out.stdout and "messages up to sim time" in out.stdout
+    assert "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("content", [None, b"", b"PK\x03\x04 a zip, not a log"])
+def test_info_on_bad_files_is_one_line(tmp_path: Path, content: bytes | None) -> None:
+    path = tmp_path / "bad.mcap"
+    if content is not None:
+        path.write_bytes(content)
+    out = _usar("info", str(path))
+    assert out.returncode == 3
+    assert out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("usar: error: ")
+    assert str(path) in lines[0]
+
+
+@pytest.mark.parametrize("command", [["replay", "x.mcap"], ["grade", "x.mcap"], ["view", "x.mcap"]])
+def test_commands_not_built_yet_say_so(command: list[str]) -> None:
+    out = _usar(*command)
+    assert out.returncode == 2
+    assert "not built yet" in out.stderr
+    assert "Traceback" not in out.stderr
