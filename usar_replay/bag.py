@@ -451,7 +451,7 @@ class BagReader:
 
     @property
     def status(self) -> str:
-        """``complete``, ``interrupted``, ``truncated`` (no summary) or ``unknown`` (foreign file)."""
+        """``complete``, ``interrupted``, ``truncated`` (no summary), or ``unknown``."""
         if not self.has_summary:
             return "truncated"
         return self._index.metadata.get(STATUS_METADATA, {}).get("status", "unknown")
