@@ -10,8 +10,17 @@ metres and radians.
 
 from __future__ import annotations
 
+import difflib
 import math
+import os
+import tomllib
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+
+from usar_replay.errors import InvalidScenario
 
 __all__ = [
     "Box",
@@ -119,6 +128,30 @@ class Scenario:
     time_limit_s: float = 600.0
     seed: int | None = None
 
+    def marker_by_id(self, marker_id: int) -> Marker:
+        """The marker with this ID (KeyError if none)."""
+        for m in self.markers:
+            if m.id == marker_id:
+                return m
+        raise KeyError(marker_id)
+
+    def summary(self) -> str:
+        """A few lines for ``usar info`` and the record summary."""
+        ids = ", ".join(str(m.id) for m in sorted(self.markers, key=lambda m: m.id))
+        targets = "; ".join(f"({x:.3f}, {y:.3f})" for x, y in self.targets)
+        cam = self.camera
+        return "\n".join(
+            [
+                f"name {self.name}" + ("" if self.seed is None else f" (seed {self.seed})"),
+                f"{len(self.walls)} walls, {len(self.boxes)} boxes, {len(self.cylinders)} "
+                f"cylinders, {len(self.spheres)} spheres",
+                f"markers {ids} ({self.markers[0].dictionary if self.markers else '-'})",
+                f"targets {targets}",
+                f"camera {cam.width}x{cam.height}@{cam.rate_hz:g} Hz {cam.encoding}, "
+                f"time limit {self.time_limit_s:g} s",
+            ]
+        )
+
     def parameters(self) -> dict[str, list[float]]:
         """The ROS parameters the mission reads: ``aruco_lookup_locations/target_k`` -> [x, y]."""
         return {
@@ -201,3 +234,410 @@ def course_world() -> Scenario:
         markers=markers,
         targets=targets,
     )
+
+
+# --- TOML ---------------------------------------------------------------------------------------
+#
+# The file format, meant to be edited by hand (an instructor's "different environment"):
+#
+#   format_version = 1
+#   name = "course"
+#   time_limit_s = 600.0
+#   seed = 3                      # optional: the variant seed this world came from
+#   [camera]        width, height, rate_hz, hfov, encoding ("png" | "jpeg")
+#   [robots.explorer] / [robots.follower]   x, y, yaw
+#   [aruco_lookup_locations]      target_1 = [x, y], target_2 = [x, y], ... (as the course's
+#                                 ROS parameter file names them)
+#   [[walls]]      name, x, y, yaw, length, optional thickness (0.15) and height (1.0)
+#   [[boxes]]      name, x, y, z, size_x, size_y, size_z, yaw
+#   [[cylinders]]  name, x, y, radius, height
+#   [[spheres]]    name, x, y, radius
+#   [[markers]]    id, x, y, z, yaw, size, dictionary
+#
+# Errors name the field (``markers[2].size: must be a positive number, got -0.1``) and stop at the
+# first one: one line, what is wrong and where.
+
+FORMAT_VERSION = 1
+DICTIONARIES: dict[str, int] = {
+    f"DICT_{n}X{n}_{k}": k for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)
+} | {"DICT_ARUCO_ORIGINAL": 1024}
+"""ArUco dictionary names (OpenCV's) and how many marker IDs each holds."""
+
+
+def _err(source: str, path: str, problem: str) -> InvalidScenario:
+    return InvalidScenario(f"{source}: {path}: {problem}")
+
+
+def _check_keys(
+    source: str, path: str, table: dict[str, Any], allowed: list[str], required: list[str]
+) -> None:
+    for key in table:
+        if key not in allowed:
+            close = difflib.get_close_matches(key, allowed, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(allowed)})"
+            raise _err(source, f"{path}.{key}" if path else key, "unknown field" + hint)
+    for key in required:
+        if key not in table:
+            raise _err(source, path or "scenario", f"missing field '{key}'")
+
+
+def _num(source: str, path: str, value: Any, *, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _err(source, path, f"must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise _err(source, path, f"must be finite, got {value!r}")
+    if positive and v <= 0:
+        raise _err(source, path, f"must be a positive number, got {value!r}")
+    return v
+
+
+def _int(source: str, path: str, value: Any, *, minimum: int = 0) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _err(source, path, f"must be an integer, got {value!r}")
+    if value < minimum:
+        raise _err(source, path, f"must be >= {minimum}, got {value!r}")
+    return value
+
+
+def _str(source: str, path: str, value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise _err(source, path, f"must be a non-empty string, got {value!r}")
+    return value
+
+
+def _list(source: str, path: str, value: Any) -> list[dict[str, Any]]:
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise _err(source, path, "must be an array of tables ([[...]])")
+    return value
+
+
+def _parse_wall(src: str, path: str, t: dict[str, Any]) -> Box:
+    _check_keys(
+        src,
+        path,
+        t,
+        ["name", "x", "y", "yaw", "length", "thickness", "height"],
+        ["name", "x", "y", "yaw", "length"],
+    )
+    height = _num(src, f"{path}.height", t.get("height", WALL_HEIGHT), positive=True)
+    return Box(
+        name=_str(src, f"{path}.name", t["name"]),
+        x=_num(src, f"{path}.x", t["x"]),
+        y=_num(src, f"{path}.y", t["y"]),
+        z=height / 2,
+        size_x=_num(src, f"{path}.length", t["length"], positive=True),
+        size_y=_num(src, f"{path}.thickness", t.get("thickness", WALL_THICKNESS), positive=True),
+        size_z=height,
+        yaw=_num(src, f"{path}.yaw", t["yaw"]),
+    )
+
+
+def _parse_box(src: str, path: str, t: dict[str, Any]) -> Box:
+    keys = ["name", "x", "y", "z", "size_x", "size_y", "size_z", "yaw"]
+    _check_keys(src, path, t, keys, keys[:7])
+    return Box(
+        name=_str(src, f"{path}.name", t["name"]),
+        x=_num(src, f"{path}.x", t["x"]),
+        y=_num(src, f"{path}.y", t["y"]),
+        z=_num(src, f"{path}.z", t["z"]),
+        size_x=_num(src, f"{path}.size_x", t["size_x"], positive=True),
+        size_y=_num(src, f"{path}.size_y", t["size_y"], positive=True),
+        size_z=_num(src, f"{path}.size_z", t["size_z"], positive=True),
+        yaw=_num(src, f"{path}.yaw", t.get("yaw", 0.0)),
+    )
+
+
+def _parse_marker(src: str, path: str, t: dict[str, Any]) -> Marker:
+    keys = ["id", "x", "y", "z", "yaw", "size", "dictionary"]
+    _check_keys(src, path, t, keys, ["id", "x", "y", "yaw"])
+    dictionary = _str(src, f"{path}.dictionary", t.get("dictionary", "DICT_4X4_50"))
+    if dictionary not in DICTIONARIES:
+        close = difflib.get_close_matches(dictionary, list(DICTIONARIES), n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise _err(src, f"{path}.dictionary", f"unknown ArUco dictionary {dictionary!r}{hint}")
+    mid = _int(src, f"{path}.id", t["id"])
+    if mid >= DICTIONARIES[dictionary]:
+        raise _err(
+            src, f"{path}.id", f"{mid} is outside {dictionary} (0..{DICTIONARIES[dictionary] - 1})"
+        )
+    return Marker(
+        id=mid,
+        x=_num(src, f"{path}.x", t["x"]),
+        y=_num(src, f"{path}.y", t["y"]),
+        z=_num(src, f"{path}.z", t.get("z", 0.2), positive=True),
+        yaw=_num(src, f"{path}.yaw", t["yaw"]),
+        size=_num(src, f"{path}.size", t.get("size", 0.15), positive=True),
+        dictionary=dictionary,
+    )
+
+
+def _parse_xy(src: str, path: str, value: Any) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise _err(src, path, f"must be [x, y], got {value!r}")
+    return (_num(src, f"{path}[0]", value[0]), _num(src, f"{path}[1]", value[1]))
+
+
+def from_toml(text: str, source: str = "<string>") -> Scenario:
+    """Parse and validate a scenario; :class:`InvalidScenario` names the first bad field."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InvalidScenario(f"{source}: invalid TOML: {err}") from err
+    src = source
+    top = [
+        "format_version",
+        "name",
+        "time_limit_s",
+        "seed",
+        "camera",
+        "robots",
+        "aruco_lookup_locations",
+        "walls",
+        "boxes",
+        "cylinders",
+        "spheres",
+        "markers",
+    ]
+    _check_keys(src, "", data, top, ["name", "walls", "markers", "aruco_lookup_locations"])
+    version = data.get("format_version", FORMAT_VERSION)
+    if version != FORMAT_VERSION:
+        raise _err(
+            src,
+            "format_version",
+            f"this usar-replay reads version {FORMAT_VERSION}, got {version!r}",
+        )
+    cam_t = data.get("camera", {})
+    if not isinstance(cam_t, dict):
+        raise _err(src, "camera", "must be a table")
+    _check_keys(src, "camera", cam_t, ["width", "height", "rate_hz", "hfov", "encoding"], [])
+    d = CameraSettings()
+    hfov = _num(src, "camera.hfov", cam_t.get("hfov", d.hfov), positive=True)
+    if hfov >= math.pi:
+        raise _err(src, "camera.hfov", f"must be below pi radians, got {hfov!r}")
+    encoding = cam_t.get("encoding", d.encoding)
+    if encoding not in ("png", "jpeg"):
+        raise _err(src, "camera.encoding", f"must be 'png' or 'jpeg', got {encoding!r}")
+    camera = CameraSettings(
+        width=_int(src, "camera.width", cam_t.get("width", d.width), minimum=16),
+        height=_int(src, "camera.height", cam_t.get("height", d.height), minimum=16),
+        rate_hz=_num(src, "camera.rate_hz", cam_t.get("rate_hz", d.rate_hz), positive=True),
+        hfov=hfov,
+        encoding=encoding,
+    )
+    robots_t = data.get("robots", {})
+    if not isinstance(robots_t, dict):
+        raise _err(src, "robots", "must be a table with [robots.explorer] and [robots.follower]")
+    _check_keys(src, "robots", robots_t, ["explorer", "follower"], [])
+    starts = {
+        "explorer": RobotStart(name="explorer", x=-4.0, y=2.5),
+        "follower": RobotStart(name="follower", x=-4.0, y=3.5),
+    }
+    for name, table in robots_t.items():
+        path = f"robots.{name}"
+        if not isinstance(table, dict):
+            raise _err(src, path, "must be a table with x, y, yaw")
+        _check_keys(src, path, table, ["x", "y", "yaw"], ["x", "y"])
+        starts[name] = RobotStart(
+            name=name,
+            x=_num(src, f"{path}.x", table["x"]),
+            y=_num(src, f"{path}.y", table["y"]),
+            yaw=_num(src, f"{path}.yaw", table.get("yaw", 0.0)),
+        )
+    loc = data["aruco_lookup_locations"]
+    if not isinstance(loc, dict) or not loc:
+        raise _err(src, "aruco_lookup_locations", "must be a table of target_1 = [x, y], ...")
+    for key in loc:
+        if not (key.startswith("target_") and key[7:].isdigit() and int(key[7:]) >= 1):
+            raise _err(src, f"aruco_lookup_locations.{key}", "unknown field (expected target_N)")
+    targets = []
+    for i in range(1, len(loc) + 1):
+        key = f"target_{i}"
+        if key not in loc:
+            raise _err(
+                src,
+                "aruco_lookup_locations",
+                f"expected target_1..target_{len(loc)} without gaps, missing {key}",
+            )
+        targets.append(_parse_xy(src, f"aruco_lookup_locations.{key}", loc[key]))
+    scn = Scenario(
+        name=_str(src, "name", data["name"]),
+        walls=tuple(
+            _parse_wall(src, f"walls[{i}]", t)
+            for i, t in enumerate(_list(src, "walls", data["walls"]))
+        ),
+        boxes=tuple(
+            _parse_box(src, f"boxes[{i}]", t)
+            for i, t in enumerate(_list(src, "boxes", data.get("boxes", [])))
+        ),
+        cylinders=tuple(
+            _parse_cylinder(src, f"cylinders[{i}]", t)
+            for i, t in enumerate(_list(src, "cylinders", data.get("cylinders", [])))
+        ),
+        spheres=tuple(
+            _parse_sphere(src, f"spheres[{i}]", t)
+            for i, t in enumerate(_list(src, "spheres", data.get("spheres", [])))
+        ),
+        markers=tuple(
+            _parse_marker(src, f"markers[{i}]", t)
+            for i, t in enumerate(_list(src, "markers", data["markers"]))
+        ),
+        targets=tuple(targets),
+        explorer=starts["explorer"],
+        follower=starts["follower"],
+        camera=camera,
+        time_limit_s=_num(src, "time_limit_s", data.get("time_limit_s", 600.0), positive=True),
+        seed=None if data.get("seed") is None else _int(src, "seed", data["seed"]),
+    )
+    validate(scn, src)
+    return scn
+
+
+def _parse_cylinder(src: str, path: str, t: dict[str, Any]) -> Cylinder:
+    _check_keys(
+        src, path, t, ["name", "x", "y", "radius", "height"], ["name", "x", "y", "radius", "height"]
+    )
+    return Cylinder(
+        name=_str(src, f"{path}.name", t["name"]),
+        x=_num(src, f"{path}.x", t["x"]),
+        y=_num(src, f"{path}.y", t["y"]),
+        radius=_num(src, f"{path}.radius", t["radius"], positive=True),
+        height=_num(src, f"{path}.height", t["height"], positive=True),
+    )
+
+
+def _parse_sphere(src: str, path: str, t: dict[str, Any]) -> Sphere:
+    _check_keys(src, path, t, ["name", "x", "y", "radius"], ["name", "x", "y", "radius"])
+    return Sphere(
+        name=_str(src, f"{path}.name", t["name"]),
+        x=_num(src, f"{path}.x", t["x"]),
+        y=_num(src, f"{path}.y", t["y"]),
+        radius=_num(src, f"{path}.radius", t["radius"], positive=True),
+    )
+
+
+def validate(scn: Scenario, source: str = "scenario") -> None:
+    """Semantic checks that hold for constructed values too (not only parsed files)."""
+    if not scn.walls:
+        raise _err(source, "walls", "at least one wall is needed")
+    if not scn.targets:
+        raise _err(source, "aruco_lookup_locations", "at least one target is needed")
+    seen: dict[int, int] = {}
+    for i, m in enumerate(scn.markers):
+        if m.id in seen:
+            raise _err(
+                source,
+                f"markers[{i}].id",
+                f"duplicate marker id {m.id} (also markers[{seen[m.id]}])",
+            )
+        seen[m.id] = i
+    x0, y0, x1, y1 = building_extent(scn)
+    points = [(f"aruco_lookup_locations.target_{i + 1}", t) for i, t in enumerate(scn.targets)]
+    points += [(f"robots.{r.name}", (r.x, r.y)) for r in (scn.explorer, scn.follower)]
+    for path, (x, y) in points:
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            raise _err(
+                source,
+                path,
+                f"({x}, {y}) is outside the building (x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f})",
+            )
+
+
+def building_extent(scn: Scenario) -> tuple[float, float, float, float]:
+    """(xmin, ymin, xmax, ymax) of the walls' footprints."""
+    xs: list[float] = []
+    ys: list[float] = []
+    for w in scn.walls:
+        c, s = math.cos(w.yaw), math.sin(w.yaw)
+        for dx, dy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+            lx, ly = dx * w.size_x / 2, dy * w.size_y / 2
+            xs.append(w.x + c * lx - s * ly)
+            ys.append(w.y + s * lx + c * ly)
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def to_toml(scn: Scenario) -> str:
+    """The scenario as TOML text; ``from_toml(to_toml(s)) == s`` exactly (floats by repr)."""
+    data: dict[str, Any] = {
+        "format_version": FORMAT_VERSION,
+        "name": scn.name,
+        "time_limit_s": scn.time_limit_s,
+    }
+    if scn.seed is not None:
+        data["seed"] = scn.seed
+    cam = scn.camera
+    data["camera"] = {
+        "width": cam.width,
+        "height": cam.height,
+        "rate_hz": cam.rate_hz,
+        "hfov": cam.hfov,
+        "encoding": cam.encoding,
+    }
+    data["robots"] = {
+        r.name: {"x": r.x, "y": r.y, "yaw": r.yaw} for r in (scn.explorer, scn.follower)
+    }
+    data["aruco_lookup_locations"] = {
+        f"target_{i + 1}": [t[0], t[1]] for i, t in enumerate(scn.targets)
+    }
+    data["walls"] = []
+    for w in scn.walls:
+        wall: dict[str, Any] = {
+            "name": w.name,
+            "x": w.x,
+            "y": w.y,
+            "yaw": w.yaw,
+            "length": w.size_x,
+        }
+        if w.size_y != WALL_THICKNESS:
+            wall["thickness"] = w.size_y
+        if w.size_z != WALL_HEIGHT or w.z != w.size_z / 2:
+            wall["height"] = w.size_z
+        data["walls"].append(wall)
+    data["boxes"] = [
+        {
+            "name": b.name,
+            "x": b.x,
+            "y": b.y,
+            "z": b.z,
+            "size_x": b.size_x,
+            "size_y": b.size_y,
+            "size_z": b.size_z,
+            "yaw": b.yaw,
+        }
+        for b in scn.boxes
+    ]
+    data["cylinders"] = [
+        {"name": c.name, "x": c.x, "y": c.y, "radius": c.radius, "height": c.height}
+        for c in scn.cylinders
+    ]
+    data["spheres"] = [
+        {"name": s.name, "x": s.x, "y": s.y, "radius": s.radius} for s in scn.spheres
+    ]
+    data["markers"] = [
+        {
+            "id": m.id,
+            "x": m.x,
+            "y": m.y,
+            "z": m.z,
+            "yaw": m.yaw,
+            "size": m.size,
+            "dictionary": m.dictionary,
+        }
+        for m in scn.markers
+    ]
+    return tomli_w.dumps(data)
+
+
+def load(path: str | os.PathLike[str]) -> Scenario:
+    """Read a scenario file (a missing file is an :class:`InvalidScenario` too)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError as err:
+        raise InvalidScenario(f"{path}: no such scenario file") from err
+    except (OSError, UnicodeDecodeError) as err:
+        raise InvalidScenario(f"{path}: cannot read the scenario: {err}") from err
+    return from_toml(text, source=str(path))
+
+
+def save(scn: Scenario, path: str | os.PathLike[str]) -> None:
+    Path(path).write_text(to_toml(scn), encoding="utf-8")

@@ -1,0 +1,580 @@
+"""The simulator: the scenario built in pybullet, two robots driven by ``cmd_vel``, one camera.
+
+The only module that imports pybullet. Why it is built this way (measured on the 2-core machines
+this runs on):
+
+* **Kinematic robots.** Driving wheel motors through pybullet tracked ``cmd_vel`` poorly (a robot
+  spinning in place drifted 9-13 cm). Each physics step here integrates the unicycle model
+  exactly (with the waffle's velocity and acceleration limits) and places the base; pybullet's
+  collision detection then checks the robot's footprint box against the walls, obstacles and the
+  other robot, and a motion that would overlap anything is refused (the robot stays, its velocity
+  drops to zero). Robots cannot pass through walls, and the result is bit-deterministic.
+* **A fixed step and a sim clock in integer nanoseconds**, starting at ``start_time_ns`` (> 0:
+  some tools mishandle a log time of 0). Nothing reads the wall clock.
+* **Rendering is the first performance problem**: the camera renders only when a frame is due
+  on the sim clock, the scene has few triangles, shadows are off, and every lighting argument is
+  passed on every call (TinyRenderer otherwise keeps the previous call's, so images would depend
+  on call history). The EGL plugin (Mesa llvmpipe on CPU) renders about 2x faster than
+  TinyRenderer where it loads; ``renderer="auto"`` uses it when it loads and falls back to
+  TinyRenderer; :attr:`Simulator.renderer_name` is recorded with every run because the two
+  renderers' pixels differ.
+* **Markers are textured OBJ quads** (a texture on a box renders as two halves and is never
+  detected) wound counter-clockwise as seen from the front, with UVs chosen so the rendered marker
+  is neither mirrored nor rotated; a test decodes every rendered marker to its own ID.
+* **Camera model**: pybullet's FOV argument is vertical, so ``fov_v = 2 atan(tan(hfov/2) H/W)``;
+  ``fx = fy = (H/2) / tan(fov_v/2)``; TinyRenderer's optical axis falls on OpenCV pixel
+  ``(W/2, H/2 - 1)``. :meth:`Simulator.camera_info` publishes exactly that K.
+
+Frames (REP-105): ``map -> <robot>_tf/odom`` (the robot's start pose, static, on ``/tf_static``:
+this world has no localisation drift to correct, so the course's map->odom is constant) ``->
+<robot>_tf/base_footprint`` (odometry, on ``/tf``) ``-> <robot>_tf/camera_rgb_frame`` (static,
+forward-looking, x forward) ``-> <robot>_tf/camera_rgb_optical_frame`` (static, rpy
+(-pi/2, 0, -pi/2): z forward, x right, y down).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import pkgutil
+import sys
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+
+@contextlib.contextmanager
+def _quiet_stdout() -> Iterator[None]:
+    """Silence C-level prints (pybullet's build banner, the EGL plugin's GL report) on fd 1.
+
+    They would otherwise interleave with the CLI's own output, which users may pipe.
+    """
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+            yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+with _quiet_stdout():
+    import pybullet as p
+
+from usar_replay import msgs  # noqa: E402 - after the quiet pybullet import above
+from usar_replay.scenario import Scenario  # noqa: E402
+
+__all__ = [
+    "CAMERA_MOUNT",
+    "FOOTPRINT",
+    "LIMITS",
+    "RobotLimits",
+    "Simulator",
+    "camera_intrinsics",
+]
+
+FOOTPRINT = ((-0.205, -0.155), (-0.205, 0.155), (0.077, 0.155), (0.077, -0.155))
+"""The waffle's costmap footprint in base_footprint (x forward), metres."""
+CAMERA_MOUNT = (0.069, -0.047, 0.117)
+"""Optical centre from base_footprint (course-world.md)."""
+OPTICAL_RPY = (-math.pi / 2, 0.0, -math.pi / 2)
+WALL_RGBA = (0.86, 0.85, 0.80, 1.0)
+OBSTACLE_RGBA = (0.55, 0.60, 0.70, 1.0)
+FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
+ROBOT_RGBA = (0.20, 0.22, 0.25, 1.0)
+LIGHT_DIRECTION = (0.4, 0.3, 1.0)
+
+
+@dataclass(frozen=True, slots=True)
+class RobotLimits:
+    """The waffle's limits; accelerations are TurtleBot3's DWA defaults."""
+
+    max_linear: float = 0.26
+    max_angular: float = 1.82
+    max_linear_accel: float = 2.5
+    max_angular_accel: float = 3.2
+
+
+LIMITS = RobotLimits()
+
+
+def camera_intrinsics(width: int, height: int, hfov: float) -> tuple[float, float, float, float]:
+    """(fx, fy, cx, cy) of the rendered image, in OpenCV's pixel convention."""
+    fov_v = 2.0 * math.atan(math.tan(hfov / 2.0) * height / width)
+    f = (height / 2.0) / math.tan(fov_v / 2.0)
+    return f, f, width / 2.0, height / 2.0 - 1.0
+
+
+def _quat_yaw(yaw: float) -> tuple[float, float, float, float]:
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+
+
+def _msg_quat(q: tuple[float, float, float, float]) -> msgs.Quaternion:
+    return msgs.Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])
+
+
+def _tf(
+    parent: str, child: str, t_ns: int, xyz: tuple[float, float, float], q: Any
+) -> msgs.TransformStamped:
+    return msgs.TransformStamped(
+        header=msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id=parent),
+        child_frame_id=child,
+        transform=msgs.Transform(
+            translation=msgs.Vector3(x=xyz[0], y=xyz[1], z=xyz[2]), rotation=_msg_quat(q)
+        ),
+    )
+
+
+@dataclass(slots=True)
+class _RobotState:
+    name: str
+    body: int
+    start: tuple[float, float, float]
+    x: float
+    y: float
+    yaw: float
+    v: float = 0.0
+    w: float = 0.0
+    cmd_v: float = 0.0
+    cmd_w: float = 0.0
+    refused: int = 0
+
+
+class Simulator:
+    """The scenario in pybullet (DIRECT mode, a private client), stepped on a sim clock."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        *,
+        physics_hz: int = 100,
+        start_time_ns: int = 1_000_000_000,
+        renderer: str = "auto",
+        limits: RobotLimits = LIMITS,
+    ) -> None:
+        if start_time_ns <= 0:
+            raise ValueError("start_time_ns must be positive")
+        if renderer not in ("auto", "tiny", "egl"):
+            raise ValueError(f"renderer must be auto, tiny or egl, not {renderer!r}")
+        self.scenario = scenario
+        self.limits = limits
+        self.physics_hz = physics_hz
+        self.dt_ns = 1_000_000_000 // physics_hz
+        self.now_ns = start_time_ns
+        self._client = p.connect(p.DIRECT)
+        self._tmp = tempfile.TemporaryDirectory(prefix="usar-sim-")
+        self._static_bodies: list[int] = []
+        cam = scenario.camera
+        self.camera_period_ns = round(1e9 / cam.rate_hz)
+        self.next_frame_ns = start_time_ns
+        self.frame_seq = 0
+        self.renderer_name = "tiny"
+        self._renderer_flag = p.ER_TINY_RENDERER
+        if renderer in ("auto", "egl"):
+            self._try_egl(required=renderer == "egl")
+        self._build_world()
+        self.robots = {
+            r.name: self._add_robot(r.name, r.x, r.y, r.yaw)
+            for r in (scenario.explorer, scenario.follower)
+        }
+        fx, fy, cx, cy = camera_intrinsics(cam.width, cam.height, cam.hfov)
+        self._intrinsics = (fx, fy, cx, cy)
+        fov_v = 2.0 * math.degrees(math.atan((cam.height / 2.0) / fy))
+        self._projection = p.computeProjectionMatrixFOV(
+            fov=fov_v,
+            aspect=cam.width / cam.height,
+            nearVal=0.02,
+            farVal=30.0,
+            physicsClientId=self._client,
+        )
+
+    # -- lifecycle ---------------------------------------------------------------------------
+
+    def __enter__(self) -> Simulator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Disconnect this simulator's pybullet client and remove its generated assets."""
+        if self._client >= 0:
+            with _quiet_stdout():
+                p.disconnect(physicsClientId=self._client)
+            self._client = -1
+            self._tmp.cleanup()
+
+    def _try_egl(self, *, required: bool) -> None:
+        loader = pkgutil.get_loader("eglRenderer")
+        plugin = -1
+        if loader is not None:
+            path = loader.get_filename()  # type: ignore[attr-defined]
+            with _quiet_stdout():
+                plugin = p.loadPlugin(path, "_eglRendererPlugin", physicsClientId=self._client)
+        if plugin < 0:
+            if required:
+                raise RuntimeError("the EGL renderer plugin does not load on this machine")
+            return
+        self.renderer_name = "egl"
+        self._renderer_flag = p.ER_BULLET_HARDWARE_OPENGL
+
+    # -- building ----------------------------------------------------------------------------
+
+    def _box(
+        self,
+        half: tuple[float, float, float],
+        pos: tuple[float, float, float],
+        yaw: float,
+        rgba: tuple[float, float, float, float],
+        mass: float = 0.0,
+    ) -> int:
+        c = self._client
+        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=c)
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c)
+        return p.createMultiBody(
+            baseMass=mass,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=pos,
+            baseOrientation=_quat_yaw(yaw),
+            physicsClientId=c,
+        )
+
+    def _build_world(self) -> None:
+        c = self._client
+        scn = self.scenario
+        xs = [w.x for w in scn.walls] or [0.0]
+        ys = [w.y for w in scn.walls] or [0.0]
+        cx, cy = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
+        span = max(max(xs) - min(xs), max(ys) - min(ys)) / 2 + 2.0
+        floor_vis = p.createVisualShape(
+            p.GEOM_BOX, halfExtents=(span, span, 0.005), rgbaColor=FLOOR_RGBA, physicsClientId=c
+        )
+        p.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=floor_vis,
+            basePosition=(cx, cy, -0.005),
+            physicsClientId=c,
+        )
+        for b in (*scn.walls, *scn.boxes):
+            rgba = WALL_RGBA if b in scn.walls else OBSTACLE_RGBA
+            self._static_bodies.append(
+                self._box((b.size_x / 2, b.size_y / 2, b.size_z / 2), (b.x, b.y, b.z), b.yaw, rgba)
+            )
+        for cyl in scn.cylinders:
+            col = p.createCollisionShape(
+                p.GEOM_CYLINDER, radius=cyl.radius, height=cyl.height, physicsClientId=c
+            )
+            vis = p.createVisualShape(
+                p.GEOM_CYLINDER,
+                radius=cyl.radius,
+                length=cyl.height,
+                rgbaColor=OBSTACLE_RGBA,
+                physicsClientId=c,
+            )
+            self._static_bodies.append(
+                p.createMultiBody(
+                    baseMass=0,
+                    baseCollisionShapeIndex=col,
+                    baseVisualShapeIndex=vis,
+                    basePosition=(cyl.x, cyl.y, cyl.height / 2),
+                    physicsClientId=c,
+                )
+            )
+        for s in scn.spheres:
+            col = p.createCollisionShape(p.GEOM_SPHERE, radius=s.radius, physicsClientId=c)
+            vis = p.createVisualShape(
+                p.GEOM_SPHERE, radius=s.radius, rgbaColor=OBSTACLE_RGBA, physicsClientId=c
+            )
+            self._static_bodies.append(
+                p.createMultiBody(
+                    baseMass=0,
+                    baseCollisionShapeIndex=col,
+                    baseVisualShapeIndex=vis,
+                    basePosition=(s.x, s.y, s.radius),
+                    physicsClientId=c,
+                )
+            )
+        for m in scn.markers:
+            self._add_marker(m.id, m.x, m.y, m.z, m.yaw, m.size, m.dictionary)
+
+    def _add_marker(
+        self, mid: int, x: float, y: float, z: float, yaw: float, size: float, dictionary: str
+    ) -> None:
+        """A quad in the marker's y-z plane facing +x, textured with the marker's image.
+
+        Seen from the front (looking along -x), +y is to the viewer's right and +z up, so the
+        image's left-to-right runs along +y and its top-to-bottom along -z.
+        """
+        c = self._client
+        aruco = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
+        bits = aruco.markerSize + 2
+        img = cv2.aruco.generateImageMarker(aruco, mid, bits * 20)
+        tex_path = Path(self._tmp.name) / f"marker_{mid}.png"
+        cv2.imwrite(str(tex_path), cv2.cvtColor(img, cv2.COLOR_GRAY2RGB))
+        h = size / 2
+        obj = Path(self._tmp.name) / f"marker_{mid}.obj"
+        obj.write_text(
+            f"v 0 -{h} -{h}\nv 0 {h} -{h}\nv 0 {h} {h}\nv 0 -{h} {h}\n"
+            + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 1 0 0\n"
+            + "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
+        )
+        vis = p.createVisualShape(
+            p.GEOM_MESH,
+            fileName=str(obj),
+            meshScale=(1, 1, 1),
+            rgbaColor=(1, 1, 1, 1),
+            physicsClientId=c,
+        )
+        body = p.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=vis,
+            basePosition=(x, y, z),
+            baseOrientation=_quat_yaw(yaw),
+            physicsClientId=c,
+        )
+        tex = p.loadTexture(str(tex_path), physicsClientId=c)
+        p.changeVisualShape(
+            body, -1, textureUniqueId=tex, rgbaColor=(1, 1, 1, 1), physicsClientId=c
+        )
+
+    def _add_robot(self, name: str, x: float, y: float, yaw: float) -> _RobotState:
+        c = self._client
+        xs = [q[0] for q in FOOTPRINT]
+        ys = [q[1] for q in FOOTPRINT]
+        half = ((max(xs) - min(xs)) / 2, (max(ys) - min(ys)) / 2, 0.05)
+        off = ((max(xs) + min(xs)) / 2, 0.0, 0.065)
+        col = p.createCollisionShape(
+            p.GEOM_BOX, halfExtents=half, collisionFramePosition=off, physicsClientId=c
+        )
+        vis = p.createVisualShape(
+            p.GEOM_BOX,
+            halfExtents=(0.133, 0.133, 0.047),
+            visualFramePosition=(-0.064, 0.0, 0.057),
+            rgbaColor=ROBOT_RGBA,
+            physicsClientId=c,
+        )
+        body = p.createMultiBody(
+            baseMass=1.8,
+            baseCollisionShapeIndex=col,
+            baseVisualShapeIndex=vis,
+            basePosition=(x, y, 0.0),
+            baseOrientation=_quat_yaw(yaw),
+            physicsClientId=c,
+        )
+        return _RobotState(name=name, body=body, start=(x, y, yaw), x=x, y=y, yaw=yaw)
+
+    # -- driving -----------------------------------------------------------------------------
+
+    def set_cmd_vel(self, robot: str, twist: msgs.Twist) -> None:
+        """The robot's velocity command; clamped to the limits when applied."""
+        r = self.robots[robot]
+        lim = self.limits
+        r.cmd_v = float(np.clip(twist.linear.x, -lim.max_linear, lim.max_linear))
+        r.cmd_w = float(np.clip(twist.angular.z, -lim.max_angular, lim.max_angular))
+
+    def teleport(self, robot: str, x: float, y: float, yaw: float) -> None:
+        """Place a robot (tests and tools only; the mission never calls this)."""
+        r = self.robots[robot]
+        r.x, r.y, r.yaw, r.v, r.w = x, y, yaw, 0.0, 0.0
+        self._place(r)
+
+    def _place(self, r: _RobotState) -> None:
+        p.resetBasePositionAndOrientation(
+            r.body, (r.x, r.y, 0.0), _quat_yaw(r.yaw), physicsClientId=self._client
+        )
+
+    def _blocked(self, r: _RobotState) -> bool:
+        c = self._client
+        p.performCollisionDetection(physicsClientId=c)
+        contacts = p.getContactPoints(bodyA=r.body, physicsClientId=c)
+        return any(cp[8] < -1e-6 for cp in contacts)  # cp[8]: signed distance, < 0 overlaps
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` fixed physics steps."""
+        dt = self.dt_ns / 1e9
+        lim = self.limits
+        for _ in range(n):
+            for r in self.robots.values():
+                dv = np.clip(r.cmd_v - r.v, -lim.max_linear_accel * dt, lim.max_linear_accel * dt)
+                dw = np.clip(r.cmd_w - r.w, -lim.max_angular_accel * dt, lim.max_angular_accel * dt)
+                v, w = r.v + float(dv), r.w + float(dw)
+                if v == 0.0 and w == 0.0:
+                    r.v, r.w = 0.0, 0.0
+                    continue
+                old = (r.x, r.y, r.yaw)
+                yaw_mid = r.yaw + w * dt / 2.0
+                r.x += v * dt * math.cos(yaw_mid)
+                r.y += v * dt * math.sin(yaw_mid)
+                r.yaw = math.atan2(math.sin(r.yaw + w * dt), math.cos(r.yaw + w * dt))
+                self._place(r)
+                if self._blocked(r):
+                    r.x, r.y, r.yaw = old
+                    self._place(r)
+                    r.v, r.w = 0.0, 0.0
+                    r.refused += 1
+                else:
+                    r.v, r.w = v, w
+            self.now_ns += self.dt_ns
+
+    def refused_motions(self, robot: str) -> int:
+        """How many steps of this robot's motion were refused because they would collide."""
+        return self.robots[robot].refused
+
+    # -- what the robots report --------------------------------------------------------------
+
+    def true_pose(self, robot: str) -> msgs.Pose:
+        """The robot's base_footprint in map (ground truth)."""
+        r = self.robots[robot]
+        return msgs.Pose(position=msgs.Point(x=r.x, y=r.y), orientation=_msg_quat(_quat_yaw(r.yaw)))
+
+    def _odom_pose(self, r: _RobotState) -> tuple[float, float, float]:
+        sx, sy, syaw = r.start
+        dx, dy = r.x - sx, r.y - sy
+        c, s = math.cos(-syaw), math.sin(-syaw)
+        yaw = math.atan2(math.sin(r.yaw - syaw), math.cos(r.yaw - syaw))
+        return (c * dx - s * dy, s * dx + c * dy, yaw)
+
+    def odometry(self, robot: str) -> msgs.Odometry:
+        """Odometry in ``<robot>_tf/odom`` (exact: the kinematic model has no slip)."""
+        r = self.robots[robot]
+        x, y, yaw = self._odom_pose(r)
+        return msgs.Odometry(
+            header=msgs.Header(stamp=msgs.Time.from_ns(self.now_ns), frame_id=f"{robot}_tf/odom"),
+            child_frame_id=f"{robot}_tf/base_footprint",
+            pose=msgs.PoseWithCovariance(
+                pose=msgs.Pose(position=msgs.Point(x=x, y=y), orientation=_msg_quat(_quat_yaw(yaw)))
+            ),
+            twist=msgs.TwistWithCovariance(
+                twist=msgs.Twist(linear=msgs.Vector3(x=r.v), angular=msgs.Vector3(z=r.w))
+            ),
+        )
+
+    def tf_static(self) -> msgs.TFMessage:
+        """``map -> <robot>_tf/odom`` and the camera mounts, for ``/tf_static``."""
+        t = self.now_ns
+        out = []
+        for name, r in self.robots.items():
+            sx, sy, syaw = r.start
+            out.append(_tf("map", f"{name}_tf/odom", t, (sx, sy, 0.0), _quat_yaw(syaw)))
+            out.append(
+                _tf(
+                    f"{name}_tf/base_footprint",
+                    f"{name}_tf/camera_rgb_frame",
+                    t,
+                    CAMERA_MOUNT,
+                    (0.0, 0.0, 0.0, 1.0),
+                )
+            )
+            out.append(
+                _tf(
+                    f"{name}_tf/camera_rgb_frame",
+                    f"{name}_tf/camera_rgb_optical_frame",
+                    t,
+                    (0.0, 0.0, 0.0),
+                    p.getQuaternionFromEuler(OPTICAL_RPY),
+                )
+            )
+        return msgs.TFMessage(transforms=tuple(out))
+
+    def tf(self) -> msgs.TFMessage:
+        """``<robot>_tf/odom -> <robot>_tf/base_footprint`` for both robots, at now."""
+        out = []
+        for name, r in self.robots.items():
+            x, y, yaw = self._odom_pose(r)
+            out.append(
+                _tf(
+                    f"{name}_tf/odom",
+                    f"{name}_tf/base_footprint",
+                    self.now_ns,
+                    (x, y, 0.0),
+                    _quat_yaw(yaw),
+                )
+            )
+        return msgs.TFMessage(transforms=tuple(out))
+
+    # -- camera ------------------------------------------------------------------------------
+
+    def camera_due(self) -> bool:
+        """True when the explorer's camera should take a frame at the current sim time."""
+        return self.now_ns >= self.next_frame_ns
+
+    def camera_info(self) -> msgs.CameraInfo:
+        """CameraInfo matching the rendering exactly (plumb_bob, zero distortion)."""
+        cam = self.scenario.camera
+        fx, fy, cx, cy = self._intrinsics
+        return msgs.CameraInfo(
+            header=msgs.Header(
+                stamp=msgs.Time.from_ns(self.now_ns),
+                frame_id="explorer_tf/camera_rgb_optical_frame",
+            ),
+            height=cam.height,
+            width=cam.width,
+            distortion_model="plumb_bob",
+            d=(0.0, 0.0, 0.0, 0.0, 0.0),
+            k=(fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0),
+            r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+            p=(fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0),
+        )
+
+    def camera_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """(optical centre, 3x3 rotation of the optical frame) in map, for the explorer."""
+        r = self.robots["explorer"]
+        c, s = math.cos(r.yaw), math.sin(r.yaw)
+        mx, my, mz = CAMERA_MOUNT
+        eye = np.array([r.x + c * mx - s * my, r.y + s * mx + c * my, mz])
+        fwd = np.array([c, s, 0.0])
+        left = np.array([-s, c, 0.0])
+        up = np.array([0.0, 0.0, 1.0])
+        rot = np.column_stack([-left, -up, fwd])  # optical x right, y down, z forward
+        return eye, rot
+
+    def render_camera(self) -> np.ndarray:
+        """Render the explorer's camera now (H, W, 3) uint8 **BGR**, and schedule the next frame."""
+        cam = self.scenario.camera
+        eye, rot = self.camera_pose()
+        target = eye + rot[:, 2]
+        up = -rot[:, 1]
+        view = p.computeViewMatrix(
+            eye.tolist(), target.tolist(), up.tolist(), physicsClientId=self._client
+        )
+        quiet = _quiet_stdout() if self.frame_seq == 0 else contextlib.nullcontext()
+        with quiet:  # the EGL plugin reports its GL vendor on the first frame
+            _, _, rgba, _, _ = p.getCameraImage(
+                cam.width,
+                cam.height,
+                viewMatrix=view,
+                projectionMatrix=self._projection,
+                shadow=0,
+                lightDirection=LIGHT_DIRECTION,
+                lightColor=(1, 1, 1),
+                lightDistance=10.0,
+                lightAmbientCoeff=0.6,
+                lightDiffuseCoeff=0.4,
+                lightSpecularCoeff=0.0,
+                renderer=self._renderer_flag,
+                flags=p.ER_NO_SEGMENTATION_MASK,
+                physicsClientId=self._client,
+            )
+        img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
+        self.frame_seq += 1
+        while self.next_frame_ns <= self.now_ns:
+            self.next_frame_ns += self.camera_period_ns
+        return np.ascontiguousarray(img[:, :, 2::-1])
+
+    def marker_poses(self) -> dict[int, msgs.Pose]:
+        """Ground-truth marker poses in map (face along +x of each pose)."""
+        return {
+            m.id: msgs.Pose(
+                position=msgs.Point(x=m.x, y=m.y, z=m.z), orientation=_msg_quat(_quat_yaw(m.yaw))
+            )
+            for m in sorted(self.scenario.markers, key=lambda m: m.id)
+        }
