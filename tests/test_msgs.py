@@ -17,9 +17,7 @@ def test_keyword_construction_from_the_issue() -> None:
     t = msgs.TransformStamped(
         header=msgs.Header(stamp=msgs.Time(sec=1, nanosec=5), frame_id="map"),
         child_frame_id="a",
-        transform=msgs.Transform(
-            translation=msgs.Vector3(x=1.0), rotation=msgs.Quaternion(w=1.0)
-        ),
+        transform=msgs.Transform(translation=msgs.Vector3(x=1.0), rotation=msgs.Quaternion(w=1.0)),
     )
     assert t.header.stamp.ns == 1_000_000_005
     assert t.transform.translation == msgs.Vector3(x=1.0, y=0.0, z=0.0)
@@ -44,7 +42,7 @@ def test_time_ns_round_trip(ns: int) -> None:
 
 def test_every_type_name_is_pkg_msg_type() -> None:
     for cls in msgs.MESSAGE_TYPES:
-        pkg, mid, name = cls.__msgtype__.split("/")
+        _pkg, mid, name = cls.__msgtype__.split("/")
         assert mid == "msg" and name == cls.__name__, cls
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -625,7 +626,8 @@ def to_toml(scn: Scenario) -> str:
         }
         for m in scn.markers
     ]
-    return tomli_w.dumps(data)
+    # tomli_w splits every array over lines; keep [x, y] pairs on one line for people
+    return re.sub(r"\[\n\s+([^,\n]+),\n\s+([^,\n]+),\n\]", r"[\1, \2]", tomli_w.dumps(data))
 
 
 def load(path: str | os.PathLike[str]) -> Scenario:

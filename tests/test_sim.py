@@ -1,0 +1,162 @@
+"""The simulator: determinism, the camera model, markers the right way round, walls that stop."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from usar_replay import msgs
+from usar_replay.scenario import course_world
+from usar_replay.sim import FOOTPRINT, Simulator
+
+# the marker each course target sees, in target order (course-world.md)
+TARGET_MARKER = {0: 0, 1: 1, 2: 3, 3: 2}
+
+
+@pytest.fixture(scope="module")
+def sim() -> Simulator:
+    s = Simulator(course_world(), renderer="tiny")
+    yield s
+    s.close()
+
+
+def _face(sim: Simulator, k: int) -> tuple[np.ndarray, msgs.CameraInfo]:
+    scn = sim.scenario
+    tx, ty = scn.targets[k]
+    m = scn.marker_by_id(TARGET_MARKER[k])
+    sim.teleport("explorer", tx, ty, math.atan2(m.y - ty, m.x - tx))
+    return sim.render_camera(), sim.camera_info()
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_each_course_marker_decodes_to_its_id_from_its_target(sim: Simulator, k: int) -> None:
+    img, info = _face(sim, k)
+    det = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50))
+    corners, ids, _ = det.detectMarkers(img)
+    assert ids is not None and ids.ravel().tolist() == [TARGET_MARKER[k]]
+    # K matches the rendering: the marker's true corners project onto the detected ones
+    m = sim.scenario.marker_by_id(TARGET_MARKER[k])
+    eye, rot = sim.camera_pose()
+    kmat = np.array(info.k).reshape(3, 3)
+    h, c, s = m.size / 2, math.cos(m.yaw), math.sin(m.yaw)
+    # seen from the front: top-left is at -y (local), top; OpenCV order TL, TR, BR, BL
+    local = [(-h, h), (h, h), (h, -h), (-h, -h)]
+    for (ly, lz), found in zip(local, corners[0][0], strict=True):
+        world = np.array([m.x - s * ly, m.y + c * ly, m.z + lz])
+        cam = rot.T @ (world - eye)
+        uv = (kmat @ cam)[:2] / cam[2]
+        assert np.hypot(*(uv - found)) < 1.5, (uv, found)
+
+
+def test_camera_info_and_optical_frame(sim: Simulator) -> None:
+    info = sim.camera_info()
+    assert (info.width, info.height) == (640, 480)
+    assert info.header.frame_id == "explorer_tf/camera_rgb_optical_frame"
+    fx = info.k[0]
+    # horizontal FOV 1.3439 rad: the image's half-width subtends hfov/2
+    assert math.isclose(2 * math.atan(320 / fx), 1.3439, rel_tol=1e-9)
+    sim.teleport("explorer", -4.0, 2.5, 0.3)
+    eye, rot = sim.camera_pose()
+    ahead = np.array([-4.0 + math.cos(0.3) * 2, 2.5 + math.sin(0.3) * 2, eye[2]])
+    cam = rot.T @ (ahead - eye)
+    assert cam[2] > 1.9 and abs(cam[0]) < 0.1 and abs(cam[1]) < 1e-9  # z forward
+    below = rot.T @ (eye - np.array([0, 0, 1.0]) - eye)
+    assert below[1] > 0.99  # y down
+
+
+def test_tf_chain_names() -> None:
+    with Simulator(course_world(), renderer="tiny") as sim:
+        static = {(t.header.frame_id, t.child_frame_id) for t in sim.tf_static().transforms}
+        dynamic = {(t.header.frame_id, t.child_frame_id) for t in sim.tf().transforms}
+    for r in ("explorer", "follower"):
+        assert ("map", f"{r}_tf/odom") in static
+        assert (f"{r}_tf/odom", f"{r}_tf/base_footprint") in dynamic
+        assert (f"{r}_tf/base_footprint", f"{r}_tf/camera_rgb_frame") in static
+        assert (f"{r}_tf/camera_rgb_frame", f"{r}_tf/camera_rgb_optical_frame") in static
+
+
+def _drive(renderer: str) -> tuple[list[tuple[float, float, float]], str]:
+    poses = []
+    digest = hashlib.sha256()
+    with Simulator(course_world(), renderer=renderer) as sim:
+        for i in range(40):
+            sim.set_cmd_vel(
+                "explorer",
+                msgs.Twist(linear=msgs.Vector3(x=0.26), angular=msgs.Vector3(z=0.3 * math.sin(i))),
+            )
+            sim.set_cmd_vel("follower", msgs.Twist(angular=msgs.Vector3(z=1.0)))
+            sim.step(5)
+            for r in ("explorer", "follower"):
+                p = sim.true_pose(r)
+                poses.append((p.position.x, p.position.y, p.orientation.z))
+            if sim.camera_due():
+                digest.update(sim.render_camera().tobytes())
+    return poses, digest.hexdigest()
+
+
+def test_same_commands_give_bit_identical_poses_and_images() -> None:
+    a, b = _drive("tiny"), _drive("tiny")
+    assert a == b
+
+
+def test_limits_and_odometry() -> None:
+    with Simulator(course_world(), renderer="tiny") as sim:
+        sim.set_cmd_vel(
+            "explorer", msgs.Twist(linear=msgs.Vector3(x=5.0), angular=msgs.Vector3(z=9.0))
+        )
+        sim.step(100)  # 1 s
+        odom = sim.odometry("explorer")
+        assert odom.twist.twist.linear.x == pytest.approx(0.26)
+        assert odom.twist.twist.angular.z == pytest.approx(1.82)
+        true = sim.true_pose("explorer").position
+        start = sim.scenario.explorer
+        # odom frame = start pose (yaw 0 in the course): odometry is the displacement from it
+        assert odom.pose.pose.position.x == pytest.approx(true.x - start.x, abs=1e-12)
+        assert odom.pose.pose.position.y == pytest.approx(true.y - start.y, abs=1e-12)
+        assert odom.header.frame_id == "explorer_tf/odom"
+
+
+def test_acceleration_is_limited() -> None:
+    with Simulator(course_world(), renderer="tiny") as sim:
+        sim.set_cmd_vel("explorer", msgs.Twist(linear=msgs.Vector3(x=0.26)))
+        sim.step(1)
+        v = sim.odometry("explorer").twist.twist.linear.x
+        assert 0 < v <= 2.5 * 0.01 + 1e-12
+
+
+def test_a_wall_stops_the_robot() -> None:
+    with Simulator(course_world(), renderer="tiny") as sim:
+        # face the east outer wall (inner face at x = 8.4925) from 1 m away and drive on
+        sim.teleport("explorer", 7.5, -1.0, 0.0)
+        sim.set_cmd_vel("explorer", msgs.Twist(linear=msgs.Vector3(x=0.26)))
+        sim.step(1500)  # 15 s: far enough to cross the wall if nothing stopped it
+        x = sim.true_pose("explorer").position.x
+        front = max(q[0] for q in FOOTPRINT)
+        assert x + front <= 8.4925 + 1e-6
+        assert x > 8.3  # it did drive up to the wall
+        assert sim.refused_motions("explorer") > 0
+        assert sim.odometry("explorer").twist.twist.linear.x == 0.0
+
+
+def test_camera_runs_at_its_rate_on_the_sim_clock() -> None:
+    with Simulator(course_world(), renderer="tiny") as sim:
+        frames = 0
+        t0 = sim.now_ns
+        while sim.now_ns < t0 + 2_000_000_000:
+            if sim.camera_due():
+                sim.render_camera()
+                frames += 1
+            sim.step(5)
+        assert frames == 20
+
+
+def test_egl_renderer_is_deterministic_when_it_loads() -> None:
+    with Simulator(course_world(), renderer="auto") as sim:
+        if sim.renderer_name != "egl":
+            pytest.skip("the EGL renderer plugin does not load on this machine")
+    a, b = _drive("egl"), _drive("egl")
+    assert a == b
