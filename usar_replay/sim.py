@@ -35,6 +35,7 @@ forward-looking, x forward) ``-> <robot>_tf/camera_rgb_optical_frame`` (static, 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import math
 import os
 import pkgutil
@@ -56,14 +57,21 @@ def _quiet_stdout() -> Iterator[None]:
     They would otherwise interleave with the CLI's own output, which users may pipe.
     """
     sys.stdout.flush()
+    _libc_fflush()
     saved = os.dup(1)
     try:
         with open(os.devnull, "wb") as null:
             os.dup2(null.fileno(), 1)
             yield
+            _libc_fflush()  # C stdio buffers when stdout is a pipe: drop it while muted
     finally:
         os.dup2(saved, 1)
         os.close(saved)
+
+
+def _libc_fflush() -> None:
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).fflush(None)
 
 
 with _quiet_stdout():
