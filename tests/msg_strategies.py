@@ -26,7 +26,9 @@ _INT_RANGES = {
     "uint64": (0, 2**64 - 1),
 }
 
-text = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=20)
+text = st.text(
+    st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=20
+)
 floats = st.floats(allow_nan=False, width=64)
 
 
@@ -58,9 +60,11 @@ def message(cls: type[msgs.Message]) -> st.SearchStrategy[msgs.Message]:
             kwargs[name] = st.binary(max_size=64)
         elif kind == "floats":
             (_, (basetype, _)), length = detail
-            size = {"min_size": length, "max_size": length} if node == Nodetype.ARRAY else {
-                "max_size": 8
-            }
+            size = (
+                {"min_size": length, "max_size": length}
+                if node == Nodetype.ARRAY
+                else {"max_size": 8}
+            )
             kwargs[name] = st.lists(_base(basetype), **size).map(tuple)
         else:
             kwargs[name] = _base(detail[0])

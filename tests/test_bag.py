@@ -45,12 +45,10 @@ def _write_all_types(path: Path, values: dict[str, msgs.Message]) -> None:
             w.write(topic, value, T0 + i)
 
 
-@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(
-    st.fixed_dictionaries(
-        {f"/t{i}": message(cls) for i, cls in enumerate(msgs.MESSAGE_TYPES)}
-    )
+@settings(
+    max_examples=5, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
+@given(st.fixed_dictionaries({f"/t{i}": message(cls) for i, cls in enumerate(msgs.MESSAGE_TYPES)}))
 def test_rosbags_reads_every_type_to_the_same_values(
     tmp_path: Path, values: dict[str, msgs.Message]
 ) -> None:
@@ -69,12 +67,10 @@ def test_rosbags_reads_every_type_to_the_same_values(
         assert _plain(ros) == _plain(value), topic
 
 
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(
-    st.lists(
-        st.sampled_from(msgs.MESSAGE_TYPES).flatmap(message), min_size=1, max_size=6
-    )
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
+@given(st.lists(st.sampled_from(msgs.MESSAGE_TYPES).flatmap(message), min_size=1, max_size=6))
 def test_write_read_round_trip(tmp_path: Path, values: list[msgs.Message]) -> None:
     path = tmp_path / "rt.mcap"
     with bag.BagWriter(path) as w:
@@ -215,7 +211,9 @@ def test_reading_streams_chunk_by_chunk(tmp_path: Path) -> None:
     ("content", "expected"),
     [(None, "no such file"), (b"", "empty"), (b"hello, not mcap at all", "not an MCAP file")],
 )
-def test_bad_paths_raise_one_line_errors(tmp_path: Path, content: bytes | None, expected: str) -> None:
+def test_bad_paths_raise_one_line_errors(
+    tmp_path: Path, content: bytes | None, expected: str
+) -> None:
     path = tmp_path / "x.mcap"
     if content is not None:
         path.write_bytes(content)

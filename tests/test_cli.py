@@ -40,7 +40,9 @@ def test_help_lists_every_command() -> None:
         assert name in out.stdout
 
 
-def test_info_reports_topics_counts_duration(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_info_reports_topics_counts_duration(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "run.mcap"
     _log(path)
     assert main(["info", str(path)]) == 0
@@ -52,7 +54,9 @@ def test_info_reports_topics_counts_duration(tmp_path: Path, capsys: pytest.Capt
     assert "camera = 640x480@10" in out
 
 
-def test_info_on_an_interrupted_log_exits_3(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_info_on_an_interrupted_log_exits_3(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "run.mcap"
     _log(path, interrupted=True)
     assert main(["info", str(path)]) == 3

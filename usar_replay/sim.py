@@ -554,8 +554,8 @@ class Simulator:
         view = p.computeViewMatrix(
             eye.tolist(), target.tolist(), up.tolist(), physicsClientId=self._client
         )
-        quiet = _quiet_stdout() if self.frame_seq == 0 else contextlib.nullcontext()
-        with quiet:  # the EGL plugin reports its GL vendor on the first frame
+        quiet = _quiet_stdout() if self.renderer_name == "egl" else contextlib.nullcontext()
+        with quiet:  # the EGL plugin prints its GL vendor on stdout on some frames
             _, _, rgba, _, _ = p.getCameraImage(
                 cam.width,
                 cam.height,
