@@ -1,0 +1,668 @@
+"""A tf2-exact transform buffer, broadcaster and listener over :mod:`usar_replay.msgs`.
+
+Students of this course learn tf2 with ROS; this buffer answers every lookup as tf2's
+``BufferCore`` does (same tree walk, same latest-common-time rule, same interpolation, same
+exceptions and message texts), so what they learn here holds on a real robot.
+
+``lookup_transform(target, source, time)`` returns the pose of ``source`` in ``target``: the
+transform that maps points expressed in ``source`` into ``target``. ``time`` is integer
+nanoseconds or a :class:`msgs.Time`; ``0`` means "the latest time at which the whole chain is
+known" (tf2's ``getLatestCommonTime``: the minimum over the dynamic links on the path of each
+link's newest stamp; static links are ignored).
+
+The course's pitfalls, explained
+--------------------------------
+* **Why ``marker_frame`` can be looked up at the image's stamp.** The broadcaster stamps
+  ``marker_frame`` with the camera image's stamp. Its parent chain
+  (``camera_rgb_optical_frame -> camera_rgb_frame -> base_footprint``) is static, and
+  ``base_footprint -> odom`` is published by the simulator at every control tick, including the
+  tick at which the frame was rendered; ``odom -> map`` is static. So every link on the path has a
+  sample at (or on both sides of) that stamp, and ``marker_frame`` itself has exactly one sample
+  at exactly that stamp. Looking it up *at that stamp* needs no extrapolation.
+* **"Lookup would require extrapolation ..."** appears when a link has no data around the
+  requested time: asking for ``marker_frame`` at "now" (later than its only sample: *into the
+  future* for that link), or at time 0 after a newer ``marker_frame`` made the chain's latest
+  common time move, or before the robot's odometry started (*into the past*). A link with a
+  single sample answers only its own stamp ("at time X, but only time Y is in the buffer"). tf2
+  never extrapolates; neither does this buffer.
+* **"\"marker_frame\" passed to lookupTransform argument source_frame does not exist"** appears
+  when the frame was never broadcast: no marker was detected yet (``marker_frame`` is broadcast
+  only on frames with a detection), or the name is misspelt (tf2 frame ids have no leading
+  '/'; a leading '/' is an InvalidArgument).
+"""
+
+from __future__ import annotations
+
+import bisect
+import logging
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+from usar_replay import msgs
+
+__all__ = [
+    "Buffer",
+    "ConnectivityException",
+    "ExtrapolationException",
+    "InvalidArgumentException",
+    "LookupException",
+    "StaticTransformBroadcaster",
+    "TimeoutException",
+    "TransformBroadcaster",
+    "TransformException",
+    "TransformListener",
+]
+
+log = logging.getLogger("usar_replay.tf_tree")
+
+MAX_GRAPH_DEPTH = 1000
+NS = 1_000_000_000
+
+Vec = tuple[float, float, float]
+Quat = tuple[float, float, float, float]  # x, y, z, w
+
+
+class TransformException(Exception):
+    """Base of tf2's lookup errors."""
+
+
+class LookupException(TransformException):
+    """A frame that the buffer has never seen."""
+
+
+class ConnectivityException(TransformException):
+    """Two frames that are not in the same tree."""
+
+
+class ExtrapolationException(TransformException):
+    """A time outside the data a link holds (tf2 never extrapolates)."""
+
+
+class InvalidArgumentException(TransformException):
+    """An empty frame id, or one with a leading '/'."""
+
+
+class TimeoutException(TransformException):
+    """Kept for API parity with tf2_ros; this buffer never waits."""
+
+
+# --- quaternion math in plain floats: the hot path of every lookup ------------------------------
+
+
+def _qmul(a: Quat, b: Quat) -> Quat:
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+def _qrot(q: Quat, v: Vec) -> Vec:
+    x, y, z, w = q
+    vx, vy, vz = v
+    # t = 2 q_vec x v ; v' = v + w t + q_vec x t
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (
+        vx + w * tx + (y * tz - z * ty),
+        vy + w * ty + (z * tx - x * tz),
+        vz + w * tz + (x * ty - y * tx),
+    )
+
+
+def _qinv(q: Quat) -> Quat:
+    x, y, z, w = q
+    n = x * x + y * y + z * z + w * w
+    return (-x / n, -y / n, -z / n, w / n)
+
+
+def _slerp(a: Quat, b: Quat, t: float) -> Quat:
+    """Shortest-path spherical interpolation, as tf2's ``slerp`` of ``tf2::Quaternion``."""
+    dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+    if dot < 0.0:
+        b = (-b[0], -b[1], -b[2], -b[3])
+        dot = -dot
+    if dot > 0.9999999:
+        out = tuple(a[i] + (b[i] - a[i]) * t for i in range(4))
+    else:
+        theta = math.acos(min(dot, 1.0))
+        s = math.sin(theta)
+        wa, wb = math.sin((1.0 - t) * theta) / s, math.sin(t * theta) / s
+        out = tuple(a[i] * wa + b[i] * wb for i in range(4))
+    n = math.sqrt(sum(c * c for c in out))
+    return (out[0] / n, out[1] / n, out[2] / n, out[3] / n)
+
+
+def _seconds(ns: int) -> str:
+    """Times in tf2's error texts: seconds with six decimals."""
+    return f"{ns / NS:.6f}"
+
+
+# --- caches --------------------------------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class _Sample:
+    stamp: int
+    parent: str
+    t: Vec
+    q: Quat
+
+
+class _Repeated(Exception):
+    """A second sample with a stamp the cache already holds."""
+
+
+@dataclass(slots=True)
+class _TimeCache:
+    """One child frame's history, sorted by stamp (tf2's ``TimeCache``)."""
+
+    max_storage_ns: int
+    stamps: list[int] = field(default_factory=list)
+    samples: list[_Sample] = field(default_factory=list)
+    static: bool = False
+
+    def insert(self, s: _Sample) -> bool:
+        if self.static:
+            self.stamps, self.samples = [s.stamp], [s]
+            return True
+        if self.stamps and s.stamp < self.stamps[-1] - self.max_storage_ns:
+            return False
+        i = bisect.bisect_left(self.stamps, s.stamp)
+        if i < len(self.stamps) and self.stamps[i] == s.stamp:
+            raise _Repeated  # tf2 (ROS 2) keeps the first sample of a stamp
+        self.stamps.insert(i, s.stamp)
+        self.samples.insert(i, s)
+        # prune what is older than the newest minus the storage time
+        cut = bisect.bisect_left(self.stamps, self.stamps[-1] - self.max_storage_ns)
+        if cut:
+            del self.stamps[:cut]
+            del self.samples[:cut]
+        return True
+
+    def latest(self) -> tuple[int, str]:
+        """(newest stamp, its parent); static caches report stamp 0, as tf2's StaticCache."""
+        if not self.samples:
+            return 0, ""
+        return (0 if self.static else self.stamps[-1]), self.samples[-1].parent
+
+    def get(self, time: int) -> tuple[_Sample | None, str]:
+        """The sample at ``time`` (interpolated), or None and tf2's error text."""
+        if not self.samples:
+            return None, ""
+        if self.static:
+            return self.samples[0], ""
+        if time == 0:
+            return self.samples[-1], ""
+        stamps = self.stamps
+        if len(stamps) == 1:
+            if stamps[0] == time:
+                return self.samples[0], ""
+            return None, (
+                f"Lookup would require extrapolation at time {_seconds(time)}, but only time "
+                f"{_seconds(stamps[0])} is in the buffer"
+            )
+        if time > stamps[-1]:
+            return None, (
+                "Lookup would require extrapolation into the future.  Requested time "
+                f"{_seconds(time)} but the latest data is at time {_seconds(stamps[-1])}"
+            )
+        if time < stamps[0]:
+            return None, (
+                "Lookup would require extrapolation into the past.  Requested time "
+                f"{_seconds(time)} but the earliest data is at time {_seconds(stamps[0])}"
+            )
+        i = bisect.bisect_left(stamps, time)
+        if stamps[i] == time:
+            return self.samples[i], ""
+        one, two = self.samples[i - 1], self.samples[i]
+        if one.parent != two.parent:
+            return one, ""  # tf2 does not interpolate across a change of parent
+        r = (time - one.stamp) / (two.stamp - one.stamp)
+        t = (
+            one.t[0] + (two.t[0] - one.t[0]) * r,
+            one.t[1] + (two.t[1] - one.t[1]) * r,
+            one.t[2] + (two.t[2] - one.t[2]) * r,
+        )
+        return _Sample(time, one.parent, t, _slerp(one.q, two.q, r)), ""
+
+
+# --- the buffer ----------------------------------------------------------------------------------
+
+
+class Buffer:
+    """tf2's ``BufferCore`` with tf2_ros' Python ``Buffer`` API (no waiting: data is the log)."""
+
+    def __init__(self, cache_time: float = 10.0) -> None:
+        self.cache_time_ns = round(cache_time * NS)
+        self._frames: dict[str, _TimeCache] = {}
+        self._known: set[str] = set()
+        self._authority: dict[str, str] = {}
+
+    # -- inserting -----------------------------------------------------------------------------
+
+    def set_transform(
+        self, msg: msgs.TransformStamped, authority: str = "default_authority"
+    ) -> bool:
+        """Insert a dynamic transform; False (with tf2's warning) when it is refused."""
+        return self._set(msg, authority, static=False)
+
+    def set_transform_static(
+        self, msg: msgs.TransformStamped, authority: str = "default_authority"
+    ) -> bool:
+        """Insert a static transform: it holds at every time."""
+        return self._set(msg, authority, static=True)
+
+    def _set(self, msg: msgs.TransformStamped, authority: str, *, static: bool) -> bool:
+        child = msg.child_frame_id.lstrip("/")
+        parent = msg.header.frame_id.lstrip("/")
+        tr, rot = msg.transform.translation, msg.transform.rotation
+        if child == parent:
+            log.error(
+                'TF_SELF_TRANSFORM: Ignoring transform from authority "%s" with frame_id and '
+                'child_frame_id  "%s" because they are the same',
+                authority,
+                child,
+            )
+            return False
+        if not child:
+            log.error(
+                'TF_NO_CHILD_FRAME_ID: Ignoring transform from authority "%s" because '
+                "child_frame_id not set ",
+                authority,
+            )
+            return False
+        if not parent:
+            log.error(
+                'TF_NO_FRAME_ID: Ignoring transform with child_frame_id "%s"  from '
+                'authority "%s" because frame_id not set',
+                child,
+                authority,
+            )
+            return False
+        values = (tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w)
+        if any(math.isnan(v) for v in values):
+            log.error(
+                'TF_NAN_INPUT: Ignoring transform for child_frame_id "%s" from authority '
+                '"%s" because of a nan value in the transform (%s)',
+                child,
+                authority,
+                " ".join(str(v) for v in values),
+            )
+            return False
+        norm = math.sqrt(rot.x**2 + rot.y**2 + rot.z**2 + rot.w**2)
+        if abs(norm - 1.0) >= 0.01:
+            log.error(
+                'TF_DENORMALIZED_QUATERNION: Ignoring transform for child_frame_id "%s" '
+                'from authority "%s" because of an invalid quaternion in the transform '
+                "(%s %s %s %s)",
+                child,
+                authority,
+                rot.x,
+                rot.y,
+                rot.z,
+                rot.w,
+            )
+            return False
+        q = (rot.x / norm, rot.y / norm, rot.z / norm, rot.w / norm)
+        cache = self._frames.get(child)
+        if cache is None:
+            cache = _TimeCache(self.cache_time_ns, static=static)
+            self._frames[child] = cache
+        elif static and not cache.static:
+            cache.static = True
+        stamp = msg.header.stamp.ns
+        try:
+            inserted = cache.insert(_Sample(stamp, parent, (tr.x, tr.y, tr.z), q))
+        except _Repeated:
+            log.warning(
+                "TF_REPEATED_DATA ignoring data with redundant timestamp for frame %s (parent "
+                "%s) at time %s according to authority %s",
+                child,
+                parent,
+                _seconds(stamp),
+                authority,
+            )
+            return False
+        if not inserted:
+            log.warning(
+                "TF_OLD_DATA ignoring data from the past for frame %s at time %s according to "
+                "authority %s\nPossible reasons are listed at "
+                "http://wiki.ros.org/tf/Errors%%20explained",
+                child,
+                _seconds(stamp),
+                authority,
+            )
+            return False
+        self._known.add(child)
+        self._known.add(parent)
+        self._authority[child] = authority
+        return True
+
+    def clear(self) -> None:
+        self._frames.clear()
+        self._known.clear()
+        self._authority.clear()
+
+    # -- looking up ----------------------------------------------------------------------------
+
+    @staticmethod
+    def _ns(time: int | msgs.Time) -> int:
+        return time.ns if isinstance(time, msgs.Time) else int(time)
+
+    def _validate(self, where: str, frame: str) -> None:
+        if not frame:
+            raise InvalidArgumentException(
+                f"Invalid argument passed to {where} in tf2 frame_ids cannot be empty"
+            )
+        if frame.startswith("/"):
+            raise InvalidArgumentException(
+                f'Invalid argument "{frame}" passed to {where} in tf2 frame_ids cannot start '
+                "with a '/' like: "
+            )
+        if frame not in self._known:
+            raise LookupException(f'"{frame}" passed to {where} does not exist. ')
+
+    def lookup_transform(
+        self, target_frame: str, source_frame: str, time: int | msgs.Time
+    ) -> msgs.TransformStamped:
+        """The pose of ``source_frame`` in ``target_frame`` at ``time`` (0: latest common)."""
+        self._validate("lookupTransform argument target_frame", target_frame)
+        self._validate("lookupTransform argument source_frame", source_frame)
+        t, q, stamp = self._walk(target_frame, source_frame, self._ns(time))
+        return _stamped(target_frame, source_frame, stamp, t, q)
+
+    def lookup_transform_full(
+        self,
+        target_frame: str,
+        target_time: int | msgs.Time,
+        source_frame: str,
+        source_time: int | msgs.Time,
+        fixed_frame: str,
+    ) -> msgs.TransformStamped:
+        """tf2's time travel: ``source`` at ``source_time`` into ``target`` at ``target_time``,
+        through ``fixed_frame`` (a frame assumed not to move between the two times)."""
+        self._validate("lookupTransform argument target_frame", target_frame)
+        self._validate("lookupTransform argument source_frame", source_frame)
+        self._validate("lookupTransform argument fixed_frame", fixed_frame)
+        t1, q1, s1 = self._walk(fixed_frame, source_frame, self._ns(source_time))
+        t2, q2, s2 = self._walk(target_frame, fixed_frame, self._ns(target_time))
+        t = _qrot(q2, t1)
+        return _stamped(
+            target_frame,
+            source_frame,
+            min(s1, s2),
+            (t[0] + t2[0], t[1] + t2[1], t[2] + t2[2]),
+            _qmul(q2, q1),
+        )
+
+    def can_transform(self, target_frame: str, source_frame: str, time: int | msgs.Time) -> bool:
+        """Whether :meth:`lookup_transform` would succeed; never raises."""
+        try:
+            self.lookup_transform(target_frame, source_frame, time)
+        except TransformException:
+            return False
+        return True
+
+    def can_transform_full(
+        self,
+        target_frame: str,
+        target_time: int | msgs.Time,
+        source_frame: str,
+        source_time: int | msgs.Time,
+        fixed_frame: str,
+    ) -> bool:
+        try:
+            self.lookup_transform_full(
+                target_frame, target_time, source_frame, source_time, fixed_frame
+            )
+        except TransformException:
+            return False
+        return True
+
+    def get_latest_common_time(self, target_frame: str, source_frame: str) -> int:
+        """tf2's ``getLatestCommonTime`` in nanoseconds (0 when the path is all static)."""
+        self._validate("getLatestCommonTime argument target_frame", target_frame)
+        self._validate("getLatestCommonTime argument source_frame", source_frame)
+        return self._latest_common_time(target_frame, source_frame)
+
+    def _latest_common_time(self, target: str, source: str) -> int:
+        inf = math.inf
+        if source == target:
+            cache = self._frames.get(source)
+            return cache.latest()[0] if cache else 0
+        lct: list[tuple[int, str]] = []
+        common: float = inf
+        frame = target
+        depth = 0
+        while frame:
+            cache = self._frames.get(frame)
+            if cache is None:
+                break
+            latest, parent = cache.latest()
+            if not parent:
+                break
+            if latest != 0:
+                common = min(common, latest)
+            lct.append((latest, parent))
+            frame = parent
+            if frame == source:
+                return 0 if common == inf else int(common)
+            depth += 1
+            if depth > MAX_GRAPH_DEPTH:
+                raise _loop_error(target, source)
+        frame = source
+        common_parent = ""
+        common = inf
+        depth = 0
+        while True:
+            cache = self._frames.get(frame)
+            if cache is None:
+                break
+            latest, parent = cache.latest()
+            if not parent:
+                break
+            if latest != 0:
+                common = min(common, latest)
+            if any(p == parent for _, p in lct):
+                common_parent = parent
+                break
+            frame = parent
+            if frame == target:
+                return 0 if common == inf else int(common)
+            depth += 1
+            if depth > MAX_GRAPH_DEPTH:
+                raise _loop_error(target, source)
+        if not common_parent:
+            raise ConnectivityException(_connectivity_text(target, source))
+        for latest, parent in lct:
+            if latest != 0:
+                common = min(common, latest)
+            if parent == common_parent:
+                break
+        return 0 if common == inf else int(common)
+
+    def _walk(self, target: str, source: str, time: int) -> tuple[Vec, Quat, int]:
+        """tf2's ``walkToTopParent`` + ``TransformAccum``: (translation, rotation, time used)."""
+        if source == target:
+            if time == 0:
+                cache = self._frames.get(source)
+                time = cache.latest()[0] if cache else 0
+            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0), time
+        if time == 0:
+            time = self._latest_common_time(target, source)
+        # walk from the source toward the root
+        s_t: Vec = (0.0, 0.0, 0.0)
+        s_q: Quat = (0.0, 0.0, 0.0, 1.0)
+        frame = source
+        top_parent = frame
+        extrapolation_error = ""
+        extrapolation_might_have_occurred = False
+        depth = 0
+        while frame:
+            cache = self._frames.get(frame)
+            if cache is None:
+                top_parent = frame
+                break
+            sample, err = cache.get(time)
+            if sample is None:
+                if not extrapolation_might_have_occurred:
+                    extrapolation_error = err
+                top_parent = frame
+                extrapolation_might_have_occurred = True
+                break
+            if frame == target:
+                return s_t, s_q, time  # the target is a parent of the source
+            r = _qrot(sample.q, s_t)
+            s_t = (r[0] + sample.t[0], r[1] + sample.t[1], r[2] + sample.t[2])
+            s_q = _qmul(sample.q, s_q)
+            top_parent = frame
+            frame = sample.parent
+            depth += 1
+            if depth > MAX_GRAPH_DEPTH:
+                raise _loop_error(target, source)
+        # walk from the target toward the same top
+        t_t: Vec = (0.0, 0.0, 0.0)
+        t_q: Quat = (0.0, 0.0, 0.0, 1.0)
+        frame = target
+        depth = 0
+        while frame != top_parent:
+            cache = self._frames.get(frame)
+            if cache is None:
+                break
+            sample, err = cache.get(time)
+            if sample is None:
+                raise ExtrapolationException(
+                    f"{err}, when looking up transform from frame [{source}] to frame [{target}]"
+                )
+            if frame == source:
+                inv = _qinv(t_q)
+                v = _qrot(inv, (-t_t[0], -t_t[1], -t_t[2]))
+                return v, inv, time  # the source is a parent of the target
+            r = _qrot(sample.q, t_t)
+            t_t = (r[0] + sample.t[0], r[1] + sample.t[1], r[2] + sample.t[2])
+            t_q = _qmul(sample.q, t_q)
+            frame = sample.parent
+            depth += 1
+            if depth > MAX_GRAPH_DEPTH:
+                raise _loop_error(target, source)
+        if frame != top_parent:
+            if extrapolation_might_have_occurred:
+                raise ExtrapolationException(
+                    f"{extrapolation_error}, when looking up transform from frame [{source}] "
+                    f"to frame [{target}]"
+                )
+            raise ConnectivityException(_connectivity_text(target, source))
+        inv = _qinv(t_q)
+        inv_t = _qrot(inv, (-t_t[0], -t_t[1], -t_t[2]))
+        r = _qrot(inv, s_t)
+        return (r[0] + inv_t[0], r[1] + inv_t[1], r[2] + inv_t[2]), _qmul(inv, s_q), time
+
+    # -- introspection -------------------------------------------------------------------------
+
+    def frames(self) -> dict[str, str]:
+        """child -> parent (its newest sample's parent), sorted by child: the tree to draw."""
+        return {
+            c: self._frames[c].samples[-1].parent
+            for c in sorted(self._frames)
+            if self._frames[c].samples
+        }
+
+    def all_frames_as_yaml(self) -> str:
+        """tf2's ``allFramesAsYAML``-like listing: parent, authority, newest/oldest stamps."""
+        lines = []
+        for child, parent in self.frames().items():
+            cache = self._frames[child]
+            lines += [
+                f"{child}:",
+                f"  parent: '{parent}'",
+                f"  broadcaster: '{self._authority.get(child, '')}'",
+                f"  most_recent_transform: {_seconds(cache.latest()[0])}",
+                f"  oldest_transform: {_seconds(0 if cache.static else cache.stamps[0])}",
+                f"  static: {str(cache.static).lower()}",
+            ]
+        return "\n".join(lines) + ("\n" if lines else "")
+
+    def all_frames_as_string(self) -> str:
+        return "".join(f"Frame {c} exists with parent {p}.\n" for c, p in self.frames().items())
+
+
+def _stamped(target: str, source: str, stamp: int, t: Vec, q: Quat) -> msgs.TransformStamped:
+    n = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    return msgs.TransformStamped(
+        header=msgs.Header(stamp=msgs.Time.from_ns(stamp), frame_id=target),
+        child_frame_id=source,
+        transform=msgs.Transform(
+            translation=msgs.Vector3(x=t[0], y=t[1], z=t[2]),
+            rotation=msgs.Quaternion(x=q[0] / n, y=q[1] / n, z=q[2] / n, w=q[3] / n),
+        ),
+    )
+
+
+def _connectivity_text(target: str, source: str) -> str:
+    return (
+        f"Could not find a connection between '{target}' and '{source}' because they are not "
+        "part of the same tree.Tf has two or more unconnected trees."
+    )
+
+
+def _loop_error(target: str, source: str) -> ConnectivityException:
+    return ConnectivityException(
+        "The tf tree is invalid because it contains a loop.\n"
+        f"when looking up transform from frame [{source}] to frame [{target}]"
+    )
+
+
+# --- broadcaster and listener -------------------------------------------------------------------
+
+
+class TransformBroadcaster:
+    """Turns transforms into the ``TFMessage`` to publish on ``/tf`` (the caller publishes)."""
+
+    topic = "/tf"
+
+    def send_transform(
+        self, transform: msgs.TransformStamped | Sequence[msgs.TransformStamped]
+    ) -> msgs.TFMessage:
+        items = (transform,) if isinstance(transform, msgs.TransformStamped) else tuple(transform)
+        return msgs.TFMessage(transforms=items)
+
+
+class StaticTransformBroadcaster(TransformBroadcaster):
+    """The same for ``/tf_static`` (latched: transient-local QoS in the log)."""
+
+    topic = "/tf_static"
+
+
+class TransformListener:
+    """Feeds a :class:`Buffer` from ``/tf`` and ``/tf_static`` messages, like tf2_ros' listener."""
+
+    def __init__(self, buffer: Buffer, authority: str = "listener") -> None:
+        self.buffer = buffer
+        self.authority = authority
+
+    def on_tf(self, msg: msgs.TFMessage) -> None:
+        for t in msg.transforms:
+            self.buffer.set_transform(t, self.authority)
+
+    def on_tf_static(self, msg: msgs.TFMessage) -> None:
+        for t in msg.transforms:
+            self.buffer.set_transform_static(t, self.authority)
+
+    def feed(self, topic: str, msg: msgs.TFMessage) -> None:
+        (self.on_tf_static if topic == "/tf_static" else self.on_tf)(msg)
+
+
+def frames_of(messages: Iterable[msgs.TFMessage]) -> set[str]:
+    """Every frame id named in some TF messages (used by the viewer to build the tree)."""
+    out: set[str] = set()
+    for m in messages:
+        for t in m.transforms:
+            out.add(t.header.frame_id)
+            out.add(t.child_frame_id)
+    return out
