@@ -55,7 +55,7 @@ DICTIONARIES = tuple(
     [f"DICT_{n}X{n}_{k}" for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)]
     + ["DICT_ARUCO_ORIGINAL"]
 )
-PNG_COMPRESSION = 3
+PNG_COMPRESSION = 6
 """Fixed PNG level: the same frame always encodes to the same bytes."""
 
 

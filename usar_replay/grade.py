@@ -349,8 +349,7 @@ class Grader:
         checks.append(
             Check(
                 id="marker_frame.only_on_detection",
-                description=f"marker_frame is a child of {OPTICAL_FRAME}, broadcast only on frames "
-                "with a detection",
+                description="marker_frame broadcast only with a detection, child of the camera",
                 passed=ok_only,
                 points=4.0 if ok_only else 0.0,
                 max_points=4.0,

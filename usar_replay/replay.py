@@ -43,6 +43,8 @@ __all__ = [
     "replay",
 ]
 
+RECORDER_LOG_NAME = "record"
+"""``Log.name`` of lines the recorder itself writes to ``/rosout``."""
 MISSION_OWNED_FRAMES = frozenset({MARKER_FRAME})
 """Child frames only the mission broadcasts: a ``/tf`` message of these is an output, not input."""
 
@@ -214,6 +216,8 @@ def settings_from_toml(path: str | Path, base: MissionSettings) -> MissionSettin
 
 
 def _is_mission_output(topic: str, msg: msgs.Message | None, outputs: set[str]) -> bool:
+    if topic == "/rosout" and isinstance(msg, msgs.Log) and msg.name == RECORDER_LOG_NAME:
+        return False  # the recorder's own notes (e.g. a hard stop) are not the mission's
     if topic == "/tf" and isinstance(msg, msgs.TFMessage):
         return bool(msg.transforms) and all(
             t.child_frame_id in MISSION_OWNED_FRAMES for t in msg.transforms

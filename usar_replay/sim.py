@@ -52,21 +52,25 @@ import numpy as np
 
 @contextlib.contextmanager
 def _quiet_stdout() -> Iterator[None]:
-    """Silence C-level prints (pybullet's build banner, the EGL plugin's GL report) on fd 1.
+    """Silence C-level prints (pybullet's build banner, the EGL plugin's GL report) on fd 1-2.
 
     They would otherwise interleave with the CLI's own output, which users may pipe.
     """
     sys.stdout.flush()
+    sys.stderr.flush()
     _libc_fflush()
-    saved = os.dup(1)
+    saved = (os.dup(1), os.dup(2))
     try:
         with open(os.devnull, "wb") as null:
             os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
             yield
             _libc_fflush()  # C stdio buffers when stdout is a pipe: drop it while muted
     finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
 
 
 def _libc_fflush() -> None:
@@ -564,7 +568,7 @@ class Simulator:
                 shadow=0,
                 lightDirection=LIGHT_DIRECTION,
                 lightColor=(1, 1, 1),
-                lightDistance=10.0,
+                lightDistance=1000.0,
                 lightAmbientCoeff=0.6,
                 lightDiffuseCoeff=0.4,
                 lightSpecularCoeff=0.0,

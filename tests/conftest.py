@@ -1,0 +1,42 @@
+"""Shared fixtures: a one-room world with one marker, recorded once per test session."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from usar_replay.record import RecordResult, RecordSettings, record
+from usar_replay.scenario import Box, Marker, RobotStart, Scenario
+
+
+def one_room() -> Scenario:
+    """A 4 m x 3 m room, one marker on the east wall, one lookup target in front of it."""
+    t, h = 0.15, 1.0
+
+    def wall(name: str, x: float, y: float, yaw: float, length: float) -> Box:
+        return Box(name=name, x=x, y=y, z=h / 2, size_x=length, size_y=t, size_z=h, yaw=yaw)
+
+    return Scenario(
+        name="one-room",
+        walls=(
+            wall("south", 0.0, -1.575, 0.0, 4.3),
+            wall("north", 0.0, 1.575, math.pi, 4.3),
+            wall("west", -2.075, 0.0, -math.pi / 2, 3.0),
+            wall("east", 2.075, 0.0, math.pi / 2, 3.0),
+        ),
+        markers=(Marker(id=0, x=1.99, y=0.4, yaw=math.pi),),
+        targets=((1.1, 0.3),),
+        explorer=RobotStart(name="explorer", x=-1.2, y=0.6),
+        follower=RobotStart(name="follower", x=-1.2, y=-0.9),
+        time_limit_s=120.0,
+    )
+
+
+@pytest.fixture(scope="session")
+def room_log(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, RecordResult]:
+    """The one-room mission, recorded once (about 15-30 s of wall time)."""
+    path = tmp_path_factory.mktemp("room") / "room.mcap"
+    result = record(one_room(), path, RecordSettings())
+    return path, result
