@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.record import RecordResult, RecordSettings, record
-from usar_replay.scenario import Box, Marker, RobotStart, Scenario
+from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
 
 
 def one_room() -> Scenario:
@@ -30,13 +30,14 @@ def one_room() -> Scenario:
         targets=((1.1, 0.3),),
         explorer=RobotStart(name="explorer", x=-1.2, y=0.6),
         follower=RobotStart(name="follower", x=-1.2, y=-0.9),
+        camera=CameraSettings(width=320, height=240, rate_hz=10.0),
         time_limit_s=120.0,
     )
 
 
 @pytest.fixture(scope="session")
 def room_log(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, RecordResult]:
-    """The one-room mission, recorded once (about 15-30 s of wall time)."""
+    """The one-room mission, recorded once (about 10-20 s of wall time)."""
     path = tmp_path_factory.mktemp("room") / "room.mcap"
     result = record(one_room(), path, RecordSettings())
     return path, result

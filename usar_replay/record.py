@@ -20,6 +20,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 
 from usar_replay import __version__, bag, msgs
 from usar_replay.detect import encode_image
@@ -242,7 +243,7 @@ def record(
     )
 
 
-def print_summary(result: RecordResult, file: object = sys.stdout) -> None:
+def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     """The end-of-run summary for people."""
     lines = [
         f"Recorded {result.path} ({result.size_bytes / 1e6:.1f} MB, {result.messages} messages,"
@@ -256,4 +257,4 @@ def print_summary(result: RecordResult, file: object = sys.stdout) -> None:
         err = result.marker_errors_m.get(mid)
         err_s = f", error {err * 100:.1f} cm" if err is not None else ""
         lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
-    print("\n".join(lines), file=file)  # type: ignore[call-overload]
+    print("\n".join(lines), file=file or sys.stdout)

@@ -1,0 +1,124 @@
+"""`usar record` end to end on a one-room world: the log contract, determinism, Ctrl-C, the CLI."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from conftest import one_room
+from logtools import digest
+
+from usar_replay import bag, msgs
+from usar_replay.cli import main
+from usar_replay.record import RecordResult, record
+from usar_replay.replay import load_scenario
+from usar_replay.scenario import save
+
+CONTRACT = {
+    "/explorer/camera/rgb/image_raw/compressed": "sensor_msgs/msg/CompressedImage",
+    "/explorer/camera/rgb/camera_info": "sensor_msgs/msg/CameraInfo",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/explorer/cmd_vel": "geometry_msgs/msg/Twist",
+    "/follower/cmd_vel": "geometry_msgs/msg/Twist",
+    "/explorer/odom": "nav_msgs/msg/Odometry",
+    "/follower/odom": "nav_msgs/msg/Odometry",
+    "/fiducial_transforms": "fiducial_msgs/msg/FiducialTransformArray",
+    "/explorer/goal": "geometry_msgs/msg/PoseStamped",
+    "/follower/goal": "geometry_msgs/msg/PoseStamped",
+    "/explorer/goal_status": "diagnostic_msgs/msg/DiagnosticStatus",
+    "/explorer/marker_poses": "fiducial_msgs/msg/FiducialTransformArray",
+    "/rosout": "rcl_interfaces/msg/Log",
+    "/ground_truth/explorer/pose": "geometry_msgs/msg/PoseStamped",
+    "/ground_truth/follower/pose": "geometry_msgs/msg/PoseStamped",
+    "/ground_truth/markers": "fiducial_msgs/msg/FiducialTransformArray",
+}
+
+
+def test_mission_completes_and_finds_the_marker(room_log: tuple[Path, RecordResult]) -> None:
+    _path, result = room_log
+    assert result.mission_done
+    assert set(result.markers_found) == {0}
+    assert result.marker_errors_m[0] < 0.05
+    assert result.sim_duration_s < one_room().time_limit_s
+
+
+def test_log_holds_the_whole_contract(room_log: tuple[Path, RecordResult]) -> None:
+    path, result = room_log
+    r = bag.BagReader(path)
+    assert r.complete
+    for topic, msgtype in CONTRACT.items():
+        assert r.topics[topic].msgtype == msgtype, topic
+    frames = r.topics["/explorer/camera/rgb/image_raw/compressed"].count
+    assert frames == result.frames == r.topics["/explorer/camera/rgb/camera_info"].count
+    # every frame at 10 Hz of sim time, none skipped
+    assert frames == math.floor((r.end_ns - r.start_ns) / 1e8) + 1
+    assert load_scenario(r) == one_room()
+    run = r.metadata[bag.RUN_METADATA]
+    assert run["renderer"] == result.renderer and run["software"].startswith("usar-replay")
+
+
+def test_marker_frame_only_with_detections(room_log: tuple[Path, RecordResult]) -> None:
+    path, _ = room_log
+    detected: set[int] = set()
+    broadcast: list[msgs.TransformStamped] = []
+    for m in bag.BagReader(path).messages(["/fiducial_transforms", "/tf"]):
+        if isinstance(m.msg, msgs.FiducialTransformArray) and m.msg.transforms:
+            detected.add(m.msg.header.stamp.ns)
+        elif isinstance(m.msg, msgs.TFMessage):
+            broadcast += [t for t in m.msg.transforms if t.child_frame_id == "marker_frame"]
+    assert broadcast
+    for t in broadcast:
+        assert t.header.frame_id == "explorer_tf/camera_rgb_optical_frame"
+        assert t.header.stamp.ns in detected
+
+
+def test_same_scenario_gives_the_same_messages_via_the_cli(
+    room_log: tuple[Path, RecordResult], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Record again through `usar record --scenario`: every message is identical."""
+    scenario = tmp_path / "room.toml"
+    save(one_room(), scenario)
+    out = tmp_path / "again.mcap"
+    code = main(["record", "--scenario", str(scenario), "--out", str(out), "--quiet"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "Mission complete" in text and "real-time factor" in text and "error" in text
+    assert digest(out) == digest(room_log[0])
+
+
+def test_ctrl_c_leaves_a_closed_interrupted_log(tmp_path: Path) -> None:
+    out = tmp_path / "cut.mcap"
+    ticks = 0
+
+    def interrupt(p: object) -> None:
+        nonlocal ticks
+        ticks += 1
+        if ticks == 60:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        record(one_room(), out, progress=interrupt)
+    r = bag.BagReader(out)
+    assert r.has_summary and r.status == "interrupted"
+    assert r.topics["/explorer/odom"].count == 60
+    assert not Path(str(out) + ".part").exists()
+
+
+def test_invalid_scenario_is_one_line_exit_2(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        'name = "x"\nwalls = []\nmarkers = []\n[aruco_lookup_locations]\ntarget_2 = [0, 0]\n'
+    )
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-m", "usar_replay.cli", "record", "--scenario", str(bad)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert out.returncode == 2
+    assert out.stderr.strip().count("\n") == 0 and "missing target_1" in out.stderr
