@@ -87,9 +87,11 @@ def test_info_on_bad_files_is_one_line(tmp_path: Path, content: bytes | None) ->
     assert str(path) in lines[0]
 
 
-@pytest.mark.parametrize("command", [["replay", "x.mcap"], ["grade", "x.mcap"], ["view", "x.mcap"]])
-def test_commands_not_built_yet_say_so(command: list[str]) -> None:
-    out = _usar(*command)
-    assert out.returncode == 2
-    assert "not built yet" in out.stderr
+@pytest.mark.parametrize("command", ["replay", "grade"])
+def test_missing_log_is_one_line_exit_3(command: str, tmp_path: Path) -> None:
+    missing = tmp_path / "x.mcap"
+    out = _usar(command, str(missing))
+    assert out.returncode == 3
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no such file" in lines[0] and str(missing) in lines[0]
     assert "Traceback" not in out.stderr

@@ -149,6 +149,7 @@ class _Track:
     last: tuple[float, float] | None = None
     last_ns: int = 0
     moved_ns: int | None = None
+    away_ns: int | None = None
 
 
 @dataclass(slots=True)
@@ -242,6 +243,8 @@ class Grader:
             track.start = xy
         if track.moved_ns is None and math.dist(xy, track.start) > self.th.follower_moved_m:
             track.moved_ns = t_ns
+        if track.away_ns is None and math.dist(xy, track.start) > 2 * self.th.home_m:
+            track.away_ns = t_ns
         track.last, track.last_ns = xy, t_ns
         return xy
 
@@ -253,9 +256,10 @@ class Grader:
             s.target_min_m[k] = min(s.target_min_m.get(k, math.inf), d)
             if d <= self.th.target_reached_m and k not in s.target_reached_ns:
                 s.target_reached_ns[k] = t_ns
-        all_targets = len(s.target_reached_ns) == len(self.targets)
+        # home counts once the explorer has left it (a skipped target is judged on its own line)
+        left = self.explorer.away_ns is not None
         if (
-            all_targets
+            left
             and s.explorer_home_ns is None
             and math.dist(xy, self.explorer_home) <= self.th.home_m
         ):
@@ -269,9 +273,9 @@ class Grader:
             s.follower_min_m[mid] = min(s.follower_min_m.get(mid, math.inf), d)
             if d <= self.th.follower_visit_m and mid not in s.follower_visit_ns:
                 s.follower_visit_ns[mid] = t_ns
-        visited_all = len(s.follower_visit_ns) == len(self.markers)
+        visited = bool(s.follower_visit_ns)
         if (
-            visited_all
+            visited
             and s.follower_home_ns is None
             and math.dist(xy, self.follower_home) <= self.th.home_m
         ):
