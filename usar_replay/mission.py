@@ -514,33 +514,62 @@ def approach_point(
 ) -> tuple[float, float, float] | None:
     """Where the follower should stop to visit a marker: (x, y, yaw facing the marker).
 
-    Markers are on walls, so their centre is unreachable. The marker's face normal (its frame's
-    +z in OpenCV's convention, projected on the floor) points into the room; walk along it from
-    ``approach_min`` to ``approach_max`` and take the first point where the robot fits (the
-    grid's free space, which includes the robot's inflation). When the straight line is blocked
-    (a marker in a corner), the nearest free point within the follower tolerance of the line is
-    taken instead. None when no point fits.
+    Markers are on walls, so their centre is unreachable, and a fixed offset in x and y ignores
+    both the marker's facing and the free space. The candidates are the grid's free cells (where
+    the robot, inflated, can stand and turn) in front of the marker's face (its normal, the
+    frame's +z in OpenCV's convention, projected on the floor), with a clear line of sight to
+    it, at least ``approach_min`` from its centre. Within ``follower_tolerance - xy_tolerance``
+    (so that reaching the goal within the goal tolerance is a visit), the cell closest to the
+    marker's normal line wins, then the closest to the marker; when none is that close (a
+    marker behind a tight corner), the nearest candidate up to ``approach_max`` is the best the
+    follower can do. Ties break by cell index, so the answer is deterministic. None when no cell
+    qualifies.
     """
     nx, ny = _normal_xy(rotation)
     mx, my = marker_xy
-    step = grid.resolution
-    d = settings.approach_min
-    while d <= settings.approach_max + 1e-9:
-        px, py = mx + nx * d, my + ny * d
-        if grid.is_free(px, py):
-            return (px, py, math.atan2(-ny, -nx))
-        d += step
-    # blocked straight ahead: search sideways along the face
-    d = settings.approach_min
-    while d <= settings.approach_max + 1e-9:
-        for side in np.arange(step, settings.follower_tolerance, step):
-            for sign in (1.0, -1.0):
-                px = mx + nx * d - ny * side * sign
-                py = my + ny * d + nx * side * sign
-                if grid.is_free(px, py):
-                    return (px, py, math.atan2(my - py, mx - px))
-        d += step
+    res = grid.resolution
+    r0, c0 = grid.world_to_cell(mx, my)
+    n = math.ceil(settings.approach_max / res) + 1
+    rows = np.arange(max(r0 - n, 0), min(r0 + n + 1, grid.height))
+    cols = np.arange(max(c0 - n, 0), min(c0 + n + 1, grid.width))
+    if rows.size == 0 or cols.size == 0:
+        return None
+    rr, cc = np.meshgrid(rows, cols, indexing="ij")
+    px = grid.origin[0] + (cc + 0.5) * res
+    py = grid.origin[1] + (rr + 0.5) * res
+    dx, dy = px - mx, py - my
+    dist = np.hypot(dx, dy)
+    along = dx * nx + dy * ny
+    lateral = np.abs(dx * ny - dy * nx)
+    ok = grid.free[rr, cc] & (along > 0) & (dist >= settings.approach_min)
+    ok &= dist <= settings.approach_max
+    reach = settings.follower_tolerance - settings.xy_tolerance
+    for within in (dist <= reach, np.ones_like(ok)):
+        cand = ok & within
+        # best first: nearest the normal line (2 cm bins), then nearest the marker, then index
+        order = np.lexsort(
+            (rr[cand] * grid.width + cc[cand], dist[cand], np.round(lateral[cand] / 0.02))
+        )
+        for i in order:
+            x, y = float(px[cand][i]), float(py[cand][i])
+            if _line_of_sight(grid, (x, y), (mx, my)):
+                return (x, y, math.atan2(my - y, mx - x))
     return None
+
+
+def _line_of_sight(grid: OccupancyGrid, a: tuple[float, float], b: tuple[float, float]) -> bool:
+    """No occupied cell between ``a`` and the marker at ``b`` (its own wall's last 10 cm aside)."""
+    length = math.dist(a, b)
+    steps = max(int(length / (grid.resolution / 2)), 1)
+    for i in range(steps + 1):
+        f = i / steps
+        if f * length > length - 0.10:
+            break
+        x = a[0] + (b[0] - a[0]) * f
+        y = a[1] + (b[1] - a[1]) * f
+        if grid.distance_to_obstacle(x, y) <= 0.0:
+            return False
+    return True
 
 
 def _normal_xy(q: msgs.Quaternion) -> tuple[float, float]:

@@ -1,0 +1,119 @@
+"""The detector on real rendered frames: IDs, poses against the truth, aruco_detect's fields."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from usar_replay import msgs
+from usar_replay.detect import DetectError, DetectorParams, decode_image, detect, encode_image
+from usar_replay.errors import UsageError
+from usar_replay.scenario import course_world
+from usar_replay.sim import Simulator
+
+# the marker each course target sees, in target order (course-world.md)
+TARGET_MARKER = {0: 0, 1: 1, 2: 3, 3: 2}
+
+
+@pytest.fixture(scope="module")
+def views() -> list[tuple[msgs.CompressedImage, msgs.CameraInfo, np.ndarray, np.ndarray, int]]:
+    """For each course target: its frame (PNG), CameraInfo, camera pose in map, marker ID."""
+    out = []
+    with Simulator(course_world(), renderer="tiny") as sim:
+        scn = sim.scenario
+        for k, (tx, ty) in enumerate(scn.targets):
+            m = scn.marker_by_id(TARGET_MARKER[k])
+            # look at the marker a little off-centre, as the spinning explorer first sees it
+            sim.teleport("explorer", tx, ty, math.atan2(m.y - ty, m.x - tx) + 0.2)
+            frame = sim.render_camera()
+            info = sim.camera_info()
+            image = msgs.CompressedImage(
+                header=info.header, format="png", data=encode_image(frame, "png")
+            )
+            eye, rot = sim.camera_pose()
+            out.append((image, info, eye, rot, m.id))
+    return out
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_each_course_marker_is_found_where_it_truly_is(views: list, k: int) -> None:
+    image, info, eye, rot, mid = views[k]
+    result = detect(image, info, DetectorParams())
+    assert [f.fiducial_id for f in result.transforms] == [mid]
+    assert result.header == image.header  # in the camera's optical frame, at the image's stamp
+    f = result.transforms[0]
+    t = f.transform.translation
+    in_map = eye + rot @ np.array([t.x, t.y, t.z])
+    m = course_world().marker_by_id(mid)
+    assert math.dist(in_map, (m.x, m.y, m.z)) < 0.03
+    # the marker's +z (out of its face) is the marker's +x in map (its face direction)
+    q = f.transform.rotation
+    normal = rot @ Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()[:, 2]
+    assert normal @ np.array([math.cos(m.yaw), math.sin(m.yaw), 0.0]) > 0.97
+    # aruco_detect's per-detection fields
+    assert 0.0 < f.image_error < 1.0
+    assert f.object_error == pytest.approx(f.image_error * t.z / info.k[0])
+    side_px = info.k[0] * 0.15 / t.z
+    assert 0.5 * side_px**2 < f.fiducial_area < 1.1 * side_px**2
+
+
+def test_detection_is_a_pure_function_of_the_bytes(views: list) -> None:
+    image, info, *_ = views[0]
+    a = detect(image, info, DetectorParams(), image_seq=7)
+    b = detect(
+        msgs.CompressedImage(header=image.header, format="png", data=bytes(image.data)),
+        info,
+        DetectorParams(),
+        image_seq=7,
+    )
+    assert a == b and a.image_seq == 7
+
+
+def test_png_is_lossless_and_jpeg_still_detects(views: list) -> None:
+    image, info, _, _, mid = views[1]
+    pixels = decode_image(image.data)
+    assert encode_image(pixels, "png") == image.data  # the same frame always encodes the same
+    jpeg = msgs.CompressedImage(
+        header=image.header, format="jpeg", data=encode_image(pixels, "jpeg")
+    )
+    assert [f.fiducial_id for f in detect(jpeg, info, DetectorParams()).transforms] == [mid]
+
+
+def test_another_dictionary_sees_nothing(views: list) -> None:
+    image, info, *_ = views[0]
+    assert detect(image, info, DetectorParams(dictionary="DICT_5X5_50")).transforms == ()
+
+
+def test_marker_size_scales_the_range(views: list) -> None:
+    image, info, *_ = views[2]
+    a = detect(image, info, DetectorParams()).transforms[0].transform.translation
+    b = detect(image, info, DetectorParams(marker_size=0.30)).transforms[0].transform.translation
+    assert b.z == pytest.approx(2 * a.z, rel=1e-6)
+
+
+def test_two_markers_come_sorted_by_id(views: list) -> None:
+    image, info, *_ = views[0]
+    dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    canvas = np.full((480, 640, 3), 255, np.uint8)
+    for mid, x0 in ((7, 380), (3, 60)):  # the higher ID on the left
+        tile = cv2.aruco.generateImageMarker(dictionary, mid, 120)
+        canvas[180:300, x0 : x0 + 120] = cv2.cvtColor(tile, cv2.COLOR_GRAY2BGR)
+    synthetic = msgs.CompressedImage(header=image.header, format="png", data=encode_image(canvas))
+    ids = [f.fiducial_id for f in detect(synthetic, info, DetectorParams()).transforms]
+    assert ids == [3, 7]
+
+
+def test_corrupt_frame_is_a_detect_error(views: list) -> None:
+    image, info, *_ = views[0]
+    broken = msgs.CompressedImage(header=image.header, format="png", data=b"\x89PNG not really")
+    with pytest.raises(DetectError, match="cannot be decoded"):
+        detect(broken, info, DetectorParams())
+
+
+def test_unknown_dictionary_is_a_usage_error() -> None:
+    with pytest.raises(UsageError, match="DICT_9X9_1"):
+        DetectorParams(dictionary="DICT_9X9_1")
