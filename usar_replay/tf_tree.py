@@ -122,20 +122,24 @@ def _qinv(q: Quat) -> Quat:
 
 
 def _slerp(a: Quat, b: Quat, t: float) -> Quat:
-    """Shortest-path spherical interpolation, as tf2's ``slerp`` of ``tf2::Quaternion``."""
-    dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+    """Shortest-path spherical interpolation, as tf2's ``slerp`` of ``tf2::Quaternion``.
+
+    Unrolled by hand: it runs once per dynamic link of every interpolated lookup.
+    """
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    dot = ax * bx + ay * by + az * bz + aw * bw
     if dot < 0.0:
-        b = (-b[0], -b[1], -b[2], -b[3])
-        dot = -dot
+        bx, by, bz, bw, dot = -bx, -by, -bz, -bw, -dot
     if dot > 0.9999999:
-        out = tuple(a[i] + (b[i] - a[i]) * t for i in range(4))
+        x, y, z, w = ax + (bx - ax) * t, ay + (by - ay) * t, az + (bz - az) * t, aw + (bw - aw) * t
     else:
         theta = math.acos(min(dot, 1.0))
         s = math.sin(theta)
         wa, wb = math.sin((1.0 - t) * theta) / s, math.sin(t * theta) / s
-        out = tuple(a[i] * wa + b[i] * wb for i in range(4))
-    n = math.sqrt(sum(c * c for c in out))
-    return (out[0] / n, out[1] / n, out[2] / n, out[3] / n)
+        x, y, z, w = ax * wa + bx * wb, ay * wa + by * wb, az * wa + bz * wb, aw * wa + bw * wb
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    return (x / n, y / n, z / n, w / n)
 
 
 def _seconds(ns: int) -> str:
