@@ -122,3 +122,14 @@ def test_invalid_scenario_is_one_line_exit_2(tmp_path: Path) -> None:
     )
     assert out.returncode == 2
     assert out.stderr.strip().count("\n") == 0 and "missing target_1" in out.stderr
+
+
+def test_an_existing_recording_is_never_overwritten_silently(
+    room_log: tuple[Path, RecordResult], capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, _ = room_log
+    before = path.read_bytes()
+    assert main(["record", "--out", str(path), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "exists" in err and "--overwrite" in err and err.count("\n") == 1
+    assert path.read_bytes() == before
