@@ -95,6 +95,17 @@ def test_controller_reaches_every_course_target_within_limits(grid: OccupancyGri
         assert abs(b.linear.x - a.linear.x) <= lim.max_linear_accel * 0.05 + 1e-9
 
 
+def test_a_long_detour_is_progress_not_a_stuck_robot(grid: OccupancyGrid) -> None:
+    """Either side of the start-strip wall: the path runs ~3 m east, away from the goal, and
+    back. Progress is measured along the path, so no recovery fires and both goals succeed."""
+    goals = [(-3.5, 1.2, None), (-3.5, 2.6, None)]
+    assert plan(grid, HOME, goals[0][:2]).length_m > 2.5 * math.dist(HOME, goals[0][:2])
+    _, navs, (x, y, _) = _drive(grid, goals)
+    assert [n.status for n in navs] == [NavStatus.SUCCEEDED] * 2, [n.reason for n in navs]
+    assert all(n._recoveries == 0 for n in navs)
+    assert math.dist((x, y), goals[1][:2]) <= 0.05
+
+
 def test_a_blocked_robot_fails_after_recovery(grid: OccupancyGrid) -> None:
     _, navs, _ = _drive(grid, [(COURSE.targets[0][0], COURSE.targets[0][1], None)], blocked=True)
     assert navs[0].status is NavStatus.FAILED

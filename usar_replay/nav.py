@@ -254,6 +254,7 @@ class Navigator:
         self.status = NavStatus.IDLE
         self.reason = ""
         self.path: tuple[tuple[float, float], ...] = ()
+        self._remaining: tuple[float, ...] = ()
         self._goal: tuple[float, float] = (0.0, 0.0)
         self._yaw: float | None = None
         self._xy_tol = 0.05
@@ -299,6 +300,12 @@ class Navigator:
             self.path = ()
             return []
         self.path = result.path
+        # path length left from each point to the goal: progress is measured along the path
+        left = [0.0] * len(result.path)
+        for i in range(len(result.path) - 2, -1, -1):
+            left[i] = left[i + 1] + math.dist(result.path[i], result.path[i + 1])
+        self._remaining = tuple(left)
+        self._best = math.inf
         self._index = 0
         return list(result.path)
 
@@ -346,9 +353,13 @@ class Navigator:
                 return self._stop(t_ns)
             w = math.copysign(max(min(abs(lim.heading_gain * err), lim.max_angular), 0.2), err)
             return self._limit(0.0, w, t_ns)
-        # stuck detection
-        if dist < self._best - lim.progress_m:
-            self._best, self._progress_t = dist, t_ns
+        # stuck detection: progress is the path length still to drive, not the straight-line
+        # distance to the goal (a path around a wall leads away from the goal for a while)
+        tx, ty = self._lookahead(x, y)
+        px, py = self.path[self._index]
+        togo = self._remaining[self._index] + math.hypot(px - x, py - y)
+        if togo < self._best - lim.progress_m:
+            self._best, self._progress_t = togo, t_ns
         elif t_ns - self._progress_t > lim.stuck_time_s * 1e9:
             if self._recoveries >= lim.max_recoveries:
                 self.status = NavStatus.FAILED
@@ -358,7 +369,6 @@ class Navigator:
             self._mode = _Mode.BACKUP
             self._backup_until = t_ns + int(lim.backup_time_s * 1e9)
             return self._limit(-lim.backup_speed, 0.0, t_ns)
-        tx, ty = self._lookahead(x, y)
         err = _wrap(math.atan2(ty - y, tx - x) - yaw)
         if abs(err) > lim.rotate_in_place_above:
             return self._limit(0.0, lim.heading_gain * err, t_ns)
