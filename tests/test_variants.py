@@ -10,7 +10,13 @@ import pytest
 from usar_replay.errors import InvalidScenario
 from usar_replay.nav import OccupancyGrid
 from usar_replay.scenario import course_world, from_toml, to_toml
-from usar_replay.variants import MAX_RANGE, check_variant, make_variant
+from usar_replay.variants import (
+    MAX_DRIVE_FRACTION,
+    MAX_RANGE,
+    check_variant,
+    drive_time_s,
+    make_variant,
+)
 
 BASE = course_world()
 GRID = OccupancyGrid.from_scenario(BASE)
@@ -34,6 +40,7 @@ def test_ten_seeded_variants_validate(seed: int) -> None:
     for target in v.targets:
         nearest = min(math.dist(target, (m.x, m.y)) for m in v.markers)
         assert nearest <= MAX_RANGE
+    assert drive_time_s(v, GRID) <= MAX_DRIVE_FRACTION * v.time_limit_s
     # the variant survives the trip through its TOML (it travels inside every recording)
     assert from_toml(to_toml(v)) == v
 
@@ -59,6 +66,14 @@ def test_validation_rejects_a_target_inside_a_wall() -> None:
     v = dataclasses.replace(BASE, targets=((wall.x, wall.y), *BASE.targets[1:]))
     problem = check_variant(v, GRID)
     assert problem is not None and "target_1" in problem
+
+
+def test_validation_rejects_a_world_too_big_for_its_time_limit() -> None:
+    need = drive_time_s(BASE, GRID)
+    assert 300 < need < MAX_DRIVE_FRACTION * BASE.time_limit_s  # the course: ~350 s of driving
+    tight = dataclasses.replace(BASE, time_limit_s=need / MAX_DRIVE_FRACTION - 1.0)
+    problem = check_variant(tight, GRID)
+    assert problem is not None and "of driving" in problem
 
 
 def test_negative_seed_is_a_user_error() -> None:

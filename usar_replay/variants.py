@@ -12,7 +12,11 @@ A candidate world is accepted only if, for every target:
 * its marker is in line of sight, within :data:`MAX_RANGE` and seen at most :data:`MAX_OBLIQUE`
   off the marker's normal (so the detector reads it);
 * no other marker in line of sight is closer than its own (the course world has the wrong-marker
-  trap, which the mission must handle; generated worlds must not make it worse).
+  trap, which the mission must handle; generated worlds must not make it worse);
+* the whole mission fits the time limit with room to spare: the planned routes (explorer:
+  start, targets in order, home; follower: start, markers in ID order, home) driven at full
+  speed take at most :data:`MAX_DRIVE_FRACTION` of the limit, leaving the rest for the spins at
+  0.1 rad/s (up to 63 s a target) and turns. The course world needs 58% (actual run: 477 s).
 
 Candidates are drawn until one passes (at most :data:`MAX_TRIES`), which keeps the search
 deterministic for a given seed.
@@ -21,21 +25,33 @@ deterministic for a given seed.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
 
 from usar_replay.errors import InvalidScenario
-from usar_replay.nav import Navigator, NavStatus, OccupancyGrid
+from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan
 from usar_replay.scenario import Box, Marker, Scenario
 
-__all__ = ["MAX_OBLIQUE", "MAX_RANGE", "Face", "check_variant", "faces", "make_variant"]
+__all__ = [
+    "MAX_DRIVE_FRACTION",
+    "MAX_OBLIQUE",
+    "MAX_RANGE",
+    "Face",
+    "check_variant",
+    "drive_time_s",
+    "faces",
+    "make_variant",
+]
 
 MAX_RANGE = 1.5
 """m; a target sees its marker from at most this far (the course's are 0.71-0.99 m)."""
 MIN_RANGE = 0.6
 MAX_OBLIQUE = math.radians(35)
 MAX_TRIES = 400
+MAX_DRIVE_FRACTION = 0.7
+"""Planned driving time at full speed, as a fraction of the scenario's time limit."""
 MARKER_SPACING = 1.5
 """m; markers are at least this far apart, so one view rarely holds two."""
 
@@ -171,12 +187,34 @@ def check_variant(scn: Scenario, grid: OccupancyGrid | None = None) -> str | Non
                 return f"from target_{k + 1} marker {other.id} is nearly as close as marker {m.id}"
         if not _reachable(grid, ex, target):
             return f"target_{k + 1} is not reachable from the explorer's start"
-        approach = (m.x + math.cos(m.yaw) * 0.35, m.y + math.sin(m.yaw) * 0.35)
+        approach = _approach(m)
         if not grid.is_free(*approach) or not _reachable(grid, fo, approach):
             return f"the follower cannot reach marker {m.id}"
     if len(owners) != len(scn.markers):
         return "some marker is no target's marker"
+    budget = MAX_DRIVE_FRACTION * scn.time_limit_s
+    need = drive_time_s(scn, grid)
+    if need > budget:
+        return f"the routes take {need:.0f} s of driving, more than {budget:.0f} s"
     return None
+
+
+def _approach(m: Marker) -> tuple[float, float]:
+    return (m.x + math.cos(m.yaw) * 0.35, m.y + math.sin(m.yaw) * 0.35)
+
+
+def drive_time_s(scn: Scenario, grid: OccupancyGrid | None = None) -> float:
+    """Seconds of driving at full speed along the planned routes of both robots."""
+    grid = grid or OccupancyGrid.from_scenario(scn)
+    ex = (scn.explorer.x, scn.explorer.y)
+    fo = (scn.follower.x, scn.follower.y)
+    by_id = sorted(scn.markers, key=lambda m: m.id)
+    length = 0.0
+    for route in ([ex, *scn.targets, ex], [fo, *(_approach(m) for m in by_id), fo]):
+        for a, b in itertools.pairwise(route):
+            result = plan(grid, a, b)
+            length += result.length_m if result.ok else math.inf
+    return length / Limits().max_linear
 
 
 def make_variant(base: Scenario, seed: int) -> Scenario:
