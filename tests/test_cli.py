@@ -95,3 +95,33 @@ def test_missing_log_is_one_line_exit_3(command: str, tmp_path: Path) -> None:
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "no such file" in lines[0] and str(missing) in lines[0]
     assert "Traceback" not in out.stderr
+
+
+def test_scenario_writes_a_variant_that_loads_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from usar_replay.scenario import course_world, load
+    from usar_replay.variants import make_variant
+
+    out = tmp_path / "demo3.toml"
+    assert main(["scenario", "--seed", "3", "--out", str(out), "--check"]) == 0
+    assert load(out) == make_variant(course_world(), 3)
+    assert "sees its own marker" in capsys.readouterr().err
+    # never replaced silently
+    assert main(["scenario", "--out", str(out)]) == 2
+    assert load(out).seed == 3
+
+
+def test_scenario_check_fails_on_a_world_that_breaks_the_rules(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["scenario", "--out", str(tmp_path / "c.toml")]) == 0
+    text = (tmp_path / "c.toml").read_text()
+    # move target_1 behind the start-strip wall, out of sight of its marker
+    bad = text.replace("target_1 = [-1.752882, 3.246192]", "target_1 = [-4.5, 0.6]")
+    assert bad != text
+    (tmp_path / "bad.toml").write_text(bad)
+    capsys.readouterr()
+    assert main(["scenario", "--scenario", str(tmp_path / "bad.toml"), "--check"]) == 1
+    err = capsys.readouterr().err
+    assert "fails the variant rules" in err and "target_1" in err

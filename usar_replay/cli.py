@@ -17,12 +17,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from usar_replay import __version__
-from usar_replay.errors import NotBuiltYet, UsageError, UsarError
+from usar_replay.errors import UsageError, UsarError
 
 if TYPE_CHECKING:
     from usar_replay.grade import GradeReport, Thresholds
@@ -85,6 +85,37 @@ def _load_scenario(args: argparse.Namespace) -> Scenario:
     return base
 
 
+def _cmd_scenario(args: argparse.Namespace) -> int:
+    from usar_replay.scenario import to_toml
+
+    scenario = _load_scenario(args)
+    text = to_toml(scenario)
+    if args.out:
+        out = Path(args.out)
+        if out.exists() and not args.overwrite:
+            raise UsageError(f"{out} exists; pass --overwrite to replace it, or --out another path")
+        out.write_text(text, encoding="utf-8")
+        print(f"wrote {out}: {scenario.summary().splitlines()[0]}", file=sys.stderr)
+    else:
+        print(text, end="")
+    if not args.check:
+        return EXIT_OK
+    from usar_replay.variants import MAX_DRIVE_FRACTION, check_variant, drive_time_s
+
+    problem = check_variant(scenario)
+    if problem is not None:
+        print(f"usar: {scenario.name}: fails the variant rules: {problem}", file=sys.stderr)
+        return EXIT_FAIL
+    need = drive_time_s(scenario)
+    print(
+        f"usar: {scenario.name}: every target sees its own marker within range, every goal is "
+        f"reachable, driving takes {need:.0f} s of the {MAX_DRIVE_FRACTION:.0%} "
+        f"({MAX_DRIVE_FRACTION * scenario.time_limit_s:.0f} s) allowed",
+        file=sys.stderr,
+    )
+    return EXIT_OK
+
+
 class _StatusLine:
     """One self-rewriting progress line on stderr (a plain line every 30 sim-s when not a tty)."""
 
@@ -115,6 +146,8 @@ def _cmd_record(args: argparse.Namespace) -> int:
 
     scenario = _load_scenario(args)
     out = Path(args.out) if args.out else default_output(scenario)
+    if out.exists() and not args.overwrite:
+        raise UsageError(f"{out} exists; pass --overwrite to replace it, or --out another path")
     settings = RecordSettings(renderer=args.renderer, max_sim_time_s=args.max_sim_time)
     status = _StatusLine()
     try:
@@ -131,12 +164,25 @@ def _cmd_record(args: argparse.Namespace) -> int:
     return EXIT_OK if result.mission_done else EXIT_FAIL
 
 
-def _reports_out(args: argparse.Namespace, reports: list[GradeReport]) -> None:
+def _reports_out(
+    args: argparse.Namespace,
+    reports: Sequence[GradeReport],
+    errors: Sequence[tuple[str, str]] = (),
+) -> None:
+    """Write the machine-readable reports asked for; a recording that could not be graded at all
+    is in them too (``errors``: (path, message)), so a CI run never loses one silently."""
     from usar_replay import reports as rep
 
-    for path, fmt in ((args.json, rep.to_json), (args.junit, rep.to_junit), (args.csv, rep.to_csv)):
+    for opt, path, fmt in (
+        ("--json", args.json, rep.to_json),
+        ("--junit", args.junit, rep.to_junit),
+        ("--csv", args.csv, rep.to_csv),
+    ):
         if path:
-            Path(path).write_text(fmt(reports))
+            try:
+                Path(path).write_text(fmt(reports, errors), encoding="utf-8")
+            except OSError as err:
+                raise UsageError(f"{opt} {path}: cannot write: {err.strerror or err}") from err
 
 
 def _thresholds(args: argparse.Namespace) -> Thresholds | None:
@@ -145,13 +191,15 @@ def _thresholds(args: argparse.Namespace) -> Thresholds | None:
     return load_thresholds(args.thresholds) if args.thresholds else None
 
 
-def _grade_one(path: str, thresholds: Thresholds | None) -> GradeReport | str:
+def _grade_one(path: str, thresholds: Thresholds | None) -> GradeReport | tuple[str, int]:
+    """Grade one file; a user error becomes (message, exit code) so one bad file among many is
+    one line, not the end of the batch (and so it crosses a process boundary as plain data)."""
     from usar_replay.grade import grade_file
 
     try:
         return grade_file(path, thresholds)
     except UsarError as err:
-        return str(err)
+        return (str(err), err.exit_code)
 
 
 def _cmd_grade(args: argparse.Namespace) -> int:
@@ -159,6 +207,8 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 
     from usar_replay.reports import to_table
 
+    if args.jobs < 1:
+        raise UsageError(f"--jobs {args.jobs}: expected 1 or more")
     files: list[str] = []
     for name in args.files:
         p = Path(name)
@@ -171,57 +221,74 @@ def _cmd_grade(args: argparse.Namespace) -> int:
             files.append(name)
     th = _thresholds(args)
     if args.jobs > 1 and len(files) > 1:
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        with ProcessPoolExecutor(max_workers=min(args.jobs, len(files))) as pool:
             results = list(pool.map(_grade_one, files, [th] * len(files)))
     else:
         results = [_grade_one(f, th) for f in files]
-    reports = [r for r in results if not isinstance(r, str)]
-    errors = [r for r in results if isinstance(r, str)]
+    reports = [r for r in results if not isinstance(r, tuple)]
+    errors = [(f, r[0]) for f, r in zip(files, results, strict=True) if isinstance(r, tuple)]
     for r in reports:
         print(to_table(r))
         print()
-    for e in errors:
-        print(f"usar: error: {e}", file=sys.stderr)
-    _reports_out(args, reports)
+        if not r.log_complete:
+            print(
+                f"usar: {r.source}: the log is incomplete ({r.log_problem}); "
+                "graded as far as it goes",
+                file=sys.stderr,
+            )
+    for _, message in errors:
+        print(f"usar: error: {message}", file=sys.stderr)
+    _reports_out(args, reports, errors)
     if len(files) > 1:
-        passed = sum(r.passed for r in reports)
+        passed = sum(r.passed and r.log_complete for r in reports)
         print(f"{passed}/{len(files)} recordings pass")
-    if errors:
-        return EXIT_INCOMPLETE
+    codes = [r[1] for r in results if isinstance(r, tuple)]
+    if codes:
+        return max(codes)
     if any(not r.log_complete for r in reports):
         return EXIT_INCOMPLETE
     return EXIT_OK if all(r.passed for r in reports) else EXIT_FAIL
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from usar_replay.grade import Grader
+    from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader
     from usar_replay.mission import MissionSettings
     from usar_replay.replay import apply_overrides, replay, settings_from_toml
     from usar_replay.reports import to_table
 
+    if args.jobs is not None and args.jobs < 0:
+        raise UsageError(f"--jobs {args.jobs}: expected 0 or more")
     settings = MissionSettings()
     if args.settings:
         settings = settings_from_toml(args.settings, settings)
     overrides: dict[str, str] = {}
     for item in args.set or []:
-        if "=" not in item:
+        k, eq, v = item.partition("=")
+        if not eq or not k.strip():
             raise UsageError(
                 f"--set {item!r}: expected NAME=VALUE, e.g. detector.dictionary=DICT_5X5_50"
             )
-        k, v = item.split("=", 1)
         overrides[k.strip()] = v.strip()
     settings = apply_overrides(settings, overrides)
     regression = bool(overrides or args.settings)
+    thresholds = _thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: Grader | None = None
-    sink = None
     if args.grade:
         from usar_replay import bag
         from usar_replay.replay import load_scenario
 
-        grader = Grader(load_scenario(bag.BagReader(args.file)), _thresholds(args))
-        sink = grader.feed
-    report = replay(args.file, settings, grade_sink=sink, regression=regression)
+        grader = Grader(load_scenario(bag.BagReader(args.file)), thresholds)
+    report = replay(
+        args.file,
+        settings,
+        grade_sink=None if grader is None else grader.feed,
+        grade_topics=GRADE_TOPICS,
+        required_topics=REQUIRED_TOPICS if grader is not None else (),
+        regression=regression,
+        workers=args.jobs,
+    )
     print("\n".join(report.lines()))
+    # regression mode expects differences: it reports them, and only grading can fail it
     code = EXIT_OK if (report.identical or regression) else EXIT_FAIL
     if grader is not None:
         g = grader.report(
@@ -233,27 +300,53 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         print(to_table(g))
         _reports_out(args, [g])
         if not g.passed:
-            code = max(code, EXIT_FAIL)
+            code = EXIT_FAIL
     if report.log_problem:
-        print(f"usar: the log is incomplete: {report.log_problem}", file=sys.stderr)
+        print(
+            f"usar: {args.file}: the log is incomplete ({report.log_problem}); "
+            "replayed as far as it goes",
+            file=sys.stderr,
+        )
         return EXIT_INCOMPLETE
     return code
 
 
-def _not_built(name: str) -> Callable[[argparse.Namespace], int]:
-    def run(args: argparse.Namespace) -> int:
-        raise NotBuiltYet(
-            f"`usar {name}` is not built yet in usar-replay {__version__}; "
-            "see the README for what works today"
-        )
+def _cmd_view(args: argparse.Namespace) -> int:
+    import os
 
-    return run
+    from usar_replay.view import choose_output, open_command, view_file, wait_until_interrupted
+
+    output = choose_output(args.file, save=args.save, web=args.web, env=os.environ)
+    result = view_file(
+        args.file, output, grade=args.grade, grpc_port=args.grpc_port, web_port=args.web_port
+    )
+    if result.rrd is not None:
+        print(
+            f"wrote {result.rrd} ({result.frames} camera frames, {result.messages} messages, "
+            f"{result.seconds:.1f} s); open it with:"
+        )
+        print(open_command(result.rrd))
+    if result.spawned:
+        print(f"sent {args.file} to the rerun viewer ({result.frames} camera frames)")
+    if result.viewer_problem:
+        print(f"usar: {result.viewer_problem}; wrote the view to a file", file=sys.stderr)
+    problems = [f"the log is incomplete ({result.problem})"] if result.problem else []
+    problems += [result.grade_problem] if result.grade_problem else []
+    if problems:
+        text = "; ".join(problems)
+        print(f"usar: {args.file}: {text}; the view shows what was read", file=sys.stderr)
+    if result.url:
+        print(f"serving the web viewer at {result.url} (Ctrl-C to stop)", flush=True)
+        wait_until_interrupted(result)
+    return EXIT_INCOMPLETE if problems else EXIT_OK
 
 
 def _grade_outputs(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--thresholds", metavar="TOML", help="override rubric thresholds")
+    p.add_argument(
+        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
+    )
     p.add_argument("--json", metavar="PATH", help="write the grade as JSON")
-    p.add_argument("--junit", metavar="PATH", help="write JUnit XML (a test case per line)")
+    p.add_argument("--junit", metavar="PATH", help="write JUnit XML (a test case per rubric line)")
     p.add_argument("--csv", metavar="PATH", help="write CSV (a row per recording)")
 
 
@@ -280,6 +373,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
     p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.set_defaults(func=_cmd_record)
 
     p = sub.add_parser("replay", help="re-run detector/tf/follower from a log and compare")
@@ -289,6 +383,12 @@ def _parser() -> argparse.ArgumentParser:
         "--set", action="append", metavar="NAME=VALUE", help="changed setting (regression mode)"
     )
     p.add_argument("--settings", metavar="TOML", help="changed settings from a TOML file")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        help="detector threads ahead of the mission (default: one per core, up to 4; 0: none)",
+    )
     _grade_outputs(p)
     p.set_defaults(func=_cmd_replay)
 
@@ -299,8 +399,29 @@ def _parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_grade)
 
     p = sub.add_parser("view", help="show a recording's timeline in the rerun viewer")
-    p.add_argument("file")
-    p.set_defaults(func=_not_built("view"))
+    p.add_argument("file", metavar="FILE")
+    p.add_argument(
+        "--save", metavar="OUT.rrd", help="write an .rrd (default without a display: FILE.rrd)"
+    )
+    p.add_argument("--web", action="store_true", help="serve the web viewer until Ctrl-C")
+    p.add_argument("--grade", action="store_true", help="add the rubric lines to the log view")
+    p.add_argument("--web-port", type=int, default=9090, metavar="N", help="web viewer port")
+    p.add_argument("--grpc-port", type=int, default=9876, metavar="N", help="viewer gRPC port")
+    p.set_defaults(func=_cmd_view)
+
+    p = sub.add_parser(
+        "scenario", help="print a world as TOML (the course, a seeded variant, or a checked file)"
+    )
+    p.add_argument("--scenario", metavar="FILE", help="scenario TOML to read (default: the course)")
+    p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
+    p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
+    p.add_argument("--out", metavar="FILE", help="write the TOML here instead of stdout")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    p.add_argument(
+        "--check", action="store_true", help="also check the variant rules (exit 1 if one fails)"
+    )
+    p.set_defaults(func=_cmd_scenario)
 
     p = sub.add_parser("info", help="summarise a recording (topics, counts, scenario, status)")
     p.add_argument("files", nargs="+", metavar="FILE", help="one or more .mcap files")

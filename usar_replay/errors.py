@@ -15,7 +15,6 @@ __all__ = [
     "NotAnMcapFile",
     "IncompleteLog",
     "MissingTopic",
-    "NotBuiltYet",
 ]
 
 
@@ -53,9 +52,3 @@ class IncompleteLog(LogError):
 
 class MissingTopic(LogError):
     """A topic the job needs is absent from the log."""
-
-
-class NotBuiltYet(UsarError):
-    """A command that is planned but not implemented in this version."""
-
-    exit_code = 2

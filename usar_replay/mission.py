@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,6 +71,11 @@ INPUT_TOPICS = (
     IMAGE_TOPIC,
 )
 """What the mission subscribes to; everything else in a log is ignored by it."""
+
+Detector = Callable[
+    [msgs.CompressedImage, msgs.CameraInfo, DetectorParams, int], msgs.FiducialTransformArray
+]
+"""The detector's signature, :func:`usar_replay.detect.detect`'s (image, info, params, seq)."""
 
 Output = tuple[str, msgs.Message]
 """(topic, message) published by the mission at the time of the input that caused it."""
@@ -130,9 +135,17 @@ class Mission:
     """Explorer + follower + broadcaster + listener, driven by messages (see module docstring)."""
 
     def __init__(
-        self, scenario: Scenario, grid: OccupancyGrid, settings: MissionSettings | None = None
+        self,
+        scenario: Scenario,
+        grid: OccupancyGrid,
+        settings: MissionSettings | None = None,
+        *,
+        detector: Detector = detect,
     ) -> None:
+        """``detector`` must compute exactly what :func:`usar_replay.detect.detect` does; replay
+        passes one that computes the same results ahead of time, in worker threads."""
         self.scenario = scenario
+        self._detect = detector
         self.settings = settings or MissionSettings()
         self.grid = grid
         self.targets: list[tuple[float, float]] = [
@@ -367,7 +380,7 @@ class Mission:
             return []
         seq = self.image_seq
         self.image_seq += 1
-        fiducials = detect(image, self.camera_info, self.settings.detector, image_seq=seq)
+        fiducials = self._detect(image, self.camera_info, self.settings.detector, seq)
         out: list[Output] = [(FIDUCIAL_TOPIC, fiducials)]
         if self.phase is not Phase.EXPLORER_SPIN:
             return out

@@ -1,0 +1,304 @@
+"""`usar replay`: bit-for-bit reproduction of the real recorded log, divergences found exactly
+where a log was altered, regression mode, streaming, and one-line errors for bad input."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from logtools import rewrite, truncate_at
+
+from usar_replay import bag, msgs
+from usar_replay.cli import main
+from usar_replay.detect import DetectorParams, decode_image, detect, detect_with_corners
+from usar_replay.detect import encode_image as encode_png
+from usar_replay.errors import UsageError
+from usar_replay.mission import CAMERA_INFO_TOPIC, IMAGE_TOPIC, MissionSettings
+from usar_replay.record import RecordResult
+from usar_replay.replay import (
+    MARKER_TF_KEY,
+    OUTPUT_TOPICS,
+    apply_overrides,
+    outputs_digest,
+    replay,
+    settings_from_toml,
+)
+
+
+def _usar(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "usar_replay.cli", *args],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+
+
+def _one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: str) -> None:
+    assert out.returncode == code, out.stderr
+    assert "Traceback" not in out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("usar: error: "), out.stderr
+    for n in needles:
+        assert n in lines[0], lines[0]
+
+
+def test_replay_reproduces_the_recording(
+    room_log: tuple[Path, RecordResult], capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = room_log[0]
+    assert main(["replay", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Replay reproduces the recording bit for bit." in out
+    digest = outputs_digest(path)
+    assert f"Digest of replayed outputs (sha256): {digest}" in out
+    # every output topic of the log is compared, every message identical
+    report = replay(path, workers=0)  # and the same without the detector's look-ahead
+    assert report.identical and report.digest == digest and report.divergence is None
+    counts = bag.BagReader(path).topics
+    for topic in OUTPUT_TOPICS & set(counts):
+        t = report.topics[topic]
+        assert t.recorded == t.replayed == t.identical, topic
+    assert report.topics["/fiducial_transforms"].identical == counts[IMAGE_TOPIC].count
+    assert report.topics[MARKER_TF_KEY].identical >= 1
+    assert report.frames_detected == report.frames_reused == 0  # workers=0: the mission detects
+
+
+def test_the_detector_look_ahead_changes_no_byte(room_log: tuple[Path, RecordResult]) -> None:
+    """Worker threads and the reuse of identical frames give the very same outputs."""
+    report = replay(room_log[0], workers=2)
+    assert report.identical and report.digest == outputs_digest(room_log[0])
+    frames = bag.BagReader(room_log[0]).topics[IMAGE_TOPIC].count
+    assert report.frames_detected + report.frames_reused == frames
+    assert report.frames_reused > 0  # the explorer waits at home: identical frames exist
+    assert report.look_ahead_misses == 0  # every frame was predicted as the mission asked
+
+
+def test_the_look_ahead_falls_back_to_the_real_detector(
+    room_log: tuple[Path, RecordResult],
+) -> None:
+    """A call it did not predict is detected on the spot, with the same result."""
+    from usar_replay.replay import _DetectAhead
+
+    frames = bag.BagReader(room_log[0]).messages([CAMERA_INFO_TOPIC, IMAGE_TOPIC])
+    info, image = next(frames).msg, next(frames).msg
+    assert isinstance(info, msgs.CameraInfo) and isinstance(image, msgs.CompressedImage)
+    params = DetectorParams()
+    with _DetectAhead(params, 1, 4) as ahead:
+        assert ahead.detect(image, info, params, image_seq=7) == detect(image, info, params, 7)
+        assert ahead.missed == 1
+
+
+def _frame_with_one_pixel_changed(
+    path: Path,
+) -> tuple[int, bytes]:
+    """The first frame with a detection, and its PNG with one pixel changed so that the
+    detection's bytes change (searched deterministically near the marker's corners)."""
+    params = DetectorParams()
+    info: msgs.CameraInfo | None = None
+    for m in bag.BagReader(path).messages([CAMERA_INFO_TOPIC, IMAGE_TOPIC]):
+        if isinstance(m.msg, msgs.CameraInfo):
+            info = m.msg
+            continue
+        assert isinstance(m.msg, msgs.CompressedImage) and info is not None
+        found, corners = detect_with_corners(m.msg, info, params)
+        if not found.transforms:
+            continue
+        before = bag.encode(found)
+        img = decode_image(m.msg.data)
+        assert np.array_equal(decode_image(encode_png(img)), img)  # PNG is lossless
+        for cu, cv in np.rint(corners[found.transforms[0].fiducial_id]).astype(int):
+            for dv, du in [(0, 0), (0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (-1, -1)]:
+                for delta in (80, -80, 160, -160):
+                    u, v = int(cu + du), int(cv + dv)
+                    changed = img.copy()
+                    changed[v, u] = np.clip(changed[v, u].astype(int) + delta, 0, 255)
+                    data = encode_png(changed)
+                    after = detect(replace(m.msg, data=data), info, params)
+                    if bag.encode(after) != before:
+                        assert int(np.count_nonzero(np.any(changed != img, axis=2))) == 1
+                        return m.log_time_ns, data
+    raise AssertionError("no single pixel changes a detection")
+
+
+def test_one_pixel_changed_diverges_at_exactly_that_frame(
+    room_log: tuple[Path, RecordResult], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    t_frame, data = _frame_with_one_pixel_changed(room_log[0])
+    path = tmp_path / "pixel.mcap"
+
+    def edit(m: bag.BagMessage) -> msgs.Message | None:
+        if m.topic == IMAGE_TOPIC and m.log_time_ns == t_frame:
+            assert isinstance(m.msg, msgs.CompressedImage)
+            return replace(m.msg, data=data)
+        return None
+
+    rewrite(room_log[0], path, edit)
+    assert main(["replay", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "Replay does NOT reproduce the recording." in out
+    report = replay(path)
+    d = report.divergence
+    assert d is not None
+    assert d.topic == "/fiducial_transforms"
+    assert d.recorded_ns == d.replayed_ns == t_frame
+    assert d.field.startswith("transforms[0].") and d.recorded_value != d.replayed_value
+    assert f"at sim time {t_frame / 1e9:.3f} s" in out and d.field in out
+
+
+def test_an_altered_recorded_output_names_its_field(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """The comparison is field by field: a recorded cmd_vel changed in one field is named."""
+    path = tmp_path / "cmd.mcap"
+    altered: list[int] = []
+
+    def edit(m: bag.BagMessage) -> msgs.Message | None:
+        msg = m.msg
+        if not altered and isinstance(msg, msgs.Twist) and m.topic == "/follower/cmd_vel":
+            altered.append(m.log_time_ns)
+            return replace(msg, angular=replace(msg.angular, z=0.5))
+        return None
+
+    rewrite(room_log[0], path, edit)
+    report = replay(path)
+    d = report.divergence
+    assert d is not None and d.topic == "/follower/cmd_vel" and d.recorded_ns == altered[0]
+    assert d.field == "angular.z" and d.recorded_value == "0.5"
+    cmd = report.topics["/follower/cmd_vel"]
+    assert cmd.identical == cmd.recorded - 1 == cmd.replayed - 1
+    assert report.digest == outputs_digest(room_log[0])  # the replay itself did not change
+
+
+def test_regression_mode_reports_what_changed(room_log: tuple[Path, RecordResult]) -> None:
+    """DICT_5X5_50 cannot see the 4x4 marker: detections lost, stored pose lost; and the
+    comparison stays streaming although the replay publishes far fewer messages."""
+    settings = apply_overrides(MissionSettings(), {"detector.dictionary": "DICT_5X5_50"})
+    report = replay(room_log[0], settings, regression=True)
+    assert not report.identical
+    lines = report.changes.lines()
+    assert any(line.startswith("marker 0: detections lost:") for line in lines), lines
+    assert "marker 0: stored pose lost" in lines
+    assert report.changes.detections_replayed == {} and report.changes.markers_replayed == {}
+    follower = report.topics["/follower/cmd_vel"]
+    assert follower.recorded > 100 and follower.replayed <= 2
+    assert report.peak_pending < 20  # one sim time's outputs, not the whole follower run
+
+
+def test_regression_mode_reports_a_moved_marker(room_log: tuple[Path, RecordResult]) -> None:
+    """Without corner refinement the marker is still seen on the same frames, but its stored
+    map pose moves by a couple of centimetres."""
+    settings = apply_overrides(MissionSettings(), {"detector.corner_refinement": "none"})
+    report = replay(room_log[0], settings, regression=True)
+    lines = report.changes.lines()
+    assert not any("detections" in line for line in lines), lines
+    moved = [line for line in lines if line.startswith("marker 0: stored map pose moved")]
+    assert len(moved) == 1, lines
+    cm = float(moved[0].split("moved ")[1].removesuffix(" cm"))
+    assert 0.0 < cm < 10.0
+    assert report.divergence is not None and report.divergence.topic == "/fiducial_transforms"
+
+
+def test_regression_mode_via_the_command(
+    room_log: tuple[Path, RecordResult], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Exit 0 with --set (it reports, it does not fail); with --grade the lost marker fails."""
+    path = str(room_log[0])
+    assert main(["replay", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
+    out = capsys.readouterr().out
+    assert "Changes with the new settings:" in out and "marker 0: stored pose lost" in out
+    toml = tmp_path / "settings.toml"
+    toml.write_text('[detector]\ndictionary = "DICT_5X5_50"\n')
+    junit = tmp_path / "g.xml"
+    assert main(["replay", "--settings", str(toml), "--grade", "--junit", str(junit), path]) == 1
+    out = capsys.readouterr().out
+    assert "marker 0: stored pose lost" in out
+    fail_lines = [ln for ln in out.splitlines() if ln.startswith("FAIL")]
+    assert any("marker_0.detected" in ln for ln in fail_lines)
+    assert not any("explorer.target_1" in ln for ln in fail_lines)  # ground truth is recorded
+    assert "marker_0.detected" in junit.read_text()
+
+
+def test_replay_grade_grades_the_replayed_outputs(
+    room_log: tuple[Path, RecordResult], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["replay", "--grade", str(room_log[0])]) == 0
+    out = capsys.readouterr().out
+    assert "bit for bit" in out and "(replayed)" in out and "Total: 60 / 60 points: PASS" in out
+
+
+def test_a_truncated_log_replays_as_far_as_it_goes(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    path = tmp_path / "cut.mcap"
+    last = truncate_at(room_log[0], path, bag.BagReader(room_log[0]).start_ns + 15_000_000_000)
+    report = replay(path)
+    assert report.log_problem and "truncated" in report.log_problem
+    assert report.identical  # what is there reproduces
+    assert report.topics["/fiducial_transforms"].identical > 0
+    assert report.topics["/fiducial_transforms"].recorded < 616
+    out = _usar("replay", str(path))
+    assert out.returncode == 3 and "Traceback" not in out.stderr
+    assert "bit for bit" in out.stdout
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "incomplete" in lines[0] and f"{last / 1e9:.3f}" in lines[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--set", "detector.dictionary=DICT_9X9_1"], "unknown ArUco dictionary"),
+        (["--set", "detector.colour=red"], "unknown setting"),
+        (["--set", "max_detection_range=far"], "expected a float"),
+        (["--set", "settle_frames"], "expected NAME=VALUE"),
+        (["--set", "detector=DICT_5X5_50"], "set one of its fields"),
+        (["--jobs", "-1"], "--jobs"),
+    ],
+)
+def test_bad_settings_are_one_line_exit_2(
+    room_log: tuple[Path, RecordResult], args: list[str], needle: str
+) -> None:
+    _one_error_line(_usar("replay", *args, str(room_log[0])), 2, needle)
+
+
+def test_settings_toml_errors(tmp_path: Path) -> None:
+    base = MissionSettings()
+    bad = tmp_path / "s.toml"
+    bad.write_text("[detector\n")
+    with pytest.raises(UsageError, match="cannot read settings"):
+        settings_from_toml(bad, base)
+    bad.write_text("[camera]\nwidth = 3\n")
+    with pytest.raises(UsageError, match="unknown table"):
+        settings_from_toml(bad, base)
+    bad.write_text("[detector]\nmarker_size = [1, 2]\n")
+    with pytest.raises(UsageError, match="expected a number"):
+        settings_from_toml(bad, base)
+    good = tmp_path / "g.toml"
+    good.write_text("spin_speed = 0.2\n[detector]\nmarker_size = 0.2\n[thresholds]\nhome_m = 1\n")
+    s = settings_from_toml(good, base)
+    assert s.spin_speed == 0.2 and s.detector.marker_size == 0.2
+
+
+def test_replay_bad_inputs_are_one_line(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    _one_error_line(_usar("replay", str(tmp_path / "none.mcap")), 3, "no such file")
+    text = tmp_path / "text.mcap"
+    text.write_text("hello")
+    _one_error_line(_usar("replay", str(text)), 3, "not an MCAP")
+    no_scenario = tmp_path / "no_scenario.mcap"
+    rewrite(room_log[0], no_scenario, keep_scenario=False)
+    _one_error_line(_usar("replay", str(no_scenario)), 3, "scenario.toml")
+    no_odom = tmp_path / "no_odom.mcap"
+    rewrite(room_log[0], no_odom, lambda m: False if m.topic == "/explorer/odom" else None)
+    _one_error_line(_usar("replay", str(no_odom)), 3, "/explorer/odom", "missing")
+    no_truth = tmp_path / "no_truth.mcap"
+    rewrite(room_log[0], no_truth, lambda m: False if m.topic.startswith("/ground_truth") else None)
+    _one_error_line(_usar("replay", "--grade", str(no_truth)), 3, "/ground_truth/", "missing")
+    bad_th = tmp_path / "t.toml"
+    bad_th.write_text("[thresholds]\nhome_m = 0\n")
+    _one_error_line(_usar("replay", "--grade", "--thresholds", str(bad_th), str(room_log[0])), 2)
