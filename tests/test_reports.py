@@ -62,7 +62,7 @@ def test_csv_one_row_per_recording() -> None:
 def test_json_round_trips_with_evidence_seconds() -> None:
     data = json.loads(to_json([_report("a.mcap", fail=True)], [("c.mcap", "bad")]))
     assert data[0]["points"] == 12 and data[0]["passed"] is False
-    assert [c["evidence_s"] for c in data[0]["checks"]] == [10.4, 701.0]  # sim time, as in `usar view`
+    assert [c["evidence_s"] for c in data[0]["checks"]] == [10.4, 701.0]  # sim time
     assert data[1] == {
         "source": "c.mcap",
         "passed": False,
