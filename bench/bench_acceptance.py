@@ -51,8 +51,12 @@ def main() -> None:
     worlds: list[int | None] = ([] if args.no_course else [None]) + list(range(args.seeds))
     print("world    done   sim s  found  worst cm  points   wall s   RTF     MB  failed lines")
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        for row in pool.map(run, worlds, [out_dir] * len(worlds)):
-            print(row, flush=True)
+        futures = [pool.submit(run, w, out_dir) for w in worlds]
+        for w, fut in zip(worlds, futures, strict=True):
+            try:
+                print(fut.result(), flush=True)
+            except Exception as err:  # noqa: BLE001 - one broken world must not hide the others
+                print(f"{'course' if w is None else f'seed{w}':<8} ERROR {err!r}", flush=True)
 
 
 if __name__ == "__main__":
