@@ -2,25 +2,15 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from clitools import usar
 
 from usar_replay import bag, msgs
 from usar_replay.cli import main
 
 T0 = 1_000_000_000
-
-
-def _usar(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
 
 
 def _log(path: Path, *, interrupted: bool = False) -> None:
@@ -34,7 +24,7 @@ def _log(path: Path, *, interrupted: bool = False) -> None:
 
 
 def test_help_lists_every_command() -> None:
-    out = _usar("--help")
+    out = usar("--help")
     assert out.returncode == 0
     for name in ("record", "replay", "grade", "view", "info"):
         assert name in out.stdout
@@ -68,7 +58,7 @@ def test_info_on_a_truncated_log_says_how_far(tmp_path: Path) -> None:
     _log(path)
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(path.read_bytes()[:-300])
-    out = _usar("info", str(cut))
+    out = usar("info", str(cut))
     assert out.returncode == 3
     assert "INCOMPLETE" in out.stdout and "messages up to sim time" in out.stdout
     assert "Traceback" not in out.stderr
@@ -79,7 +69,7 @@ def test_info_on_bad_files_is_one_line(tmp_path: Path, content: bytes | None) ->
     path = tmp_path / "bad.mcap"
     if content is not None:
         path.write_bytes(content)
-    out = _usar("info", str(path))
+    out = usar("info", str(path))
     assert out.returncode == 3
     assert out.stdout == ""
     lines = out.stderr.strip().splitlines()
@@ -90,7 +80,7 @@ def test_info_on_bad_files_is_one_line(tmp_path: Path, content: bytes | None) ->
 @pytest.mark.parametrize("command", ["replay", "grade"])
 def test_missing_log_is_one_line_exit_3(command: str, tmp_path: Path) -> None:
     missing = tmp_path / "x.mcap"
-    out = _usar(command, str(missing))
+    out = usar(command, str(missing))
     assert out.returncode == 3
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "no such file" in lines[0] and str(missing) in lines[0]

@@ -12,13 +12,12 @@ import csv
 import io
 import json
 import math
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from clitools import one_error_line, usar
 from logtools import SyntheticRun, rewrite, synthetic_mission, truncate_at
 
 from usar_replay import bag, msgs
@@ -39,24 +38,6 @@ from usar_replay.scenario import course_world
 
 COURSE_LINES = 20  # 4 targets, 4 x (detected, broadcast), only_on_detection, home, 4 follower, 2
 ROOM_LINES = 8
-
-
-def _usar(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-
-
-def _one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: str) -> None:
-    assert out.returncode == code, out.stderr
-    assert "Traceback" not in out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("usar: error: "), out.stderr
-    for n in needles:
-        assert n in lines[0]
 
 
 # --- synthetic course-world missions ------------------------------------------------------------
@@ -295,7 +276,7 @@ def test_a_truncated_log_is_graded_as_far_as_it_goes(
     assert {"explorer.target_1", "marker_0.detected", "marker_0.broadcast"} <= passed
     assert {"follower.home", "time_limit"} <= set(report.failed_ids())
 
-    out = _usar("grade", str(path))
+    out = usar("grade", str(path))
     assert out.returncode == 3
     assert "Traceback" not in out.stderr
     lines = out.stderr.strip().splitlines()
@@ -407,8 +388,8 @@ def test_a_bad_file_among_good_ones_is_one_line_and_still_reported(
     bad = tmp_path / "notes.mcap"
     bad.write_text("not a log")
     junit = tmp_path / "out.xml"
-    out = _usar("grade", str(room_log[0]), str(bad), "--junit", str(junit))
-    _one_error_line(out, 3, str(bad), "not an MCAP")
+    out = usar("grade", str(room_log[0]), str(bad), "--junit", str(junit))
+    one_error_line(out, 3, str(bad), "not an MCAP")
     assert "Grade of" in out.stdout and "1/2 recordings pass" in out.stdout
     names = [s.get("name") for s in ET.parse(junit).getroot().findall("testsuite")]
     assert names == [str(room_log[0]), str(bad)]
@@ -417,23 +398,23 @@ def test_a_bad_file_among_good_ones_is_one_line_and_still_reported(
 def test_grade_bad_inputs_are_one_line(room_log: tuple[Path, RecordResult], tmp_path: Path) -> None:
     no_scenario = tmp_path / "no_scenario.mcap"
     rewrite(room_log[0], no_scenario, keep_scenario=False)
-    _one_error_line(_usar("grade", str(no_scenario)), 3, "scenario.toml")
+    one_error_line(usar("grade", str(no_scenario)), 3, "scenario.toml")
     no_truth = tmp_path / "no_truth.mcap"
     rewrite(room_log[0], no_truth, lambda m: False if "/ground_truth/" in m.topic else None)
     with pytest.raises(MissingTopic):
         grade_file(no_truth)
-    _one_error_line(_usar("grade", str(no_truth)), 3, "/ground_truth/explorer/pose", "missing")
+    one_error_line(usar("grade", str(no_truth)), 3, "/ground_truth/explorer/pose", "missing")
     cut = tmp_path / "header_only.mcap"
     cut.write_bytes(room_log[0].read_bytes()[:20])
-    out = _usar("grade", str(cut))
+    out = usar("grade", str(cut))
     assert out.returncode == 3 and "Traceback" not in out.stderr
     bad_toml = tmp_path / "t.toml"
     bad_toml.write_text("[thresholds]\nnope = 1\n")
-    _one_error_line(_usar("grade", str(room_log[0]), "--thresholds", str(bad_toml)), 2, "nope")
-    _one_error_line(_usar("grade", str(room_log[0]), "--jobs", "0"), 2, "--jobs")
+    one_error_line(usar("grade", str(room_log[0]), "--thresholds", str(bad_toml)), 2, "nope")
+    one_error_line(usar("grade", str(room_log[0]), "--jobs", "0"), 2, "--jobs")
     empty = tmp_path / "empty_dir"
     empty.mkdir()
-    _one_error_line(_usar("grade", str(empty)), 2, "no .mcap files")
+    one_error_line(usar("grade", str(empty)), 2, "no .mcap files")
 
 
 def test_report_lookup_helpers() -> None:

@@ -3,13 +3,12 @@ where a log was altered, regression mode, streaming, and one-line errors for bad
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from clitools import one_error_line, usar
 from logtools import rewrite, truncate_at
 
 from usar_replay import bag, msgs
@@ -27,24 +26,6 @@ from usar_replay.replay import (
     replay,
     settings_from_toml,
 )
-
-
-def _usar(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-
-
-def _one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: str) -> None:
-    assert out.returncode == code, out.stderr
-    assert "Traceback" not in out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("usar: error: "), out.stderr
-    for n in needles:
-        assert n in lines[0], lines[0]
 
 
 def test_replay_reproduces_the_recording(
@@ -241,7 +222,7 @@ def test_a_truncated_log_replays_as_far_as_it_goes(
     assert report.identical  # what is there reproduces
     assert report.topics["/fiducial_transforms"].identical > 0
     assert report.topics["/fiducial_transforms"].recorded < 616
-    out = _usar("replay", str(path))
+    out = usar("replay", str(path))
     assert out.returncode == 3 and "Traceback" not in out.stderr
     assert "bit for bit" in out.stdout
     lines = out.stderr.strip().splitlines()
@@ -262,7 +243,7 @@ def test_a_truncated_log_replays_as_far_as_it_goes(
 def test_bad_settings_are_one_line_exit_2(
     room_log: tuple[Path, RecordResult], args: list[str], needle: str
 ) -> None:
-    _one_error_line(_usar("replay", *args, str(room_log[0])), 2, needle)
+    one_error_line(usar("replay", *args, str(room_log[0])), 2, needle)
 
 
 def test_settings_toml_errors(tmp_path: Path) -> None:
@@ -286,19 +267,19 @@ def test_settings_toml_errors(tmp_path: Path) -> None:
 def test_replay_bad_inputs_are_one_line(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
-    _one_error_line(_usar("replay", str(tmp_path / "none.mcap")), 3, "no such file")
+    one_error_line(usar("replay", str(tmp_path / "none.mcap")), 3, "no such file")
     text = tmp_path / "text.mcap"
     text.write_text("hello")
-    _one_error_line(_usar("replay", str(text)), 3, "not an MCAP")
+    one_error_line(usar("replay", str(text)), 3, "not an MCAP")
     no_scenario = tmp_path / "no_scenario.mcap"
     rewrite(room_log[0], no_scenario, keep_scenario=False)
-    _one_error_line(_usar("replay", str(no_scenario)), 3, "scenario.toml")
+    one_error_line(usar("replay", str(no_scenario)), 3, "scenario.toml")
     no_odom = tmp_path / "no_odom.mcap"
     rewrite(room_log[0], no_odom, lambda m: False if m.topic == "/explorer/odom" else None)
-    _one_error_line(_usar("replay", str(no_odom)), 3, "/explorer/odom", "missing")
+    one_error_line(usar("replay", str(no_odom)), 3, "/explorer/odom", "missing")
     no_truth = tmp_path / "no_truth.mcap"
     rewrite(room_log[0], no_truth, lambda m: False if m.topic.startswith("/ground_truth") else None)
-    _one_error_line(_usar("replay", "--grade", str(no_truth)), 3, "/ground_truth/", "missing")
+    one_error_line(usar("replay", "--grade", str(no_truth)), 3, "/ground_truth/", "missing")
     bad_th = tmp_path / "t.toml"
     bad_th.write_text("[thresholds]\nhome_m = 0\n")
-    _one_error_line(_usar("replay", "--grade", "--thresholds", str(bad_th), str(room_log[0])), 2)
+    one_error_line(usar("replay", "--grade", "--thresholds", str(bad_th), str(room_log[0])), 2)

@@ -1,0 +1,26 @@
+"""Test helpers that run the `usar` command as a user does: a subprocess, its exit code, stderr."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def usar(*args: str) -> subprocess.CompletedProcess[str]:
+    """``usar ARGS...`` in a fresh interpreter (what a shell user sees, tracebacks included)."""
+    return subprocess.run(
+        [sys.executable, "-m", "usar_replay.cli", *args],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+
+
+def one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: str) -> None:
+    """The user-error contract: exit ``code``, one ``usar: error:`` line naming ``needles``."""
+    assert out.returncode == code, out.stderr
+    assert "Traceback" not in out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("usar: error: "), out.stderr
+    for n in needles:
+        assert n in lines[0], lines[0]
