@@ -133,3 +133,29 @@ def test_an_existing_recording_is_never_overwritten_silently(
     err = capsys.readouterr().err
     assert "exists" in err and "--overwrite" in err and err.count("\n") == 1
     assert path.read_bytes() == before
+
+
+def test_ctrl_c_in_the_cli_exits_130_with_a_closed_log(tmp_path: Path) -> None:
+    """A real SIGINT to `usar record`, sent once its first progress line shows it is running."""
+    import signal
+    import subprocess
+    import sys
+
+    scenario, out = tmp_path / "room.toml", tmp_path / "cut.mcap"
+    save(one_room(), scenario)
+    argv = ["record", "--scenario", str(scenario), "--out", str(out)]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "usar_replay.cli", *argv],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stderr is not None
+    assert proc.stderr.readline().startswith("sim ")  # the run is under way
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "closed and readable, marked interrupted" in err
+    r = bag.BagReader(out)
+    assert r.has_summary and r.status == "interrupted" and r.message_count > 0
+    assert not Path(str(out) + ".part").exists()
