@@ -115,6 +115,29 @@ def _qrot(q: Quat, v: Vec) -> Vec:
     )
 
 
+def _chain(t: Vec, q: Quat, acc_t: Vec, acc_q: Quat) -> tuple[Vec, Quat]:
+    """``(t, q) * (acc_t, acc_q)``: one more link toward the root, in one call (hot path).
+
+    The same arithmetic as ``_qrot(q, acc_t) + t`` and ``_qmul(q, acc_q)``, inlined.
+    """
+    x, y, z, w = q
+    vx, vy, vz = acc_t
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    bx, by, bz, bw = acc_q
+    return (
+        vx + w * tx + (y * tz - z * ty) + t[0],
+        vy + w * ty + (z * tx - x * tz) + t[1],
+        vz + w * tz + (x * ty - y * tx) + t[2],
+    ), (
+        w * bx + x * bw + y * bz - z * by,
+        w * by - x * bz + y * bw + z * bx,
+        w * bz + x * by - y * bx + z * bw,
+        w * bw - x * bx - y * by - z * bz,
+    )
+
+
 def _qinv(q: Quat) -> Quat:
     x, y, z, w = q
     n = x * x + y * y + z * z + w * w
@@ -522,9 +545,7 @@ class Buffer:
                 break
             if frame == target:
                 return s_t, s_q, time  # the target is a parent of the source
-            r = _qrot(sample.q, s_t)
-            s_t = (r[0] + sample.t[0], r[1] + sample.t[1], r[2] + sample.t[2])
-            s_q = _qmul(sample.q, s_q)
+            s_t, s_q = _chain(sample.t, sample.q, s_t, s_q)
             top_parent = frame
             frame = sample.parent
             depth += 1
@@ -548,9 +569,7 @@ class Buffer:
                 inv = _qinv(t_q)
                 v = _qrot(inv, (-t_t[0], -t_t[1], -t_t[2]))
                 return v, inv, time  # the source is a parent of the target
-            r = _qrot(sample.q, t_t)
-            t_t = (r[0] + sample.t[0], r[1] + sample.t[1], r[2] + sample.t[2])
-            t_q = _qmul(sample.q, t_q)
+            t_t, t_q = _chain(sample.t, sample.q, t_t, t_q)
             frame = sample.parent
             depth += 1
             if depth > MAX_GRAPH_DEPTH:
