@@ -10,8 +10,8 @@ Usage::
 
     python bench/bench_replay.py [LOG.mcap] [--repeat N] [--profile]
 
-The default log is ``/tmp/runs/course.mcap`` (record one with
-``usar record --out /tmp/runs/course.mcap``). ``--profile`` prints the top of a cProfile of one
+The default log is ``recordings/course.mcap`` (record one with
+``usar record``). ``--profile`` prints the top of a cProfile of one
 default replay+grade, to see where the time goes.
 """
 
@@ -34,7 +34,7 @@ from usar_replay import bag
 from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader, grade_file
 from usar_replay.replay import ReplayReport, default_workers, load_scenario, replay
 
-DEFAULT_LOG = Path("/tmp/runs/course.mcap")
+DEFAULT_LOG = Path("recordings/course.mcap")
 
 
 @dataclass(frozen=True, slots=True)

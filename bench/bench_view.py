@@ -1,6 +1,6 @@
 """Seconds to write a recording's ``.rrd`` with `usar view --save` (printed, not asserted).
 
-    python bench/bench_view.py [LOG.mcap ...]   # default: /tmp/runs/course.mcap if it exists
+    python bench/bench_view.py [LOG.mcap ...]   # default: recordings/course.mcap
 
 Measures :func:`usar_replay.view.view_file` in-process (module imports excluded), three times,
 and prints the best and the median with camera frames per second. On the course log (477 sim-s,
@@ -20,7 +20,7 @@ from pathlib import Path
 from usar_replay.bag import BagReader
 from usar_replay.view import CAMERA_TOPIC, Output, view_file
 
-DEFAULT_LOG = Path("/tmp/runs/course.mcap")
+DEFAULT_LOG = Path("recordings/course.mcap")
 
 
 def bench(log: Path, repeats: int = 3, *, grade: bool = False) -> None:
