@@ -45,10 +45,12 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1, help="worlds recorded in parallel")
     ap.add_argument("--out", default="recordings/acceptance", help="where the logs go")
     ap.add_argument("--no-course", action="store_true", help="skip the course world")
+    ap.add_argument("--only", metavar="S,S,...", help="these seeds instead of 0..N-1")
     args = ap.parse_args()
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
-    worlds: list[int | None] = ([] if args.no_course else [None]) + list(range(args.seeds))
+    seeds = [int(x) for x in args.only.split(",")] if args.only else list(range(args.seeds))
+    worlds: list[int | None] = ([] if args.no_course else [None]) + seeds
     print("world    done   sim s  found  worst cm  points   wall s   RTF     MB  failed lines")
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         futures = [pool.submit(run, w, out_dir) for w in worlds]

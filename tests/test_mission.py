@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from usar_replay import bag, msgs
 from usar_replay.mission import MissionSettings, approach_point
-from usar_replay.nav import OccupancyGrid
+from usar_replay.nav import OccupancyGrid, robot_disc
 from usar_replay.record import RecordSettings, record
 from usar_replay.scenario import Marker, course_world
 
@@ -96,3 +96,25 @@ def test_a_marker_beyond_range_is_refused_and_the_mission_goes_on(tmp_path: Path
     assert spins >= 2 * math.pi / 0.1 * 20 * 0.95
     assert any("no marker found at target_1 after a full turn" in s for s in lines)
     assert lines[-1] == "mission complete"
+
+
+def test_the_approach_point_keeps_clear_of_the_parked_explorer() -> None:
+    """Seed 5 put a marker beside the explorer's home: the follower's map has the parked
+    explorer in it, so its goal is where it fits, not against the other robot."""
+    m = COURSE.marker_by_id(1)
+    settings = MissionSettings()
+    free_goal = approach_point(GRID, (m.x, m.y), _optical_quat(m), settings)
+    assert free_goal is not None
+    reach = settings.follower_tolerance - settings.xy_tolerance
+    # the explorer parked beside the best spot: the goal moves to the other side, still in reach
+    beside = robot_disc(free_goal[0] + 0.064 + 0.45, free_goal[1], 0.0)
+    goal = approach_point(GRID.with_discs([beside]), (m.x, m.y), _optical_quat(m), settings)
+    assert goal is not None and goal[:2] != free_goal[:2]
+    assert math.dist(goal[:2], beside[:2]) >= beside[2] + GRID.robot_radius
+    assert math.dist(goal[:2], (m.x, m.y)) <= reach
+    # parked right on it: no spot in reach is left, the nearest clear one is the best there is
+    on = robot_disc(free_goal[0] + 0.064, free_goal[1], 0.0)
+    goal = approach_point(GRID.with_discs([on]), (m.x, m.y), _optical_quat(m), settings)
+    assert goal is not None
+    assert math.dist(goal[:2], on[:2]) >= on[2] + GRID.robot_radius
+    assert reach < math.dist(goal[:2], (m.x, m.y)) <= settings.approach_max

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from usar_replay import msgs
-from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan
+from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
 from usar_replay.scenario import course_world
 
 COURSE = course_world()
@@ -115,3 +115,16 @@ def test_a_blocked_robot_fails_after_recovery(grid: OccupancyGrid) -> None:
 def test_navigation_is_deterministic(grid: OccupancyGrid) -> None:
     goals = [(COURSE.targets[1][0], COURSE.targets[1][1], 1.0)]
     assert _drive(grid, goals)[0] == _drive(OccupancyGrid.from_scenario(COURSE), goals)[0]
+
+
+def test_a_parked_robot_is_an_obstacle_in_another_robots_map(grid: OccupancyGrid) -> None:
+    x, y, yaw = HOME[0], HOME[1], 0.0
+    cx, cy, r = robot_disc(x, y, yaw)
+    assert (cx, cy) == pytest.approx((x - 0.064, y)) and r == pytest.approx(0.21)
+    with_robot = grid.with_discs([(cx, cy, r)])
+    assert grid.is_free(x, y) and not with_robot.is_free(x, y)
+    assert not with_robot.is_free(x + 0.4, y)  # the other robot cannot come this close
+    assert with_robot.is_free(x + 0.6, y)
+    assert not grid.occupied[grid.world_to_cell(cx, cy)]  # the original map is unchanged
+    # the follower's start is still connected to the rest of the building around it
+    assert plan(with_robot, (-4.0, 3.5), COURSE.targets[0]).ok

@@ -37,7 +37,7 @@ import numpy as np
 
 from usar_replay import msgs
 from usar_replay.detect import DetectorParams, detect
-from usar_replay.nav import Navigator, NavStatus, OccupancyGrid
+from usar_replay.nav import Navigator, NavStatus, OccupancyGrid, robot_disc
 from usar_replay.scenario import Scenario
 from usar_replay.tf_tree import Buffer, TransformBroadcaster, TransformException, TransformListener
 
@@ -148,6 +148,8 @@ class Mission:
         self._detect = detector
         self.settings = settings or MissionSettings()
         self.grid = grid
+        self.follower_grid = grid
+        """The follower's costmap: the map plus the parked explorer, once it is home."""
         self.targets: list[tuple[float, float]] = [
             (float(v[0]), float(v[1])) for v in scenario.parameters().values()
         ]
@@ -472,6 +474,11 @@ class Mission:
 
     def _start_follower(self, t_ns: int) -> list[Output]:
         self.follower_queue = sorted(self.markers)
+        if self.explorer.pose is not None:
+            # the explorer stays parked at home: the follower's costmap has it as an obstacle,
+            # as its laser would (a marker near the explorer's home is otherwise unreachable)
+            self.follower_grid = self.grid.with_discs([robot_disc(*self.explorer.pose)])
+            self.follower.nav = Navigator(self.follower_grid)
         out = [
             self._log(
                 t_ns,
@@ -485,7 +492,7 @@ class Mission:
         while self.follower_queue:
             mid = self.follower_queue[0]
             x, y, _, q = self.markers[mid]
-            goal = approach_point(self.grid, (x, y), q, self.settings)
+            goal = approach_point(self.follower_grid, (x, y), q, self.settings)
             if goal is None:
                 self.follower_queue.pop(0)
                 continue

@@ -24,6 +24,7 @@ import enum
 import functools
 import itertools
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,10 +42,22 @@ __all__ = [
     "OccupancyGrid",
     "PlanResult",
     "plan",
+    "robot_disc",
 ]
 
 ROBOT_RADIUS = 0.26
 """m; the waffle's footprint rotating about base_footprint reaches 0.257 m."""
+
+
+BODY_OFFSET = -0.064
+"""m; the waffle's body centre is this far along x from base_footprint (behind the axle)."""
+BODY_RADIUS = 0.21
+"""m; the footprint's circumscribed radius about the body centre."""
+
+
+def robot_disc(x: float, y: float, yaw: float) -> tuple[float, float, float]:
+    """A robot standing at (x, y, yaw) as a round obstacle (x, y, radius) for another's map."""
+    return (x + BODY_OFFSET * math.cos(yaw), y + BODY_OFFSET * math.sin(yaw), BODY_RADIUS)
 
 
 class NavStatus(enum.Enum):
@@ -101,6 +114,7 @@ class OccupancyGrid:
         self.height, self.width = occupied.shape
         self.robot_radius = robot_radius
         self.inflation_radius = inflation_radius
+        self.cost_scaling = cost_scaling
         self.distance = ndimage.distance_transform_edt(~occupied) * resolution
         over = np.maximum(self.distance - robot_radius, 0.0)
         cost = np.exp(-cost_scaling * over)
@@ -137,6 +151,24 @@ class OccupancyGrid:
         for disc in (*scn.cylinders, *scn.spheres):
             occ |= np.hypot(gx - disc.x, gy - disc.y) <= disc.radius + pad
         return cls(occ, (ox, oy), resolution, robot_radius=robot_radius)
+
+    def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> OccupancyGrid:
+        """This grid plus round obstacles ``(x, y, radius)``: what a robot's sensors would add
+        to its costmap, e.g. another robot parked in the way."""
+        ys, xs = np.mgrid[0 : self.height, 0 : self.width]
+        gx = self.origin[0] + (xs + 0.5) * self.resolution
+        gy = self.origin[1] + (ys + 0.5) * self.resolution
+        occ = self.occupied.copy()
+        for x, y, r in discs:
+            occ |= np.hypot(gx - x, gy - y) <= r + self.resolution / 2
+        return OccupancyGrid(
+            occ,
+            self.origin,
+            self.resolution,
+            robot_radius=self.robot_radius,
+            inflation_radius=self.inflation_radius,
+            cost_scaling=self.cost_scaling,
+        )
 
     # -- coordinates -------------------------------------------------------------------------
 

@@ -8,7 +8,8 @@ every machine.
 A candidate world is accepted only if, for every target:
 
 * the robot fits there (the navigation grid's free space) and the planner reaches it from the
-  explorer's start, and the follower can reach an approach point in front of its marker;
+  explorer's start;
+* the follower can reach a point in front of its marker with the explorer parked at home;
 * its marker is in line of sight, within :data:`MAX_RANGE` and seen at most :data:`MAX_OBLIQUE`
   off the marker's normal (so the detector reads it);
 * no other marker in line of sight is closer than its own (the course world has the wrong-marker
@@ -31,7 +32,7 @@ import math
 import numpy as np
 
 from usar_replay.errors import InvalidScenario
-from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan
+from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
 from usar_replay.scenario import Box, Marker, Scenario
 
 __all__ = [
@@ -167,6 +168,8 @@ def check_variant(scn: Scenario, grid: OccupancyGrid | None = None) -> str | Non
     grid = grid or OccupancyGrid.from_scenario(scn)
     ex = (scn.explorer.x, scn.explorer.y, scn.explorer.yaw)
     fo = (scn.follower.x, scn.follower.y, scn.follower.yaw)
+    # the follower drives while the explorer is parked at home
+    fgrid = grid.with_discs([robot_disc(*ex)])
     owners: dict[int, int] = {}
     for k, target in enumerate(scn.targets):
         if not scn.markers:
@@ -188,7 +191,7 @@ def check_variant(scn: Scenario, grid: OccupancyGrid | None = None) -> str | Non
         if not _reachable(grid, ex, target):
             return f"target_{k + 1} is not reachable from the explorer's start"
         approach = _approach(m)
-        if not grid.is_free(*approach) or not _reachable(grid, fo, approach):
+        if not fgrid.is_free(*approach) or not _reachable(fgrid, fo, approach):
             return f"the follower cannot reach marker {m.id}"
     if len(owners) != len(scn.markers):
         return "some marker is no target's marker"
