@@ -572,24 +572,9 @@ def approach_point(
         )
         for i in order:
             x, y = float(px[cand][i]), float(py[cand][i])
-            if _line_of_sight(grid, (x, y), (mx, my)):
+            if grid.line_clear((x, y), (mx, my), skip_end=0.10):
                 return (x, y, math.atan2(my - y, mx - x))
     return None
-
-
-def _line_of_sight(grid: OccupancyGrid, a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """No occupied cell between ``a`` and the marker at ``b`` (its own wall's last 10 cm aside)."""
-    length = math.dist(a, b)
-    steps = max(int(length / (grid.resolution / 2)), 1)
-    for i in range(steps + 1):
-        f = i / steps
-        if f * length > length - 0.10:
-            break
-        x = a[0] + (b[0] - a[0]) * f
-        y = a[1] + (b[1] - a[1]) * f
-        if grid.distance_to_obstacle(x, y) <= 0.0:
-            return False
-    return True
 
 
 def _normal_xy(q: msgs.Quaternion) -> tuple[float, float]:

@@ -138,9 +138,7 @@ class OccupancyGrid:
         ox, oy = x0 - margin, y0 - margin
         w = math.ceil((x1 - x0 + 2 * margin) / resolution)
         h = math.ceil((y1 - y0 + 2 * margin) / resolution)
-        xs = ox + (np.arange(w) + 0.5) * resolution
-        ys = oy + (np.arange(h) + 0.5) * resolution
-        gx, gy = np.meshgrid(xs, ys)
+        gx, gy = _cell_centres((ox, oy), resolution, h, w)
         occ = np.zeros((h, w), dtype=bool)
         pad = resolution / 2
         for b in (*scn.walls, *scn.boxes):
@@ -148,19 +146,15 @@ class OccupancyGrid:
             lx = (gx - b.x) * c + (gy - b.y) * s
             ly = -(gx - b.x) * s + (gy - b.y) * c
             occ |= (np.abs(lx) <= b.size_x / 2 + pad) & (np.abs(ly) <= b.size_y / 2 + pad)
-        for disc in (*scn.cylinders, *scn.spheres):
-            occ |= np.hypot(gx - disc.x, gy - disc.y) <= disc.radius + pad
+        _add_discs(occ, gx, gy, ((d.x, d.y, d.radius) for d in (*scn.cylinders, *scn.spheres)), pad)
         return cls(occ, (ox, oy), resolution, robot_radius=robot_radius)
 
     def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> OccupancyGrid:
         """This grid plus round obstacles ``(x, y, radius)``: what a robot's sensors would add
         to its costmap, e.g. another robot parked in the way."""
-        ys, xs = np.mgrid[0 : self.height, 0 : self.width]
-        gx = self.origin[0] + (xs + 0.5) * self.resolution
-        gy = self.origin[1] + (ys + 0.5) * self.resolution
+        gx, gy = _cell_centres(self.origin, self.resolution, self.height, self.width)
         occ = self.occupied.copy()
-        for x, y, r in discs:
-            occ |= np.hypot(gx - x, gy - y) <= r + self.resolution / 2
+        _add_discs(occ, gx, gy, discs, self.resolution / 2)
         return OccupancyGrid(
             occ,
             self.origin,
@@ -197,6 +191,22 @@ class OccupancyGrid:
         """Whether the robot, centred at (x, y), can stand and rotate there."""
         r, c = self.world_to_cell(x, y)
         return self.inside(r, c) and bool(self.free[r, c])
+
+    def line_clear(
+        self, a: tuple[float, float], b: tuple[float, float], skip_end: float = 0.0
+    ) -> bool:
+        """No occupied cell on the segment a -> b, ignoring its last ``skip_end`` metres (the
+        wall a marker hangs on), sampled every half cell: a line of sight on this map."""
+        length = math.dist(a, b)
+        n = max(int(length / (self.resolution / 2)), 1)
+        for i in range(n + 1):
+            f = i / n
+            if f * length > length - skip_end:
+                break
+            x, y = a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f
+            if self.distance_to_obstacle(x, y) <= 0.0:
+                return False
+        return True
 
     def nearest_free(self, x: float, y: float, max_dist: float = 0.5) -> tuple[float, float] | None:
         """The centre of the free cell nearest to (x, y), within ``max_dist``; None if none."""
@@ -235,6 +245,28 @@ class OccupancyGrid:
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(h * w, h * w),
         )
+
+
+def _cell_centres(
+    origin: tuple[float, float], resolution: float, height: int, width: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """World x and y of every cell centre, as two (height, width) arrays."""
+    xs = origin[0] + (np.arange(width) + 0.5) * resolution
+    ys = origin[1] + (np.arange(height) + 0.5) * resolution
+    gx, gy = np.meshgrid(xs, ys)
+    return gx, gy
+
+
+def _add_discs(
+    occ: np.ndarray,
+    gx: np.ndarray,
+    gy: np.ndarray,
+    discs: Iterable[tuple[float, float, float]],
+    pad: float,
+) -> None:
+    """Mark the cells whose centre is within ``radius + pad`` of each disc (x, y, radius)."""
+    for x, y, r in discs:
+        occ |= np.hypot(gx - x, gy - y) <= r + pad
 
 
 def plan(grid: OccupancyGrid, start: tuple[float, float], goal: tuple[float, float]) -> PlanResult:

@@ -126,27 +126,11 @@ def _place(face: Face, rng: np.random.Generator) -> tuple[float, float, float]:
     return (face.x + tx * off + nx * 0.01, face.y + ty * off + ny * 0.01, face.yaw)
 
 
-def _line_clear(
-    grid: OccupancyGrid, a: tuple[float, float], b: tuple[float, float], skip_end: float
-) -> bool:
-    """No occupied cell on the segment a -> b, ignoring the last ``skip_end`` metres."""
-    length = math.dist(a, b)
-    n = max(int(length / (grid.resolution / 2)), 1)
-    for i in range(n + 1):
-        f = i / n
-        if f * length > length - skip_end:
-            break
-        x, y = a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f
-        if grid.distance_to_obstacle(x, y) <= 0.0:
-            return False
-    return True
-
-
 def _sees(grid: OccupancyGrid, target: tuple[float, float], m: Marker) -> tuple[bool, float]:
     d = math.dist(target, (m.x, m.y))
     to_target = math.atan2(target[1] - m.y, target[0] - m.x)
     oblique = abs(math.atan2(math.sin(to_target - m.yaw), math.cos(to_target - m.yaw)))
-    visible = oblique < math.pi / 2 and _line_clear(grid, target, (m.x, m.y), skip_end=0.08)
+    visible = oblique < math.pi / 2 and grid.line_clear(target, (m.x, m.y), skip_end=0.08)
     return visible, d
 
 
