@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.record import RecordResult, RecordSettings, record
+from usar_replay.record import RecordResult, record
+from usar_replay.settings import RunSettings
 from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
 
 
@@ -39,5 +40,5 @@ def one_room() -> Scenario:
 def room_log(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, RecordResult]:
     """The one-room mission, recorded once (about 10-20 s of wall time)."""
     path = tmp_path_factory.mktemp("room") / "room.mcap"
-    result = record(one_room(), path, RecordSettings())
+    result = record(one_room(), path, RunSettings())
     return path, result

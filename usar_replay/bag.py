@@ -21,7 +21,6 @@ Why this shape:
 
 from __future__ import annotations
 
-import functools
 import io
 import os
 from collections.abc import Iterable, Iterator, Mapping
@@ -29,16 +28,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-import numpy as np
 from mcap.reader import SeekingReader
 from mcap.records import Attachment, Channel, Chunk, Metadata, Schema
 from mcap.records import Message as McapMessage
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from rosbags.typesys.store import Typestore
 
-from usar_replay import __version__, msgs
+from usar_replay import __version__, contract, msgs
+from usar_replay.cdr import decode, encode, schema_text, typestore
 from usar_replay.errors import LogError, NotAnMcapFile
 
 __all__ = [
@@ -59,11 +56,13 @@ __all__ = [
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
 MESSAGE_ENCODING = "cdr"
-STATUS_METADATA = "usar.status"
+STATUS_METADATA = contract.STATUS_METADATA
 """Metadata record written on close: ``status`` is ``complete`` or ``interrupted``."""
-RUN_METADATA = "usar.run"
+RUN_METADATA = contract.RUN_METADATA
 """Metadata record with the run's settings and software version (written by the recorder)."""
 MCAP_MAGIC = b"\x89MCAP0\r\n"
+PUBLISHER_KEY = "usar.publisher"
+"""Channel metadata key: who published the channel's messages (sim, mission, recorder)."""
 
 # rosbag2's QoS profile, in the integer form rosbag2 expects when the file has no rosbag2
 # metadata record (enum values: history 1 keep_last / 3 unknown, reliability 1 reliable,
@@ -81,80 +80,11 @@ def _qos_yaml(*, transient_local: bool) -> str:
     )
 
 
-LATCHED_TOPICS = frozenset({"/tf_static", "/explorer/camera/rgb/camera_info_static"})
+LATCHED_TOPICS = frozenset({contract.TF_STATIC, contract.MAP_TOPIC})
 """Topics written with transient-local QoS, as a latched ROS 2 publisher offers them."""
 
 
-# --- CDR via rosbags' typestore -----------------------------------------------------------------
-
-
-@functools.cache
-def typestore() -> Typestore:
-    """A rosbags typestore holding exactly the definitions declared in :mod:`usar_replay.msgs`."""
-    store = get_typestore(Stores.EMPTY)
-    for cls in msgs.MESSAGE_TYPES:
-        store.register(get_types_from_msg(cls.__msgdef__, cls.__msgtype__))
-    return store
-
-
-@functools.cache
-def schema_text(msgtype: str) -> str:
-    """The ``ros2msg`` schema of a type: its definition followed by every dependency's."""
-    text, _ = typestore().generate_msgdef(msgtype, ros_version=2)
-    return text
-
-
-def _to_ros(value: msgs.Message, store: Typestore) -> Any:
-    cls = type(value)
-    kwargs: dict[str, Any] = {}
-    for name, kind, _ in msgs.field_kinds(cls):
-        v = getattr(value, name)
-        if kind == "msg":
-            kwargs[name] = _to_ros(v, store)
-        elif kind == "msgs":
-            kwargs[name] = [_to_ros(x, store) for x in v]
-        elif kind == "bytes":
-            kwargs[name] = np.frombuffer(v, dtype=np.uint8)
-        elif kind == "floats":
-            kwargs[name] = np.asarray(v, dtype=np.float64)
-        else:
-            kwargs[name] = v
-    return store.types[cls.__msgtype__](**kwargs)
-
-
-def _from_ros(obj: Any, cls: type[msgs.Message]) -> msgs.Message:
-    kwargs: dict[str, Any] = {}
-    for name, kind, elem in msgs.field_kinds(cls):
-        v = getattr(obj, name)
-        if kind == "msg":
-            kwargs[name] = _from_ros(v, elem)
-        elif kind == "msgs":
-            kwargs[name] = tuple(_from_ros(x, elem) for x in v)
-        elif kind == "bytes":
-            kwargs[name] = bytes(v)
-        elif kind == "floats":
-            kwargs[name] = tuple(float(x) for x in v)
-        elif kind == "float":
-            kwargs[name] = float(v)
-        elif kind == "int":
-            kwargs[name] = int(v)
-        elif kind == "bool":
-            kwargs[name] = bool(v)
-        else:
-            kwargs[name] = str(v)
-    return cls(**kwargs)
-
-
-def encode(msg: msgs.Message) -> bytes:
-    """CDR bytes of a message, exactly as they are written to the log."""
-    store = typestore()
-    return bytes(store.serialize_cdr(_to_ros(msg, store), type(msg).__msgtype__))
-
-
-def decode(data: bytes, msgtype: str) -> msgs.Message:
-    """The typed message of CDR ``data`` of ROS 2 type ``msgtype`` (``pkg/msg/Type``)."""
-    cls = msgs.message_class(msgtype)
-    return _from_ros(typestore().deserialize_cdr(data, msgtype), cls)
+# --- CDR lives in usar_replay.cdr (re-exported here for older callers) ------------------------
 
 
 # --- writing ------------------------------------------------------------------------------------
@@ -186,11 +116,14 @@ class BagWriter:
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)
         self._writer.start(profile=PROFILE, library=f"usar-replay/{__version__}")
         self._schemas: dict[str, int] = {}
-        self._channels: dict[str, tuple[int, str]] = {}
-        self._sequence: dict[str, int] = {}
+        self._channels: dict[tuple[str, str], tuple[int, str]] = {}
+        self._sequence: dict[tuple[str, str], int] = {}
         self._last_time = 0
         self.message_count = 0
         self.closed = False
+        self.outcome = ""
+        """How the run ended, written into the status record on close (see :meth:`close`)."""
+        self.outcome_reason = ""
 
     def __enter__(self) -> BagWriter:
         return self
@@ -201,14 +134,16 @@ class BagWriter:
         if self.closed:
             return
         if exc_type is None:
-            self.close("complete")
+            self.close("complete", outcome=self.outcome, outcome_reason=self.outcome_reason)
         elif issubclass(exc_type, KeyboardInterrupt):
-            self.close("interrupted", reason="interrupted by the user (Ctrl-C)")
+            reason = "interrupted by the user (Ctrl-C)"
+            self.close("interrupted", reason=reason, outcome="interrupted", outcome_reason=reason)
         else:
-            self.close("interrupted", reason=f"{exc_type.__name__}: {exc}")
+            reason = f"{exc_type.__name__}: {exc}"
+            self.close("interrupted", reason=reason, outcome="interrupted", outcome_reason=reason)
 
-    def _channel(self, topic: str, msgtype: str) -> int:
-        known = self._channels.get(topic)
+    def _channel(self, topic: str, msgtype: str, publisher: str) -> int:
+        known = self._channels.get((topic, publisher))
         if known is not None:
             if known[1] != msgtype:
                 raise ValueError(f"topic {topic} has type {known[1]}, cannot write {msgtype}")
@@ -224,18 +159,27 @@ class BagWriter:
             topic=topic,
             message_encoding=MESSAGE_ENCODING,
             schema_id=schema_id,
-            metadata={"offered_qos_profiles": qos},
+            metadata={"offered_qos_profiles": qos, PUBLISHER_KEY: publisher},
         )
-        self._channels[topic] = (channel_id, msgtype)
-        self._sequence[topic] = 0
+        self._channels[(topic, publisher)] = (channel_id, msgtype)
+        self._sequence[(topic, publisher)] = 0
         return channel_id
 
-    def write(self, topic: str, msg: msgs.Message, log_time_ns: int) -> None:
-        """Append ``msg`` on ``topic`` at sim time ``log_time_ns`` (never earlier than the last)."""
-        self.write_raw(topic, type(msg).__msgtype__, encode(msg), log_time_ns)
+    def write(
+        self, topic: str, msg: msgs.Message, log_time_ns: int, *, publisher: str = "sim"
+    ) -> None:
+        """Append ``msg`` on ``topic`` at sim time ``log_time_ns`` (never earlier than the last).
 
-    def write_raw(self, topic: str, msgtype: str, data: bytes, log_time_ns: int) -> None:
-        """Append already-serialised CDR ``data`` (used when copying or editing a log)."""
+        ``publisher`` (``sim``, ``mission``, ``recorder``) names who published it: each gets
+        its own channel of the topic (``/tf`` has both the simulator's and the mission's), so
+        replay tells inputs from outputs by the channel, whatever frames a mission broadcasts.
+        """
+        self.write_raw(topic, type(msg).__msgtype__, encode(msg), log_time_ns, publisher=publisher)
+
+    def write_raw(
+        self, topic: str, msgtype: str, data: bytes, log_time_ns: int, *, publisher: str = "sim"
+    ) -> None:
+        """Append already-serialised CDR ``data`` (from a mission process, or a copied log)."""
         if self.closed:
             raise ValueError("write to a closed BagWriter")
         if log_time_ns < self._last_time:
@@ -244,9 +188,9 @@ class BagWriter:
             )
         if log_time_ns <= 0:
             raise ValueError("log times must be positive (some tools mishandle 0)")
-        channel_id = self._channel(topic, msgtype)
-        seq = self._sequence[topic]
-        self._sequence[topic] = seq + 1
+        channel_id = self._channel(topic, msgtype, publisher)
+        seq = self._sequence[(topic, publisher)]
+        self._sequence[(topic, publisher)] = seq + 1
         self._writer.add_message(
             channel_id=channel_id,
             log_time=log_time_ns,
@@ -268,8 +212,18 @@ class BagWriter:
             create_time=t, log_time=t, name=name, media_type=media_type, data=data
         )
 
-    def close(self, status: str = "complete", reason: str = "") -> Path:
-        """Write the status record, the summary and indexes; rename ``.part`` to the final name."""
+    def close(
+        self,
+        status: str = "complete",
+        reason: str = "",
+        *,
+        outcome: str = "",
+        outcome_reason: str = "",
+    ) -> Path:
+        """Write the status record, the summary and indexes; rename ``.part`` to the final name.
+
+        ``status`` is the file's state; ``outcome`` how the run ended (``done``, ``time_limit``,
+        ``crashed``, ...: set :attr:`outcome` while writing, or pass it here)."""
         if self.closed:
             return self.path
         self.closed = True
@@ -279,6 +233,8 @@ class BagWriter:
                 data={
                     "status": status,
                     "reason": reason,
+                    "outcome": outcome,
+                    "outcome_reason": outcome_reason,
                     "message_count": str(self.message_count),
                     "end_time_ns": str(self._last_time),
                 },
@@ -302,6 +258,8 @@ class BagMessage:
     log_time_ns: int
     data: bytes
     msg: msgs.Message | None = None
+    publisher: str = ""
+    """Who published it (the channel's ``usar.publisher``): ``sim``, ``mission``, ``recorder``."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -381,7 +339,9 @@ class BagReader:
                     schema = summary.schemas.get(ch.schema_id)
                     name = schema.name if schema else ""
                     count = stats.channel_message_counts.get(cid, 0)
-                    idx.topics[ch.topic] = TopicInfo(ch.topic, name, count)
+                    prior = idx.topics.get(ch.topic)
+                    total = count + (prior.count if prior else 0)
+                    idx.topics[ch.topic] = TopicInfo(ch.topic, name, total)
                 for md in reader.iter_metadata():
                     idx.metadata[md.name] = dict(md.metadata)
                 for att in reader.iter_attachments():
@@ -432,7 +392,12 @@ class BagReader:
                         elif isinstance(r, McapMessage):
                             ch = channels[r.channel_id]
                             schema = schemas.get(ch.schema_id)
-                            yield _Msg(ch.topic, schema.name if schema else "", r)
+                            yield _Msg(
+                                ch.topic,
+                                schema.name if schema else "",
+                                r,
+                                ch.metadata.get(PUBLISHER_KEY, ""),
+                            )
                         else:
                             yield r
             except Exception as err:  # noqa: BLE001 - any decode failure means: damaged here
@@ -512,7 +477,7 @@ class BagReader:
                 continue
             if (start_ns is not None and t < start_ns) or (end_ns is not None and t >= end_ns):
                 continue
-            yield _bag_message(rec.topic, rec.msgtype, t, rec.data, decode_messages)
+            yield _bag_message(rec.topic, rec.msgtype, t, rec.data, decode_messages, rec.publisher)
 
     def _messages_indexed(
         self, wanted: set[str] | None, start_ns: int | None, end_ns: int | None, dec: bool
@@ -529,7 +494,14 @@ class BagReader:
                 )
                 for schema, channel, message in it:
                     msgtype = schema.name if schema else ""
-                    out = _bag_message(channel.topic, msgtype, message.log_time, message.data, dec)
+                    out = _bag_message(
+                        channel.topic,
+                        msgtype,
+                        message.log_time,
+                        message.data,
+                        dec,
+                        channel.metadata.get(PUBLISHER_KEY, ""),
+                    )
                     count, last = count + 1, message.log_time
                     yield out
             except Exception as err:  # noqa: BLE001 - zstd and struct errors from a bad chunk
@@ -541,6 +513,7 @@ class _Msg:
     topic: str
     msgtype: str
     record: McapMessage
+    publisher: str = ""
 
     @property
     def log_time(self) -> int:
@@ -551,7 +524,9 @@ class _Msg:
         return bytes(self.record.data)
 
 
-def _bag_message(topic: str, msgtype: str, t: int, data: bytes, dec: bool) -> BagMessage:
+def _bag_message(
+    topic: str, msgtype: str, t: int, data: bytes, dec: bool, publisher: str = ""
+) -> BagMessage:
     value: msgs.Message | None = None
     if dec:
         try:
@@ -562,7 +537,7 @@ def _bag_message(topic: str, msgtype: str, t: int, data: bytes, dec: bool) -> Ba
             raise LogError(
                 f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}"
             ) from err
-    return BagMessage(topic, msgtype, int(t), bytes(data), value)
+    return BagMessage(topic, msgtype, int(t), bytes(data), value, publisher)
 
 
 def _short(err: BaseException) -> str:

@@ -30,6 +30,7 @@ __all__ = [
     "GROUND_TRUTH_TOPICS",
     "IMAGE",
     "MAP",
+    "MAP_TOPIC",
     "MARKER_FRAME",
     "MARKER_POSES",
     "MISSION_ATTACHMENT",
@@ -40,7 +41,6 @@ __all__ = [
     "RobotBody",
     "SCENARIO_ATTACHMENT",
     "SETTINGS_ATTACHMENT",
-    "SIM_FRAMES_PREFIXES",
     "SIM_TOPICS",
     "START_TIME_NS",
     "STATUS_METADATA",
@@ -57,6 +57,7 @@ __all__ = [
     "odom_frame",
     "plan",
     "robot_of_topic",
+    "sim_frames",
     "truth_pose",
 ]
 
@@ -89,6 +90,9 @@ def base_frame(robot: str) -> str:
 
 TF = "/tf"
 TF_STATIC = "/tf_static"
+MAP_TOPIC = "/map"
+"""nav_msgs/OccupancyGrid of walls and fixed obstacles, published once (latched) at the start,
+as map_server does."""
 IMAGE = "/explorer/camera/rgb/image_raw/compressed"
 CAMERA_INFO = "/explorer/camera/rgb/camera_info"
 FIDUCIALS = "/fiducial_transforms"
@@ -146,6 +150,7 @@ def is_ground_truth(topic: str) -> bool:
 
 SIM_TOPICS: tuple[str, ...] = (
     TF_STATIC,
+    MAP_TOPIC,
     TF,
     CAMERA_INFO,
     IMAGE,
@@ -155,8 +160,21 @@ SIM_TOPICS: tuple[str, ...] = (
 
 GROUND_TRUTH_TOPICS: tuple[str, ...] = (*(truth_pose(r) for r in ROBOTS), TRUTH_MARKERS)
 
-SIM_FRAMES_PREFIXES: tuple[str, ...] = tuple(f"{r}_tf/" for r in ROBOTS)
-"""Frames under these prefixes belong to the simulator: a mission may not broadcast them."""
+
+def sim_frames(robots: tuple[str, ...] = ROBOTS) -> tuple[str, ...]:
+    """The tf links the simulator publishes (as child frames): a mission may not broadcast
+    them (it would fight the simulator over where the robot is)."""
+    return tuple(
+        f
+        for r in robots
+        for f in (
+            odom_frame(r),
+            base_frame(r),
+            f"{r}_tf/camera_rgb_frame",
+            f"{r}_tf/camera_rgb_optical_frame",
+        )
+    )
+
 
 # --- the log file ---------------------------------------------------------------------------------
 

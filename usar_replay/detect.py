@@ -30,14 +30,14 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass, fields
 
 import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from usar_replay import msgs
-from usar_replay.errors import UsageError, UsarError
+from usar_replay.errors import UsarError
+from usar_replay.settings import DetectorParams
 
 __all__ = [
     "DICTIONARIES",
@@ -63,37 +63,6 @@ class DetectError(UsarError):
     """A frame that cannot be decoded (corrupt image bytes in a log)."""
 
     exit_code = 3
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class DetectorParams:
-    """The detector's settings; every field is a plain value so replay can override it."""
-
-    dictionary: str = "DICT_4X4_50"
-    marker_size: float = 0.15
-    """m, the printed marker's side including its black border."""
-    corner_refinement: str = "subpix"
-    """``subpix``, ``contour``, ``apriltag`` or ``none``."""
-    max_reprojection_error: float = 3.0
-    """px; a pose whose corners reproject worse than this is rejected as wrong."""
-
-    def __post_init__(self) -> None:
-        if self.dictionary not in DICTIONARIES:
-            raise UsageError(
-                f"detector.dictionary: unknown ArUco dictionary {self.dictionary!r}; "
-                f"use one of {', '.join(DICTIONARIES)}"
-            )
-        if self.corner_refinement not in _REFINE:
-            raise UsageError(
-                f"detector.corner_refinement: {self.corner_refinement!r} is not one of "
-                f"{', '.join(_REFINE)}"
-            )
-        if not self.marker_size > 0 or not self.max_reprojection_error > 0:
-            raise UsageError("detector.marker_size and max_reprojection_error must be positive")
-
-    @classmethod
-    def field_names(cls) -> tuple[str, ...]:
-        return tuple(f.name for f in fields(cls))
 
 
 _REFINE = {

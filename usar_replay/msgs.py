@@ -52,6 +52,8 @@ __all__ = [
     "FiducialTransformArray",
     "KeyValue",
     "DiagnosticStatus",
+    "MapMetaData",
+    "OccupancyGrid",
     "MESSAGE_TYPES",
     "message_class",
 ]
@@ -414,6 +416,39 @@ class DiagnosticStatus(Message):
     values: tuple[KeyValue, ...] = ()
 
 
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MapMetaData(Message):
+    """nav_msgs/msg/MapMetaData: the grid's resolution (m/cell), size and origin in ``map``."""
+
+    __msgtype__: ClassVar[str] = "nav_msgs/msg/MapMetaData"
+    __msgdef__: ClassVar[str] = (
+        "builtin_interfaces/Time map_load_time\nfloat32 resolution\nuint32 width\n"
+        "uint32 height\ngeometry_msgs/Pose origin\n"
+    )
+    map_load_time: Time = field(default_factory=Time)
+    resolution: float = 0.0
+    width: int = 0
+    height: int = 0
+    origin: Pose = field(default_factory=Pose)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class OccupancyGrid(Message):
+    """nav_msgs/msg/OccupancyGrid, the type of ``/map`` (what map_server publishes, latched).
+
+    ``data`` holds the ``int8`` cells row-major from the origin (row = y, column = x) as raw
+    bytes: 0 free, 100 occupied, 255 (-1 as int8) unknown.
+    """
+
+    __msgtype__: ClassVar[str] = "nav_msgs/msg/OccupancyGrid"
+    __msgdef__: ClassVar[str] = (
+        "std_msgs/Header header\nnav_msgs/MapMetaData info\nint8[] data\n"
+    )
+    header: Header = field(default_factory=Header)
+    info: MapMetaData = field(default_factory=MapMetaData)
+    data: bytes = b""
+
+
 MESSAGE_TYPES: tuple[type[Message], ...] = (
     Time,
     Duration,
@@ -441,6 +476,8 @@ MESSAGE_TYPES: tuple[type[Message], ...] = (
     FiducialTransformArray,
     KeyValue,
     DiagnosticStatus,
+    MapMetaData,
+    OccupancyGrid,
 )
 """Every message type usar-replay writes, in dependency order."""
 

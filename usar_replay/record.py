@@ -1,12 +1,18 @@
-"""`usar record`: run the mission live in pybullet and write everything to one MCAP file.
+"""`usar record`: run a mission live in pybullet and write everything to one MCAP file.
 
 The loop is the design's data flow, sim -> messages -> mission -> messages -> sim, on the sim
-clock only. At each control tick (``control_hz``) the simulator's outputs (``/tf``, odometry, a
-camera frame when one is due, ground truth) are written to the log **and** handed to the mission
-in the same order; whatever the mission publishes is written at the same sim time, and its
-``cmd_vel``s go back to the simulator. Because the mission sees exactly the logged messages (the
-camera frame is encoded first and the mission detects on those bytes), a replay from the log
-reproduces its outputs bit for bit.
+clock only. At each control tick (``record.control_hz``) the simulator's messages (``/tf``, a
+camera frame when one is due, odometry; ``/tf_static`` and ``/map`` at the first tick) are
+written to the log as the ``sim`` publisher and handed, as the same CDR bytes, to the mission
+process (:mod:`usar_replay.worker`) as one tick; whatever the mission publishes is written at the
+same sim time as the ``mission`` publisher, and its ``cmd_vel``s go to the simulator before the
+next physics step. Ground truth is written as the ``recorder`` publisher and never reaches the
+mission. Because the mission sees exactly the logged bytes, a replay from the log reproduces its
+outputs bit for bit.
+
+The log is self-contained: the scenario (``scenario.toml``), every setting (``settings.toml``),
+which mission code ran (``mission.toml``: target, module, sha256) and, on close, how the run
+ended (``usar.status``: the file's state and the mission's outcome).
 """
 
 from __future__ import annotations
@@ -20,39 +26,40 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
-from usar_replay import __version__, bag, msgs
+from usar_replay import __version__, bag, cdr, contract, msgs
 from usar_replay.detect import encode_image
-from usar_replay.info import SCENARIO_ATTACHMENT
-from usar_replay.mission import CAMERA_INFO_TOPIC, IMAGE_TOPIC, Mission, MissionSettings, Phase
 from usar_replay.nav import OccupancyGrid
+from usar_replay.navigation import grid_to_msg
+from usar_replay.run import MissionInfo
 from usar_replay.scenario import Scenario, to_toml
+from usar_replay.settings import RunSettings
+from usar_replay.settings import to_toml as settings_to_toml
 from usar_replay.sim import Simulator
+from usar_replay.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
 
 __all__ = [
-    "GROUND_TRUTH_MARKERS",
+    "OUTCOMES",
     "Progress",
     "RecordResult",
-    "RecordSettings",
     "default_output",
+    "mission_parameters",
+    "print_summary",
     "record",
 ]
 
-GROUND_TRUTH_MARKERS = "/ground_truth/markers"
-START_TIME_NS = 1_000_000_000
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class RecordSettings:
-    """How a run is recorded (the scenario says what world; this says how it is simulated)."""
-
-    physics_hz: int = 100
-    control_hz: int = 20
-    max_sim_time_s: float | None = None
-    """Hard stop; default 1.5 x the scenario's time limit (a run past the limit fails grading)."""
-    renderer: str = "auto"
-    mission: MissionSettings = dataclasses.field(default_factory=MissionSettings)
+OUTCOMES = {
+    "done": "the mission said it was done",
+    "time_limit": "stopped at the hard limit (1.5 x the scenario's time limit)",
+    "max_sim_time": "stopped at --max-sim-time",
+    "interrupted": "interrupted",
+    "crashed": "the mission's code raised an exception",
+    "hung": "a mission callback did not return in time",
+    "out_of_memory": "the mission ran out of memory",
+    "refused": "the mission published something it may not",
+}
+"""How a run can end (``usar.status`` ``outcome``), with the words people read."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,10 +67,10 @@ class Progress:
     """What the progress display shows after each control tick."""
 
     sim_time_s: float
-    phase: Phase
     markers_found: int
     markers_total: int
     frames: int
+    last_log: str
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,14 +79,20 @@ class RecordResult:
 
     path: Path
     status: str
+    outcome: str
+    outcome_reason: str
     sim_duration_s: float
     wall_time_s: float
     frames: int
     messages: int
     markers_found: dict[int, tuple[float, float, float]]
     marker_errors_m: dict[int, float]
-    mission_done: bool
     renderer: str
+    mission: str
+
+    @property
+    def mission_done(self) -> bool:
+        return self.outcome == "done"
 
     @property
     def real_time_factor(self) -> float:
@@ -96,7 +109,24 @@ def default_output(scenario: Scenario, directory: str | os.PathLike[str] = "reco
     return Path(directory) / f"{stem}.mcap"
 
 
-def _run_metadata(scenario: Scenario, settings: RecordSettings, renderer: str) -> dict[str, str]:
+def mission_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
+    """The parameters a mission's nodes read, as the course's launch and parameter files give
+    them: ``aruco_lookup_locations.target_k`` ([x, y]), ``<robot>.home`` ([x, y, yaw]) and the
+    run's ``mission.*`` and ``detector.*`` settings. Never a marker position."""
+    params: dict[str, Any] = {}
+    for i, (x, y) in enumerate(scenario.targets):
+        params[f"aruco_lookup_locations.target_{i + 1}"] = [float(x), float(y)]
+    for start in (scenario.explorer, scenario.follower):
+        params[f"{start.name}.home"] = [start.x, start.y, start.yaw]
+    for group in ("mission", "detector"):
+        for f in dataclasses.fields(getattr(settings, group)):
+            params[f"{group}.{f.name}"] = getattr(getattr(settings, group), f.name)
+    params["use_sim_time"] = True
+    return params
+
+
+def _run_metadata(renderer: str) -> dict[str, str]:
+    """Facts about the machine that recorded (the settings are in ``settings.toml``)."""
     import cv2
     import pybullet
 
@@ -106,14 +136,7 @@ def _run_metadata(scenario: Scenario, settings: RecordSettings, renderer: str) -
         "opencv": cv2.__version__,
         "pybullet_api": str(pybullet.getAPIVersion()),
         "renderer": renderer,
-        "scenario": scenario.name,
-        "seed": "" if scenario.seed is None else str(scenario.seed),
-        "camera": f"{scenario.camera.width}x{scenario.camera.height}@{scenario.camera.rate_hz:g}",
-        "camera_encoding": scenario.camera.encoding,
-        "physics_hz": str(settings.physics_hz),
-        "control_hz": str(settings.control_hz),
-        "start_time_ns": str(START_TIME_NS),
-        "mission_settings": repr(settings.mission),
+        "log_format": "2",
     }
 
 
@@ -130,131 +153,195 @@ def _truth_markers(scenario: Scenario, t_ns: int) -> msgs.FiducialTransformArray
             )
         )
     return msgs.FiducialTransformArray(
-        header=msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id="map"), transforms=tuple(items)
+        header=msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id=contract.MAP),
+        transforms=tuple(items),
     )
 
 
 def record(
     scenario: Scenario,
     out: str | os.PathLike[str],
-    settings: RecordSettings | None = None,
+    settings: RunSettings | None = None,
     progress: Callable[[Progress], None] | None = None,
+    *,
+    mission: str | None = None,
+    limits: MissionLimits | None = None,
 ) -> RecordResult:
-    """Run the mission on ``scenario`` and write the log to ``out``.
+    """Run ``mission`` (default: the built-in one) on ``scenario`` and write the log to ``out``.
 
     Ctrl-C (KeyboardInterrupt) stops the run: the file is closed, indexed and marked
-    ``interrupted``, and the interrupt propagates to the caller after the file is safe.
+    ``interrupted``, and the interrupt propagates to the caller after the file is safe. A
+    mission that crashes, hangs or is refused ends the run with that outcome in the log (the
+    file itself is complete); the result says so.
     """
-    settings = settings or RecordSettings()
+    settings = settings or RunSettings()
+    rs = settings.record
+    target = resolve_target(mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
-    limit_s = settings.max_sim_time_s or scenario.time_limit_s * 1.5
+    limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
+    limit_outcome = "max_sim_time" if rs.max_sim_time_s else "time_limit"
     grid = OccupancyGrid.from_scenario(scenario)
-    mission = Mission(scenario, grid, settings.mission)
+    params = mission_parameters(scenario, settings)
     frames = 0
+    markers: dict[int, tuple[float, float, float]] = {}
+    last_log = ""
+    outcome, reason = limit_outcome, f"stopped at {limit_s:g} s of sim time"
     with (
         Simulator(
             scenario,
-            physics_hz=settings.physics_hz,
-            start_time_ns=START_TIME_NS,
-            renderer=settings.renderer,
+            physics_hz=rs.physics_hz,
+            start_time_ns=contract.START_TIME_NS,
+            renderer=rs.renderer,
         ) as sim,
         bag.BagWriter(out) as writer,
     ):
         renderer = sim.renderer_name
+        stored = dataclasses.replace(settings, record=dataclasses.replace(rs, renderer=renderer))
         t0 = sim.now_ns
         writer.add_attachment(
-            SCENARIO_ATTACHMENT, "application/toml", to_toml(scenario).encode(), t0
+            contract.SCENARIO_ATTACHMENT, "application/toml", to_toml(scenario).encode(), t0
         )
-        writer.add_metadata(bag.RUN_METADATA, _run_metadata(scenario, settings, renderer))
-
-        def publish(topic: str, msg: msgs.Message, t_ns: int) -> None:
-            writer.write(topic, msg, t_ns)
-            for out_topic, out_msg in mission.on_message(topic, msg, t_ns):
-                writer.write(out_topic, out_msg, t_ns)
-                if out_topic.endswith("/cmd_vel") and isinstance(out_msg, msgs.Twist):
-                    sim.set_cmd_vel(out_topic.split("/")[1], out_msg)
-
-        publish("/tf_static", sim.tf_static(), t0)
-        writer.write(GROUND_TRUTH_MARKERS, _truth_markers(scenario, t0), t0)
-        steps_per_tick = max(1, settings.physics_hz // settings.control_hz)
+        writer.add_attachment(
+            contract.SETTINGS_ATTACHMENT,
+            "application/toml",
+            settings_to_toml(stored).encode(),
+            t0,
+        )
+        info = MissionInfo(target.spec, target.module, target.sha256, __version__)
+        writer.add_attachment(
+            contract.MISSION_ATTACHMENT, "application/toml", info.to_toml().encode(), t0
+        )
+        writer.add_metadata(contract.RUN_METADATA, _run_metadata(renderer))
+        writer.write(contract.TRUTH_MARKERS, _truth_markers(scenario, t0), t0, publisher="recorder")
+        first: list[tuple[str, msgs.Message]] = [
+            (contract.TF_STATIC, sim.tf_static()),
+            (contract.MAP_TOPIC, grid_to_msg(grid, msgs.Time.from_ns(t0))),
+        ]
+        steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
         end_ns = t0 + int(limit_s * 1e9)
-        while not mission.done and sim.now_ns <= end_ns:
-            t = sim.now_ns
-            publish("/tf", sim.tf(), t)
-            if sim.camera_due():
-                frame = sim.render_camera()
-                info = sim.camera_info()
-                data = encode_image(frame, scenario.camera.encoding)
-                image = msgs.CompressedImage(
-                    header=info.header, format=scenario.camera.encoding, data=data
-                )
-                publish(CAMERA_INFO_TOPIC, info, t)
-                publish(IMAGE_TOPIC, image, t)
-                frames += 1
-            for robot in ("explorer", "follower"):
-                publish(f"/{robot}/odom", sim.odometry(robot), t)
-                truth = msgs.PoseStamped(
-                    header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id="map"),
-                    pose=sim.true_pose(robot),
-                )
-                writer.write(f"/ground_truth/{robot}/pose", truth, t)
-            if progress is not None:
-                progress(
-                    Progress(
-                        (t - t0) / 1e9,
-                        mission.phase,
-                        len(mission.markers),
-                        len(scenario.markers),
-                        frames,
-                    )
-                )
-            sim.step(steps_per_tick)
-        status = "complete"
-        if not mission.done:
+        try:
+            with MissionProcess(
+                target,
+                params,
+                sim_topics=contract.SIM_TOPICS,
+                sim_frames=contract.sim_frames(),
+                limits=limits,
+            ) as proc:
+                while sim.now_ns <= end_ns:
+                    t = sim.now_ns
+                    batch, first = [*first, (contract.TF, sim.tf())], []
+                    if sim.camera_due():
+                        cam = sim.camera_info()
+                        data = encode_image(sim.render_camera(), scenario.camera.encoding)
+                        image = msgs.CompressedImage(
+                            header=cam.header, format=scenario.camera.encoding, data=data
+                        )
+                        batch += [(contract.CAMERA_INFO, cam), (contract.IMAGE, image)]
+                        frames += 1
+                    batch += [(contract.odom(r), sim.odometry(r)) for r in contract.ROBOTS]
+                    wire = []
+                    for topic, msg in batch:
+                        raw = cdr.encode(msg)
+                        writer.write_raw(topic, msg.__msgtype__, raw, t, publisher="sim")
+                        wire.append((topic, msg.__msgtype__, raw))
+                    for r in contract.ROBOTS:
+                        truth = msgs.PoseStamped(
+                            header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP),
+                            pose=sim.true_pose(r),
+                        )
+                        writer.write(contract.truth_pose(r), truth, t, publisher="recorder")
+                    for topic, msgtype, raw, value in proc.tick(t, wire):
+                        writer.write_raw(topic, msgtype, raw, t, publisher="mission")
+                        robot = contract.robot_of_topic(topic)
+                        if robot is not None and topic == contract.cmd_vel(robot):
+                            assert isinstance(value, msgs.Twist)
+                            sim.set_cmd_vel(robot, value)
+                        elif topic == contract.MARKER_POSES and isinstance(
+                            value, msgs.FiducialTransformArray
+                        ):
+                            markers = {
+                                f.fiducial_id: (
+                                    f.transform.translation.x,
+                                    f.transform.translation.y,
+                                    f.transform.translation.z,
+                                )
+                                for f in value.transforms
+                            }
+                        elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
+                            last_log = value.msg
+                    if progress is not None:
+                        progress(
+                            Progress(
+                                (t - t0) / 1e9,
+                                len(markers),
+                                len(scenario.markers),
+                                frames,
+                                last_log,
+                            )
+                        )
+                    if proc.shutdown_requested:
+                        outcome, reason = "done", "the mission said it was done"
+                        break
+                    sim.step(steps_per_tick)
+        except MissionEnded as ended:
+            outcome, reason = ended.verdict, ended.detail
+        except KeyboardInterrupt:
+            writer.outcome, writer.outcome_reason = "interrupted", "interrupted by the user"
+            raise
+        writer.outcome, writer.outcome_reason = outcome, reason
+        if outcome != "done":
             writer.write(
-                "/rosout",
+                contract.ROSOUT,
                 msgs.Log(
                     stamp=msgs.Time.from_ns(sim.now_ns),
                     level=msgs.Log.ERROR,
                     name="record",
-                    msg=f"stopped at the hard limit of {limit_s:.0f} s sim time; mission not done",
+                    msg=f"run ended: {OUTCOMES.get(outcome, outcome)}",
                 ),
                 sim.now_ns,
+                publisher="recorder",
             )
         sim_duration = (sim.now_ns - t0) / 1e9
         message_count = writer.message_count
-    errors = {}
     truth = {m.id: m for m in scenario.markers}
-    for mid, (x, y, z, _) in mission.markers.items():
-        if mid in truth:
-            m = truth[mid]
-            errors[mid] = math.dist((x, y, z), (m.x, m.y, m.z))
+    errors = {
+        mid: math.dist(p, (truth[mid].x, truth[mid].y, truth[mid].z))
+        for mid, p in markers.items()
+        if mid in truth
+    }
     return RecordResult(
         path=Path(out),
-        status=status,
+        status="complete",
+        outcome=outcome,
+        outcome_reason=reason,
         sim_duration_s=sim_duration,
         wall_time_s=time.perf_counter() - wall_start,
         frames=frames,
         messages=message_count,
-        markers_found={k: v[:3] for k, v in sorted(mission.markers.items())},
+        markers_found=dict(sorted(markers.items())),
         marker_errors_m=errors,
-        mission_done=mission.done,
         renderer=renderer,
+        mission=target.spec,
     )
 
 
 def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
-    """The end-of-run summary for people."""
+    """The end-of-run summary for people (fits 100 columns; a crash's traceback is shown as
+    the user's own)."""
     lines = [
         f"Recorded {result.path} ({result.size_bytes / 1e6:.1f} MB, {result.messages} messages,"
-        f" {result.frames} camera frames, renderer {result.renderer})",
+        f" {result.frames} camera frames)",
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
-        f" real-time factor {result.real_time_factor:.2f}",
-        "Mission " + ("complete" if result.mission_done else "NOT complete"),
+        f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
+        f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
         f"Markers found: {len(result.markers_found)}",
     ]
     for mid, pos in result.markers_found.items():
         err = result.marker_errors_m.get(mid)
         err_s = f", error {err * 100:.1f} cm" if err is not None else ""
         lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
-    print("\n".join(lines), file=file or sys.stdout)
+    out = file or sys.stdout
+    print("\n".join(lines), file=out)
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+        print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
+        print(result.outcome_reason.rstrip(), file=out)

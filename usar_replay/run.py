@@ -103,7 +103,7 @@ class Run:
     @property
     def outcome_reason(self) -> str:
         """The recorder's words for the outcome (the user's traceback for ``crashed``)."""
-        return self.status_record.get("reason", "")
+        return self.status_record.get("outcome_reason", "")
 
     @property
     def run_metadata(self) -> dict[str, str]:

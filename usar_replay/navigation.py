@@ -1,0 +1,276 @@
+"""A move_base-like navigation action for one robot, built on the node API and nothing else.
+
+Why it is a library on :class:`usar_replay.node.Node` rather than part of the simulator: in the
+course, move_base is a node the students' code sends goals to; here it runs in the mission's
+process, with the same inputs any node gets (``/map``, ``/tf``, the robot's odometry) and the
+same outputs (``cmd_vel``, the goal, the plan, the goal's outcome). User code may use it or drive
+``cmd_vel`` itself. The built-in mission uses it exactly as a user would.
+
+Use::
+
+    nav = NavigateClient(node, "explorer")
+    nav.send_goal(pose_stamped_in_map, done_callback=on_done)   # on_done(NavResult)
+
+While a goal is active the client publishes ``/<robot>/cmd_vel`` on each odometry message (the
+simulator's control rate); when it ends it publishes a zero ``cmd_vel``, the outcome on
+``/<robot>/goal_status`` (``diagnostic_msgs/DiagnosticStatus``: succeeded, or failed with a
+reason) and a log line, then calls ``done_callback``. Idle, it publishes nothing, so another
+publisher (a spin) can drive the robot.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from usar_replay import contract, msgs
+from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid
+from usar_replay.node import Node, Time
+from usar_replay.rotations import quat_from_yaw, yaw_from_quat
+from usar_replay.tf2 import Buffer, TransformException, TransformListener
+
+__all__ = ["NavResult", "NavigateClient", "grid_from_msg", "grid_to_msg"]
+
+SUCCEEDED = "succeeded"
+ABORTED = "aborted"
+
+
+@dataclass(frozen=True, slots=True)
+class NavResult:
+    """How a goal ended: ``status`` is ``succeeded`` or ``aborted`` (with a ``reason``)."""
+
+    goal_name: str
+    status: str
+    reason: str
+    pose: tuple[float, float, float] | None
+    """The robot's (x, y, yaw) in ``map`` when the goal ended."""
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status == SUCCEEDED
+
+
+def grid_to_msg(grid: OccupancyGrid, stamp: msgs.Time) -> msgs.OccupancyGrid:
+    """The costmap's occupancy as ``nav_msgs/OccupancyGrid`` (0 free, 100 occupied)."""
+    data = np.where(grid.occupied, 100, 0).astype(np.uint8).tobytes()
+    return msgs.OccupancyGrid(
+        header=msgs.Header(stamp=stamp, frame_id=contract.MAP),
+        info=msgs.MapMetaData(
+            map_load_time=stamp,
+            resolution=grid.resolution,
+            width=grid.width,
+            height=grid.height,
+            origin=msgs.Pose(position=msgs.Point(x=grid.origin[0], y=grid.origin[1])),
+        ),
+        data=data,
+    )
+
+
+def grid_from_msg(
+    msg: msgs.OccupancyGrid, robot_radius: float = contract.WAFFLE.radius
+) -> OccupancyGrid:
+    """A costmap from ``/map``: occupied and unknown cells are obstacles, inflated by the robot.
+
+    The resolution travels as float32; it is read back as the nearest short decimal (0.05, not
+    0.0500000007) so grids built from the map and from the scenario agree cell for cell.
+    """
+    info = msg.info
+    cells = np.frombuffer(msg.data, dtype=np.int8).reshape(info.height, info.width)
+    occupied = (cells >= 50) | (cells < 0)
+    resolution = float(f"{info.resolution:.7g}")
+    origin = (info.origin.position.x, info.origin.position.y)
+    return OccupancyGrid(occupied, origin, resolution, robot_radius=robot_radius)
+
+
+class NavigateClient:
+    """move_base for ``robot``, driven by its odometry; see the module docstring."""
+
+    def __init__(
+        self,
+        node: Node,
+        robot: str,
+        *,
+        buffer: Buffer | None = None,
+        limits: Limits | None = None,
+        xy_tolerance: float = 0.05,
+        yaw_tolerance: float = 0.17,
+    ) -> None:
+        self.node = node
+        self.robot = robot
+        self.limits = limits or Limits()
+        self.xy_tolerance = xy_tolerance
+        self.yaw_tolerance = yaw_tolerance
+        if buffer is None:
+            buffer = Buffer(cache_time=30.0)
+            TransformListener(buffer, node)
+        self.buffer = buffer
+        self.grid: OccupancyGrid | None = None
+        self._base_grid: OccupancyGrid | None = None
+        self._discs: list[tuple[float, float, float]] = []
+        self._nav: Navigator | None = None
+        self.pose: tuple[float, float, float] | None = None
+        self._goal_name = ""
+        self._goal_seq = 0
+        self._started_ns = 0
+        self._done: Callable[[NavResult], None] | None = None
+        self._pending: tuple[float, float, float | None, float, float] | None = None
+        self._cmd = node.create_publisher(msgs.Twist, contract.cmd_vel(robot))
+        self._goal_pub = node.create_publisher(msgs.PoseStamped, contract.goal(robot))
+        self._plan_pub = node.create_publisher(msgs.Path, contract.plan(robot))
+        self._status_pub = node.create_publisher(msgs.DiagnosticStatus, contract.goal_status(robot))
+        node.create_subscription(msgs.OccupancyGrid, contract.MAP_TOPIC, self._on_map)
+        node.create_subscription(msgs.Odometry, contract.odom(robot), self._on_odom)
+
+    # -- the map ---------------------------------------------------------------------------------
+
+    def _on_map(self, msg: msgs.OccupancyGrid) -> None:
+        self._base_grid = grid_from_msg(msg)
+        self._rebuild()
+
+    def mark_obstacle(self, x: float, y: float, radius: float) -> None:
+        """Add a round obstacle to this robot's costmap, as its laser would mark another robot
+        standing at (x, y) (the map has only walls and fixed obstacles)."""
+        self._discs.append((x, y, radius))
+        self._rebuild()
+
+    def _rebuild(self) -> None:
+        if self._base_grid is None:
+            return
+        self.grid = self._base_grid.with_discs(self._discs) if self._discs else self._base_grid
+        self._nav = Navigator(self.grid, self.limits)
+
+    # -- goals -----------------------------------------------------------------------------------
+
+    @property
+    def active(self) -> bool:
+        return self._nav is not None and self._nav.status is NavStatus.ACTIVE
+
+    def send_goal(
+        self,
+        goal: msgs.PoseStamped,
+        done_callback: Callable[[NavResult], None] | None = None,
+        *,
+        name: str = "",
+        ignore_yaw: bool = False,
+        xy_tolerance: float | None = None,
+        yaw_tolerance: float | None = None,
+    ) -> None:
+        """Drive to ``goal`` (in ``map``); ``done_callback(NavResult)`` when it ends.
+
+        ``ignore_yaw``: any final heading will do. A new goal replaces an active one (its
+        callback is not called, as move_base preempts).
+        """
+        if goal.header.frame_id.lstrip("/") != contract.MAP:
+            raise ValueError(
+                f"navigation goals are in {contract.MAP!r}, got frame {goal.header.frame_id!r}: "
+                "transform the pose into map first (tf2 Buffer.transform / lookup_transform)"
+            )
+        self._goal_seq += 1
+        self._goal_name = name or f"goal_{self._goal_seq}"
+        self._done = done_callback
+        p = goal.pose.position
+        yaw = None if ignore_yaw else yaw_from_quat(goal.pose.orientation)
+        xy = self.xy_tolerance if xy_tolerance is None else xy_tolerance
+        yt = self.yaw_tolerance if yaw_tolerance is None else yaw_tolerance
+        t_ns = self.node.get_clock().now().nanoseconds
+        self._started_ns = t_ns
+        stamp = msgs.Time.from_ns(t_ns)
+        header = msgs.Header(stamp=stamp, frame_id=contract.MAP)
+        self._goal_pub.publish(
+            msgs.PoseStamped(
+                header=header,
+                pose=msgs.Pose(
+                    position=msgs.Point(x=p.x, y=p.y), orientation=quat_from_yaw(yaw or 0.0)
+                ),
+            )
+        )
+        if self._nav is None:
+            self._finish(NavStatus.FAILED, "no map received on /map yet")
+            return
+        path = self._nav.set_goal(
+            p.x, p.y, yaw, xy_tolerance=xy, yaw_tolerance=yt, t_ns=t_ns, start=self.pose
+        )
+        if path:
+            self._plan_pub.publish(
+                msgs.Path(
+                    header=header,
+                    poses=tuple(
+                        msgs.PoseStamped(
+                            header=header, pose=msgs.Pose(position=msgs.Point(x=px, y=py))
+                        )
+                        for px, py in path
+                    ),
+                )
+            )
+        self.node.get_logger().info(
+            f"{self.robot}: goal {self._goal_name} at ({p.x:.3f}, {p.y:.3f})"
+        )
+        if self._nav.status is NavStatus.FAILED:
+            self._finish(NavStatus.FAILED, self._nav.reason)
+
+    def cancel_goal(self) -> None:
+        """Stop driving now; the done callback is not called."""
+        if self._nav is not None and self.active:
+            self._nav.cancel()
+            self._cmd.publish(msgs.Twist())
+
+    # -- driving ---------------------------------------------------------------------------------
+
+    def _lookup_pose(self, stamp: msgs.Time) -> tuple[float, float, float] | None:
+        try:
+            tf = self.buffer.lookup_transform(
+                contract.MAP, contract.base_frame(self.robot), Time.from_msg(stamp)
+            )
+        except TransformException:
+            return None
+        tr = tf.transform.translation
+        return (tr.x, tr.y, yaw_from_quat(tf.transform.rotation))
+
+    def _on_odom(self, msg: msgs.Odometry) -> None:
+        pose = self._lookup_pose(msg.header.stamp)
+        if pose is None:
+            return
+        self.pose = pose
+        nav = self._nav
+        if nav is None or nav.status is not NavStatus.ACTIVE:
+            return
+        t_ns = msg.header.stamp.ns
+        twist = nav.update(t_ns, *pose)
+        self._cmd.publish(twist)
+        if nav.status is not NavStatus.ACTIVE:
+            self._finish(nav.status, nav.reason)
+
+    def _finish(self, status: NavStatus, reason: str) -> None:
+        ok = status is NavStatus.SUCCEEDED
+        t_ns = self.node.get_clock().now().nanoseconds
+        pose = self.pose or (math.nan, math.nan, math.nan)
+        self._cmd.publish(msgs.Twist())
+        values = (
+            msgs.KeyValue(key="goal", value=self._goal_name),
+            msgs.KeyValue(key="seq", value=str(self._goal_seq)),
+            msgs.KeyValue(key="x", value=repr(pose[0])),
+            msgs.KeyValue(key="y", value=repr(pose[1])),
+            msgs.KeyValue(key="yaw", value=repr(pose[2])),
+            msgs.KeyValue(key="started_ns", value=str(self._started_ns)),
+            msgs.KeyValue(key="ended_ns", value=str(t_ns)),
+        )
+        self._status_pub.publish(
+            msgs.DiagnosticStatus(
+                level=msgs.DiagnosticStatus.OK if ok else msgs.DiagnosticStatus.ERROR,
+                name=self._goal_name,
+                message=SUCCEEDED if ok else f"failed: {reason}",
+                hardware_id=self.robot,
+                values=values,
+            )
+        )
+        text = f"{self.robot}: goal {self._goal_name} " + ("reached" if ok else f"failed: {reason}")
+        if ok:
+            self.node.get_logger().info(text)
+        else:
+            self.node.get_logger().warning(text)
+        done, self._done = self._done, None
+        if done is not None:
+            done(NavResult(self._goal_name, SUCCEEDED if ok else ABORTED, reason, self.pose))
