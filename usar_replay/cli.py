@@ -6,6 +6,8 @@ Exit codes (the same for every subcommand):
 * 1 - a rubric line or the replay comparison failed.
 * 2 - usage error: bad option, bad scenario file, a command not built yet.
 * 3 - the log is incomplete or corrupt (what could be read was still used, and said so).
+* 4 - the mission's code crashed, hung, ran out of memory or published what it may not (the
+  log is closed and records the verdict; the user's traceback is shown).
 * 130 - interrupted by Ctrl-C (a recording is still closed and readable).
 
 User errors (:class:`usar_replay.errors.UsarError`) are printed as one line, ``usar: error: ...``,
@@ -28,6 +30,8 @@ if TYPE_CHECKING:
     from usar_replay.grade import GradeReport, Thresholds
     from usar_replay.record import Progress
     from usar_replay.scenario import Scenario
+    from usar_replay.settings import RunSettings
+    from usar_replay.worker import MissionLimits
 
 __all__ = ["main"]
 
@@ -35,6 +39,7 @@ EXIT_OK = 0
 EXIT_FAIL = 1
 EXIT_USAGE = 2
 EXIT_INCOMPLETE = 3
+EXIT_MISSION = 4
 EXIT_INTERRUPTED = 130
 
 
@@ -120,17 +125,20 @@ class _StatusLine:
     """One self-rewriting progress line on stderr (a plain line every 30 sim-s when not a tty)."""
 
     def __init__(self) -> None:
+        import shutil
+
         self.tty = sys.stderr.isatty()
+        self.width = min(shutil.get_terminal_size((100, 24)).columns, 100) - 1
         self.last_print = -1e9
 
     def __call__(self, p: Progress) -> None:
         text = (
-            f"sim {p.sim_time_s:7.1f} s | {p.phase.value:<32} | markers {p.markers_found}/"
-            f"{p.markers_total} | frames {p.frames}"
-        )
+            f"sim {p.sim_time_s:7.1f} s | markers {p.markers_found}/{p.markers_total} | "
+            f"frames {p.frames} | {p.last_log}"
+        )[: self.width]
         if self.tty:
             if p.sim_time_s - self.last_print >= 0.5:
-                print("\r" + text, end="", file=sys.stderr, flush=True)
+                print("\r" + text.ljust(self.width), end="", file=sys.stderr, flush=True)
                 self.last_print = p.sim_time_s
         elif p.sim_time_s - self.last_print >= 30.0:
             print(text, file=sys.stderr, flush=True)
@@ -141,26 +149,84 @@ class _StatusLine:
             print(file=sys.stderr)
 
 
+def _overrides(items: Sequence[str] | None) -> dict[str, str]:
+    overrides: dict[str, str] = {}
+    for item in items or []:
+        k, eq, v = item.partition("=")
+        if not eq or not k.strip():
+            raise UsageError(
+                f"--set {item!r}: expected NAME=VALUE, e.g. detector.dictionary=DICT_5X5_50"
+            )
+        overrides[k.strip()] = v.strip()
+    return overrides
+
+
+def _run_settings(args: argparse.Namespace, base: RunSettings) -> RunSettings:
+    """``--settings FILE`` then ``--set NAME=VALUE`` on top of ``base`` (one codec for all)."""
+    from usar_replay import settings as settings_mod
+
+    out = base
+    if getattr(args, "settings", None):
+        data = settings_mod.load(settings_mod.RunSettings, args.settings)
+        # only the tables the file has replace the base's
+        import tomllib
+
+        given = tomllib.loads(Path(args.settings).read_text(encoding="utf-8"))
+        out = dataclasses.replace(
+            out, **{k: getattr(data, k) for k in ("record", "mission", "detector") if k in given}
+        )
+    return settings_mod.apply_overrides(out, _overrides(args.set), default_group="mission")
+
+
+def _limits(args: argparse.Namespace) -> MissionLimits:
+    from usar_replay.worker import MissionLimits
+
+    if not (args.tick_timeout > 0):
+        raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
+    if args.mission_memory < 0:
+        raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
+    return MissionLimits(tick_timeout_s=args.tick_timeout, memory_mb=args.mission_memory)
+
+
 def _cmd_record(args: argparse.Namespace) -> int:
-    from usar_replay.record import RecordSettings, default_output, print_summary, record
+    from usar_replay.record import default_output, print_summary, record
+    from usar_replay.settings import RunSettings
 
     scenario = _load_scenario(args)
     out = Path(args.out) if args.out else default_output(scenario)
     if out.exists() and not args.overwrite:
         raise UsageError(f"{out} exists; pass --overwrite to replace it, or --out another path")
-    settings = RecordSettings(renderer=args.renderer, max_sim_time_s=args.max_sim_time)
+    base = RunSettings()
+    base = dataclasses.replace(
+        base,
+        record=dataclasses.replace(
+            base.record, renderer=args.renderer, max_sim_time_s=args.max_sim_time
+        ),
+    )
+    settings = _run_settings(args, base)
     status = _StatusLine()
     try:
-        result = record(scenario, out, settings, progress=None if args.quiet else status)
+        result = record(
+            scenario,
+            out,
+            settings,
+            progress=None if args.quiet else status,
+            mission=args.mission,
+            limits=_limits(args),
+        )
     except KeyboardInterrupt:
         status.close()
-        print(
-            f"usar: interrupted; {out} is closed and readable, marked interrupted",
-            file=sys.stderr,
+        what = (
+            f"{out} is closed and readable, marked interrupted"
+            if out.exists()
+            else ("nothing was written")
         )
+        print(f"usar: interrupted; {what}", file=sys.stderr)
         return EXIT_INTERRUPTED
     status.close()
     print_summary(result)
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+        return EXIT_MISSION
     return EXIT_OK if result.mission_done else EXIT_FAIL
 
 
@@ -252,44 +318,31 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 
 def _cmd_replay(args: argparse.Namespace) -> int:
     from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader
-    from usar_replay.mission import MissionSettings
-    from usar_replay.replay import apply_overrides, replay, settings_from_toml
+    from usar_replay.replay import check_not_damaged, replay
     from usar_replay.reports import to_table
+    from usar_replay.run import open_run
 
-    if args.jobs is not None and args.jobs < 0:
-        raise UsageError(f"--jobs {args.jobs}: expected 0 or more")
-    settings = MissionSettings()
-    if args.settings:
-        settings = settings_from_toml(args.settings, settings)
-    overrides: dict[str, str] = {}
-    for item in args.set or []:
-        k, eq, v = item.partition("=")
-        if not eq or not k.strip():
-            raise UsageError(
-                f"--set {item!r}: expected NAME=VALUE, e.g. detector.dictionary=DICT_5X5_50"
-            )
-        overrides[k.strip()] = v.strip()
-    settings = apply_overrides(settings, overrides)
-    regression = bool(overrides or args.settings)
+    run = open_run(args.file)
+    changed = bool(args.set or args.settings)
+    settings = _run_settings(args, run.settings) if changed else None
     thresholds = _thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: Grader | None = None
     if args.grade:
-        from usar_replay import bag
-        from usar_replay.replay import load_scenario
-
-        grader = Grader(load_scenario(bag.BagReader(args.file)), thresholds)
+        grader = Grader(run.require_scenario(), thresholds)
     report = replay(
-        args.file,
+        run,
         settings,
+        mission=args.mission,
         grade_sink=None if grader is None else grader.feed,
         grade_topics=GRADE_TOPICS,
         required_topics=REQUIRED_TOPICS if grader is not None else (),
-        regression=regression,
-        workers=args.jobs,
+        limits=_limits(args),
     )
+    check_not_damaged(report)
     print("\n".join(report.lines()))
-    # regression mode expects differences: it reports them, and only grading can fail it
-    code = EXIT_OK if (report.identical or regression) else EXIT_FAIL
+    code = EXIT_OK if report.identical or args.expect_changes else EXIT_FAIL
+    if report.mission_failure is not None:
+        code = EXIT_MISSION
     if grader is not None:
         g = grader.report(
             f"{args.file} (replayed)",
@@ -299,7 +352,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         print()
         print(to_table(g))
         _reports_out(args, [g])
-        if not g.passed:
+        if not g.passed and code == EXIT_OK:
             code = EXIT_FAIL
     if report.log_problem:
         print(
@@ -309,6 +362,38 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         )
         return EXIT_INCOMPLETE
     return code
+
+
+def _mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
+    p.add_argument(
+        "--mission",
+        metavar="TARGET",
+        help=(
+            "mission code: a .py file or module:function that creates the nodes "
+            + ("(default: the one the log recorded)" if replay else "(default: builtin)")
+        ),
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="a setting, e.g. detector.dictionary=DICT_5X5_50 or mission.settle_frames=3",
+    )
+    p.add_argument("--settings", metavar="TOML", help="settings from [record]/[mission]/[detector]")
+    p.add_argument(
+        "--tick-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="wall seconds a tick's callbacks may take before the mission is 'hung' (10)",
+    )
+    p.add_argument(
+        "--mission-memory",
+        type=int,
+        default=4096,
+        metavar="MIB",
+        help="memory limit of the mission process in MiB (4096; 0: none)",
+    )
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
@@ -357,7 +442,10 @@ def _parser() -> argparse.ArgumentParser:
             "Run, record, replay, grade and view the two-robot US&R mission "
             "(ENPM809Y 'US&R Simplified') without ROS."
         ),
-        epilog="Exit codes: 0 ok, 1 a check failed, 2 usage error, 3 incomplete or corrupt log.",
+        epilog=(
+            "Exit codes: 0 ok, 1 a check failed, 2 usage error, 3 incomplete or corrupt log, "
+            "4 the mission's code failed, 130 interrupted."
+        ),
     )
     parser.add_argument("--version", action="version", version=f"usar-replay {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -373,22 +461,19 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
     p.add_argument("--quiet", action="store_true", help="no progress line")
+    _mission_options(p, replay=False)
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.set_defaults(func=_cmd_record)
 
-    p = sub.add_parser("replay", help="re-run detector/tf/follower from a log and compare")
+    p = sub.add_parser("replay", help="re-run the mission from a log and compare its outputs")
     p.add_argument("file", metavar="FILE")
     p.add_argument("--grade", action="store_true", help="then grade the replayed outputs")
     p.add_argument(
-        "--set", action="append", metavar="NAME=VALUE", help="changed setting (regression mode)"
+        "--expect-changes",
+        action="store_true",
+        help="report differences without failing (regression runs of changed code or settings)",
     )
-    p.add_argument("--settings", metavar="TOML", help="changed settings from a TOML file")
-    p.add_argument(
-        "--jobs",
-        type=int,
-        metavar="N",
-        help="detector threads ahead of the mission (default: one per core, up to 4; 0: none)",
-    )
+    _mission_options(p, replay=True)
     _grade_outputs(p)
     p.set_defaults(func=_cmd_replay)
 
