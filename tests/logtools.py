@@ -7,7 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from usar_replay import bag, msgs
-from usar_replay.info import SCENARIO_ATTACHMENT
+from usar_replay.contract import SCENARIO_ATTACHMENT
 from usar_replay.scenario import Scenario, to_toml
 
 
@@ -51,10 +51,11 @@ def rewrite(
             if out is False:
                 continue
             t = m.log_time_ns if retime is None else retime(m.log_time_ns)
+            who = m.publisher or "sim"
             if isinstance(out, msgs.Message):
-                w.write(m.topic, out, t)
+                w.write(m.topic, out, t, publisher=who)
             else:
-                w.write_raw(m.topic, m.msgtype, m.data, t)
+                w.write_raw(m.topic, m.msgtype, m.data, t, publisher=who)
 
 
 def truncate_at(src: Path, dst: Path, min_time_ns: int) -> int:
@@ -87,10 +88,11 @@ class Synthetic:
                 pose=msgs.Pose(position=msgs.Point(x=x, y=y)),
             ),
             self.t,
+            publisher="recorder",
         )
 
-    def write(self, topic: str, msg: msgs.Message) -> None:
-        self.w.write(topic, msg, self.t)
+    def write(self, topic: str, msg: msgs.Message, publisher: str = "mission") -> None:
+        self.w.write(topic, msg, self.t, publisher=publisher)
 
     def advance(self, seconds: float) -> None:
         self.t += int(seconds * 1e9)

@@ -13,19 +13,20 @@ from logtools import rewrite, truncate_at
 
 from usar_replay import bag, msgs
 from usar_replay.cli import main
-from usar_replay.detect import DetectorParams, decode_image, detect, detect_with_corners
+from usar_replay.contract import CAMERA_INFO, IMAGE
+from usar_replay.detect import decode_image, detect, detect_with_corners
 from usar_replay.detect import encode_image as encode_png
 from usar_replay.errors import UsageError
-from usar_replay.mission import CAMERA_INFO_TOPIC, IMAGE_TOPIC, MissionSettings
 from usar_replay.record import RecordResult
-from usar_replay.replay import (
-    MARKER_TF_KEY,
-    OUTPUT_TOPICS,
-    apply_overrides,
-    outputs_digest,
-    replay,
-    settings_from_toml,
-)
+from usar_replay.replay import MISSION_TF_KEY, outputs_digest, replay
+from usar_replay.run import open_run
+from usar_replay.settings import DetectorParams, RunSettings, apply_overrides, load
+
+CAMERA_INFO_TOPIC, IMAGE_TOPIC = CAMERA_INFO, IMAGE
+
+
+def _changed(**overrides: str) -> RunSettings:
+    return apply_overrides(RunSettings(), overrides, default_group="mission")
 
 
 def test_replay_reproduces_the_recording(
@@ -38,40 +39,17 @@ def test_replay_reproduces_the_recording(
     digest = outputs_digest(path)
     assert f"Digest of replayed outputs (sha256): {digest}" in out
     # every output topic of the log is compared, every message identical
-    report = replay(path, workers=0)  # and the same without the detector's look-ahead
+    report = replay(path, window=1)  # and the same with one tick in flight
     assert report.identical and report.digest == digest and report.divergence is None
-    counts = bag.BagReader(path).topics
-    for topic in OUTPUT_TOPICS & set(counts):
+    mission_topics = {m.topic for m in open_run(path).messages(decode=False) if m.publisher == "mission"}
+    assert {"/fiducial_transforms", "/explorer/cmd_vel", "/follower/cmd_vel", "/rosout"} <= mission_topics
+    for topic in mission_topics - {"/tf"}:
         t = report.topics[topic]
-        assert t.recorded == t.replayed == t.identical, topic
+        assert t.recorded == t.replayed == t.identical > 0, topic
+    counts = bag.BagReader(path).topics
     assert report.topics["/fiducial_transforms"].identical == counts[IMAGE_TOPIC].count
-    assert report.topics[MARKER_TF_KEY].identical >= 1
-    assert report.frames_detected == report.frames_reused == 0  # workers=0: the mission detects
-
-
-def test_the_detector_look_ahead_changes_no_byte(room_log: tuple[Path, RecordResult]) -> None:
-    """Worker threads and the reuse of identical frames give the very same outputs."""
-    report = replay(room_log[0], workers=2)
-    assert report.identical and report.digest == outputs_digest(room_log[0])
-    frames = bag.BagReader(room_log[0]).topics[IMAGE_TOPIC].count
-    assert report.frames_detected + report.frames_reused == frames
-    assert report.frames_reused > 0  # the explorer waits at home: identical frames exist
-    assert report.look_ahead_misses == 0  # every frame was predicted as the mission asked
-
-
-def test_the_look_ahead_falls_back_to_the_real_detector(
-    room_log: tuple[Path, RecordResult],
-) -> None:
-    """A call it did not predict is detected on the spot, with the same result."""
-    from usar_replay.replay import _DetectAhead
-
-    frames = bag.BagReader(room_log[0]).messages([CAMERA_INFO_TOPIC, IMAGE_TOPIC])
-    info, image = next(frames).msg, next(frames).msg
-    assert isinstance(info, msgs.CameraInfo) and isinstance(image, msgs.CompressedImage)
-    params = DetectorParams()
-    with _DetectAhead(params, 1, 4) as ahead:
-        assert ahead.detect(image, info, params, image_seq=7) == detect(image, info, params, 7)
-        assert ahead.missed == 1
+    assert report.topics[MISSION_TF_KEY].identical >= 1
+    assert not report.regression and report.mission == "builtin"
 
 
 def _frame_with_one_pixel_changed(
@@ -158,23 +136,20 @@ def test_an_altered_recorded_output_names_its_field(
 def test_regression_mode_reports_what_changed(room_log: tuple[Path, RecordResult]) -> None:
     """DICT_5X5_50 cannot see the 4x4 marker: detections lost, stored pose lost; and the
     comparison stays streaming although the replay publishes far fewer messages."""
-    settings = apply_overrides(MissionSettings(), {"detector.dictionary": "DICT_5X5_50"})
-    report = replay(room_log[0], settings, regression=True)
-    assert not report.identical
+    report = replay(room_log[0], _changed(**{"detector.dictionary": "DICT_5X5_50"}))
+    assert not report.identical and report.regression and report.settings_changed
     lines = report.changes.lines()
     assert any(line.startswith("marker 0: detections lost:") for line in lines), lines
     assert "marker 0: stored pose lost" in lines
     assert report.changes.detections_replayed == {} and report.changes.markers_replayed == {}
     follower = report.topics["/follower/cmd_vel"]
     assert follower.recorded > 100 and follower.replayed <= 2
-    assert report.peak_pending < 20  # one sim time's outputs, not the whole follower run
 
 
 def test_regression_mode_reports_a_moved_marker(room_log: tuple[Path, RecordResult]) -> None:
     """Without corner refinement the marker is still seen on the same frames, but its stored
     map pose moves by a couple of centimetres."""
-    settings = apply_overrides(MissionSettings(), {"detector.corner_refinement": "none"})
-    report = replay(room_log[0], settings, regression=True)
+    report = replay(room_log[0], _changed(**{"detector.corner_refinement": "none"}))
     lines = report.changes.lines()
     assert not any("detections" in line for line in lines), lines
     moved = [line for line in lines if line.startswith("marker 0: stored map pose moved")]
@@ -187,11 +162,13 @@ def test_regression_mode_reports_a_moved_marker(room_log: tuple[Path, RecordResu
 def test_regression_mode_via_the_command(
     room_log: tuple[Path, RecordResult], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Exit 0 with --set (it reports, it does not fail); with --grade the lost marker fails."""
+    """Changed outputs exit 1 unless --expect-changes; with --grade the lost marker fails."""
     path = str(room_log[0])
-    assert main(["replay", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
+    assert main(["replay", "--set", "detector.dictionary=DICT_5X5_50", path]) == 1
+    capsys.readouterr()
+    assert main(["replay", "--expect-changes", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
     out = capsys.readouterr().out
-    assert "Changes with the new settings:" in out and "marker 0: stored pose lost" in out
+    assert "Changes with changed settings:" in out and "marker 0: stored pose lost" in out
     toml = tmp_path / "settings.toml"
     toml.write_text('[detector]\ndictionary = "DICT_5X5_50"\n')
     junit = tmp_path / "g.xml"
@@ -232,12 +209,14 @@ def test_a_truncated_log_replays_as_far_as_it_goes(
 @pytest.mark.parametrize(
     ("args", "needle"),
     [
-        (["--set", "detector.dictionary=DICT_9X9_1"], "unknown ArUco dictionary"),
+        (["--set", "detector.dictionary=DICT_9X9_1"], "is not one of"),
         (["--set", "detector.colour=red"], "unknown setting"),
         (["--set", "max_detection_range=far"], "expected a float"),
         (["--set", "settle_frames"], "expected NAME=VALUE"),
         (["--set", "detector=DICT_5X5_50"], "set one of its fields"),
-        (["--jobs", "-1"], "--jobs"),
+        (["--set", "settle_frames=-3"], "out of range"),
+        (["--set", "mission.follower_tolerance=0"], "out of range"),
+        (["--tick-timeout", "0"], "--tick-timeout"),
     ],
 )
 def test_bad_settings_are_one_line_exit_2(
@@ -247,21 +226,20 @@ def test_bad_settings_are_one_line_exit_2(
 
 
 def test_settings_toml_errors(tmp_path: Path) -> None:
-    base = MissionSettings()
     bad = tmp_path / "s.toml"
     bad.write_text("[detector\n")
-    with pytest.raises(UsageError, match="cannot read settings"):
-        settings_from_toml(bad, base)
+    with pytest.raises(UsageError, match="invalid TOML"):
+        load(RunSettings, bad)
     bad.write_text("[camera]\nwidth = 3\n")
-    with pytest.raises(UsageError, match="unknown table"):
-        settings_from_toml(bad, base)
+    with pytest.raises(UsageError, match="unknown setting"):
+        load(RunSettings, bad)
     bad.write_text("[detector]\nmarker_size = [1, 2]\n")
     with pytest.raises(UsageError, match="expected a number"):
-        settings_from_toml(bad, base)
+        load(RunSettings, bad)
     good = tmp_path / "g.toml"
-    good.write_text("spin_speed = 0.2\n[detector]\nmarker_size = 0.2\n[thresholds]\nhome_m = 1\n")
-    s = settings_from_toml(good, base)
-    assert s.spin_speed == 0.2 and s.detector.marker_size == 0.2
+    good.write_text("[mission]\nspin_speed = 0.2\n[detector]\nmarker_size = 0.2\n")
+    s = load(RunSettings, good)
+    assert s.mission.spin_speed == 0.2 and s.detector.marker_size == 0.2
 
 
 def test_replay_bad_inputs_are_one_line(

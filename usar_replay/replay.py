@@ -236,13 +236,15 @@ class ReplayReport:
         if self.identical:
             out.append("Replay reproduces the recording bit for bit.")
         elif self.nondeterministic:
+            out.append("Replay does NOT reproduce the recording.")
             out += _wrap(
-                "Replay does NOT reproduce the recording, with the same code and settings: the "
-                "mission is not deterministic (it reads a clock, an unseeded random generator, "
-                "or depends on thread timing, dict/set order of objects, or files)."
+                "The code and the settings are the recorded ones, so either the mission is not "
+                "deterministic (it reads a clock, an unseeded random generator, files, or "
+                "depends on thread timing or the order of a set), or the log's inputs were "
+                "edited after recording."
             )
         else:
-            out.append("Replay differs from the recording (see above).")
+            out.append("Replay does NOT reproduce the recording (expected: see the changes).")
         return out
 
 
@@ -435,7 +437,7 @@ def replay(
     """
     run = source if isinstance(source, Run) else open_run(source)
     scenario = run.require_scenario()
-    run.require_topics([contract.TF, contract.IMAGE, *required_topics])
+    run.require_topics([*contract.SIM_TOPICS, *required_topics])
     recorded_target = run.mission.target or "builtin"
     spec = mission or recorded_target
     try:
@@ -499,7 +501,11 @@ def replay(
         try:
             for tick in _ticks(run):
                 last = tick
-                if not tick.inputs:
+                if not tick.inputs or proc.shutdown_requested:
+                    # nothing for the mission (or it said it is done): the recording's outputs
+                    # here have no replayed counterpart
+                    for topic, msgtype, data in tick.inputs:
+                        feed(topic, msgtype, data, None, tick.t)
                     for m in tick.truth:
                         feed(m.topic, m.msgtype, m.data, None, tick.t)
                     for p in tick.recorded:
@@ -511,8 +517,6 @@ def replay(
                 in_flight.append(tick)
                 while len(in_flight) > max(window, 1):
                     finish(in_flight.popleft(), proc)
-                if proc.shutdown_requested:
-                    break
             cut = run.reader.damage is not None or run.file_state != "complete"
             while in_flight:
                 tick = in_flight.popleft()

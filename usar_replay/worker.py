@@ -252,7 +252,8 @@ def _serve(conn: multiprocessing.connection.Connection, executor: Executor) -> N
                 return
             _, t_ns, items, _ = _unpack(frame)
             inputs = [(topic, cdr.decode(data, msgtype)) for topic, msgtype, data in items]
-            outputs = executor.tick(t_ns, inputs)
+            # a mission that said it is done runs no more callbacks (live, the run ends there)
+            outputs = [] if executor.shutdown_requested else executor.tick(t_ns, inputs)
             wire = [(topic, type(m).__msgtype__, cdr.encode(m)) for topic, m in outputs]
             conn.send_bytes(_pack(_OUT, t_ns, wire, int(executor.shutdown_requested)))
 

@@ -1,4 +1,4 @@
-"""The mission's own ideas: follower approach points, range gating, a target with no marker."""
+"""The built-in mission's own ideas (usar_replay/missions/usar.py): follower approach points, range gating, a target with no marker."""
 
 from __future__ import annotations
 
@@ -12,9 +12,10 @@ from conftest import one_room
 from scipy.spatial.transform import Rotation
 
 from usar_replay import bag, msgs
-from usar_replay.mission import MissionSettings, approach_point
+from usar_replay.missions.usar import approach_point
 from usar_replay.nav import OccupancyGrid, robot_disc
-from usar_replay.record import RecordSettings, record
+from usar_replay.record import record
+from usar_replay.settings import MissionSettings, RunSettings
 from usar_replay.scenario import Marker, course_world
 
 COURSE = course_world()
@@ -73,7 +74,7 @@ def test_no_free_point_gives_none() -> None:
 def test_a_marker_beyond_range_is_refused_and_the_mission_goes_on(tmp_path: Path) -> None:
     """With a range gate shorter than the room's marker distance (0.9 m), the explorer turns a
     full circle at 0.1 rad/s, reports the target, goes home, and the follower still runs."""
-    settings = RecordSettings(mission=MissionSettings(max_detection_range=0.5))
+    settings = RunSettings(mission=MissionSettings(max_detection_range=0.5))
     result = record(one_room(), tmp_path / "gated.mcap", settings)
     assert result.mission_done and result.markers_found == {}
     detections, broadcasts, spins = 0, 0, 0
