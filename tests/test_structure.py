@@ -145,3 +145,12 @@ def test_core_module_loads_no_heavy_back_end(module: str) -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert out.stdout.strip() == "", f"{PACKAGE}.{module} imports {out.stdout.strip()}"
+
+
+def test_the_package_ships_py_typed() -> None:
+    """PEP 561: the marker file exists and the build lists it as package data."""
+    import tomllib
+
+    assert (ROOT / "py.typed").is_file()
+    project = tomllib.loads((ROOT.parent / "pyproject.toml").read_text(encoding="utf-8"))
+    assert "py.typed" in project["tool"]["setuptools"]["package-data"][PACKAGE]

@@ -112,7 +112,8 @@ class OccupancyGrid:
         self.occupied = occupied
         self.origin = origin
         self.resolution = resolution
-        self.height, self.width = occupied.shape
+        self.height: int = int(occupied.shape[0])
+        self.width: int = int(occupied.shape[1])
         self.robot_radius = robot_radius
         self.inflation_radius = inflation_radius
         self.cost_scaling = cost_scaling
@@ -147,7 +148,9 @@ class OccupancyGrid:
             lx = (gx - b.x) * c + (gy - b.y) * s
             ly = -(gx - b.x) * s + (gy - b.y) * c
             occ |= (np.abs(lx) <= b.size_x / 2 + pad) & (np.abs(ly) <= b.size_y / 2 + pad)
-        _add_discs(occ, gx, gy, ((d.x, d.y, d.radius) for d in (*scn.cylinders, *scn.spheres)), pad)
+        discs = [(c.x, c.y, c.radius) for c in scn.cylinders]
+        discs += [(s.x, s.y, s.radius) for s in scn.spheres]
+        _add_discs(occ, gx, gy, discs, pad)
         return cls(occ, (ox, oy), resolution, robot_radius=robot_radius)
 
     def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> OccupancyGrid:

@@ -29,6 +29,10 @@ The course's pitfalls, explained
   when the frame was never broadcast: no marker was detected yet (``marker_frame`` is broadcast
   only on frames with a detection), or the name is misspelt (tf2 frame ids have no leading
   '/'; a leading '/' is an InvalidArgument).
+* **A frame looked up in itself** is the identity, before any check of the frame: tf2 answers
+  it even for a frame that was never broadcast (stamped with the requested time, or for time 0
+  with the frame's newest stamp, 0 when it has none), and ``can_transform`` says True.
+  ``lookup_transform_full`` is stricter: its three frames must exist.
 """
 
 from __future__ import annotations
