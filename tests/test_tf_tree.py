@@ -147,7 +147,9 @@ def test_refused_inserts() -> None:
     assert not b.set_transform(ts("a", ""))
     assert not b.set_transform(ts("a", "b", (math.nan, 0, 0)))
     assert not b.set_transform(ts("a", "b", q=(0, 0, 0, 1.02)))
-    assert b.set_transform(ts("a", "b", q=(0, 0, 0, 1.005)))
+    # tf2 checks |q|^2 - 1 against 10e-3: 1.004^2 = 1.008 passes, 1.005^2 = 1.010025 does not
+    assert b.set_transform(ts("a", "b", q=(0, 0, 0, 1.004)))
+    assert not b.set_transform(ts("a", "b", q=(0, 0, 0, 1.005), stamp=1))
     assert b.set_transform(ts("/map", "/c", stamp=5))
     assert "c" in b.frames() and b.frames()["c"] == "map"
 
@@ -156,8 +158,10 @@ def test_cache_time_prunes_and_refuses_old_data() -> None:
     b = Buffer(cache_time=10.0)
     b.set_transform(ts("a", "b", stamp=1 * S))
     b.set_transform(ts("a", "b", stamp=20 * S))
-    assert not b.can_transform("a", "b", 1 * S)  # pruned
+    # tf2 prunes by the newest stamp *before* an insert: 1 s survives until the next insert
+    assert b.can_transform("a", "b", 1 * S)
     assert not b.set_transform(ts("a", "b", stamp=5 * S))  # older than newest - cache_time
+    assert not b.can_transform("a", "b", 1 * S)  # pruned by that (refused) insert
     assert b.set_transform(ts("a", "b", stamp=15 * S))
 
 

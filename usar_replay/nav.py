@@ -33,6 +33,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from usar_replay import msgs
+from usar_replay.rotations import wrap_angle
 from usar_replay.scenario import Scenario, building_extent
 
 __all__ = [
@@ -111,7 +112,8 @@ class OccupancyGrid:
         self.occupied = occupied
         self.origin = origin
         self.resolution = resolution
-        self.height, self.width = occupied.shape
+        self.height: int = int(occupied.shape[0])
+        self.width: int = int(occupied.shape[1])
         self.robot_radius = robot_radius
         self.inflation_radius = inflation_radius
         self.cost_scaling = cost_scaling
@@ -146,7 +148,9 @@ class OccupancyGrid:
             lx = (gx - b.x) * c + (gy - b.y) * s
             ly = -(gx - b.x) * s + (gy - b.y) * c
             occ |= (np.abs(lx) <= b.size_x / 2 + pad) & (np.abs(ly) <= b.size_y / 2 + pad)
-        _add_discs(occ, gx, gy, ((d.x, d.y, d.radius) for d in (*scn.cylinders, *scn.spheres)), pad)
+        discs = [(c.x, c.y, c.radius) for c in scn.cylinders]
+        discs += [(s.x, s.y, s.radius) for s in scn.spheres]
+        _add_discs(occ, gx, gy, discs, pad)
         return cls(occ, (ox, oy), resolution, robot_radius=robot_radius)
 
     def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> OccupancyGrid:
@@ -299,10 +303,6 @@ def plan(grid: OccupancyGrid, start: tuple[float, float], goal: tuple[float, flo
     return PlanResult(True, tuple(pts), "", length)
 
 
-def _wrap(a: float) -> float:
-    return math.atan2(math.sin(a), math.cos(a))
-
-
 class _Mode(enum.Enum):
     DRIVE = "drive"
     TURN = "turn"
@@ -411,7 +411,7 @@ class Navigator:
         if self._mode is _Mode.DRIVE and dist <= self._xy_tol:
             self._mode = _Mode.TURN  # xy reached: latched, as move_base does
         if self._mode is _Mode.TURN:
-            err = 0.0 if self._yaw is None else _wrap(self._yaw - yaw)
+            err = 0.0 if self._yaw is None else wrap_angle(self._yaw - yaw)
             if abs(err) <= self._yaw_tol:
                 self.status = NavStatus.SUCCEEDED
                 return self._stop(t_ns)
@@ -433,7 +433,7 @@ class Navigator:
             self._mode = _Mode.BACKUP
             self._backup_until = t_ns + int(lim.backup_time_s * 1e9)
             return self._limit(-lim.backup_speed, 0.0, t_ns)
-        err = _wrap(math.atan2(ty - y, tx - x) - yaw)
+        err = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(err) > lim.rotate_in_place_above:
             return self._limit(0.0, lim.heading_gain * err, t_ns)
         v = lim.max_linear

@@ -29,6 +29,10 @@ The course's pitfalls, explained
   when the frame was never broadcast: no marker was detected yet (``marker_frame`` is broadcast
   only on frames with a detection), or the name is misspelt (tf2 frame ids have no leading
   '/'; a leading '/' is an InvalidArgument).
+* **A frame looked up in itself** is the identity, before any check of the frame: tf2 answers
+  it even for a frame that was never broadcast (stamped with the requested time, or for time 0
+  with the frame's newest stamp, 0 when it has none), and ``can_transform`` says True.
+  ``lookup_transform_full`` is stricter: its three frames must exist.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ import logging
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Literal, overload
 
 from usar_replay import msgs
 
@@ -58,9 +63,13 @@ log = logging.getLogger("usar_replay.tf_tree")
 
 MAX_GRAPH_DEPTH = 1000
 NS = 1_000_000_000
+QUATERNION_NORMALIZATION_TOLERANCE = 10e-3  # on |q|^2 - 1, as tf2's buffer_core.cpp
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # x, y, z, w
+
+_ZERO: Vec = (0.0, 0.0, 0.0)
+_UNIT: Quat = (0.0, 0.0, 0.0, 1.0)
 
 
 class TransformException(Exception):
@@ -165,6 +174,11 @@ def _slerp(a: Quat, b: Quat, t: float) -> Quat:
     return (x / n, y / n, z / n, w / n)
 
 
+def _strip_slash(frame: str) -> str:
+    """tf2's ``stripSlash``: one leading '/' goes (a second one stays)."""
+    return frame[1:] if frame[:1] == "/" else frame
+
+
 def _seconds(ns: int) -> str:
     """Times in tf2's error texts: seconds with six decimals."""
     return f"{ns / NS:.6f}"
@@ -181,13 +195,15 @@ class _Sample:
     q: Quat
 
 
-class _Repeated(Exception):
-    """A second sample with a stamp the cache already holds."""
-
-
 @dataclass(slots=True)
 class _TimeCache:
-    """One child frame's history, sorted by stamp (tf2's ``TimeCache``)."""
+    """One child frame's history, sorted by stamp (tf2's ``TimeCache`` / ``StaticCache``).
+
+    tf2 keeps its list newest first; here it is oldest first, so tf2's "front" is ``[-1]``.
+    Samples that share a stamp are all kept, in insertion order (tf2 (ROS 2) drops only an
+    exact duplicate); a lookup at the newest stamp or in the middle gets the last inserted of
+    that stamp, at the oldest stamp the first inserted, as tf2's ``findClosest`` does.
+    """
 
     max_storage_ns: int
     stamps: list[int] = field(default_factory=list)
@@ -195,22 +211,36 @@ class _TimeCache:
     static: bool = False
 
     def insert(self, s: _Sample) -> bool:
+        """tf2's ``insertData``: prune by the newest stamp *before* the insert, refuse data
+        older than that newest minus the storage time, drop an exact duplicate (still True)."""
         if self.static:
             self.stamps, self.samples = [s.stamp], [s]
             return True
-        if self.stamps and s.stamp < self.stamps[-1] - self.max_storage_ns:
-            return False
-        i = bisect.bisect_left(self.stamps, s.stamp)
-        if i < len(self.stamps) and self.stamps[i] == s.stamp:
-            raise _Repeated  # tf2 (ROS 2) keeps the first sample of a stamp
-        self.stamps.insert(i, s.stamp)
+        stamps = self.stamps
+        if stamps:
+            oldest_kept = stamps[-1] - self.max_storage_ns
+            if stamps[0] < oldest_kept:
+                cut = bisect.bisect_left(stamps, oldest_kept)
+                del stamps[:cut]
+                del self.samples[:cut]
+            if s.stamp < oldest_kept:
+                return False
+        i = bisect.bisect_right(stamps, s.stamp)
+        j = i - 1
+        while j >= 0 and stamps[j] == s.stamp:
+            d = self.samples[j]
+            if d.parent == s.parent and d.t == s.t and d.q == s.q:
+                return True  # an exact repeat: tf2 keeps one copy and reports success
+            j -= 1
+        stamps.insert(i, s.stamp)
         self.samples.insert(i, s)
-        # prune what is older than the newest minus the storage time
-        cut = bisect.bisect_left(self.stamps, self.stamps[-1] - self.max_storage_ns)
-        if cut:
-            del self.stamps[:cut]
-            del self.samples[:cut]
         return True
+
+    def clear(self) -> None:
+        """tf2's ``clearList``: a dynamic history empties, a static transform stays."""
+        if not self.static:
+            self.stamps.clear()
+            self.samples.clear()
 
     def latest(self) -> tuple[int, str]:
         """(newest stamp, its parent); static caches report stamp 0, as tf2's StaticCache."""
@@ -220,20 +250,28 @@ class _TimeCache:
 
     def get(self, time: int) -> tuple[_Sample | None, str]:
         """The sample at ``time`` (interpolated), or None and tf2's error text."""
-        if not self.samples:
-            return None, ""
-        if self.static:
-            return self.samples[0], ""
-        if time == 0:
-            return self.samples[-1], ""
+        samples = self.samples
+        if self.static and samples:
+            return samples[0], ""
         stamps = self.stamps
+        if not stamps:
+            return None, (
+                f"Lookup would require extrapolation at time {_seconds(time)}, but only time "
+                f"{_seconds(0)} is in the buffer"
+            )
+        if time == 0:
+            return samples[-1], ""
         if len(stamps) == 1:
             if stamps[0] == time:
-                return self.samples[0], ""
+                return samples[0], ""
             return None, (
                 f"Lookup would require extrapolation at time {_seconds(time)}, but only time "
                 f"{_seconds(stamps[0])} is in the buffer"
             )
+        if time == stamps[-1]:
+            return samples[-1], ""
+        if time == stamps[0]:
+            return samples[0], ""
         if time > stamps[-1]:
             return None, (
                 "Lookup would require extrapolation into the future.  Requested time "
@@ -244,10 +282,11 @@ class _TimeCache:
                 "Lookup would require extrapolation into the past.  Requested time "
                 f"{_seconds(time)} but the earliest data is at time {_seconds(stamps[0])}"
             )
-        i = bisect.bisect_left(stamps, time)
-        if stamps[i] == time:
-            return self.samples[i], ""
-        one, two = self.samples[i - 1], self.samples[i]
+        i = bisect.bisect_right(stamps, time) - 1
+        one = samples[i]
+        if one.stamp == time:
+            return one, ""
+        two = samples[i + 1]
         if one.parent != two.parent:
             return one, ""  # tf2 does not interpolate across a change of parent
         r = (time - one.stamp) / (two.stamp - one.stamp)
@@ -268,7 +307,9 @@ class Buffer:
     def __init__(self, cache_time: float = 10.0) -> None:
         self.cache_time_ns = round(cache_time * NS)
         self._frames: dict[str, _TimeCache] = {}
-        self._known: set[str] = set()
+        # every frame id ever named by an accepted-looking insert, in first-seen order (tf2's
+        # frame numbers: the child is numbered before its parent); clear() keeps them, as tf2
+        self._ids: dict[str, None] = {}
         self._authority: dict[str, str] = {}
 
     # -- inserting -----------------------------------------------------------------------------
@@ -286,24 +327,26 @@ class Buffer:
         return self._set(msg, authority, static=True)
 
     def _set(self, msg: msgs.TransformStamped, authority: str, *, static: bool) -> bool:
-        child = msg.child_frame_id.lstrip("/")
-        parent = msg.header.frame_id.lstrip("/")
+        """tf2's ``setTransformImpl``: every check logs its error, then any error refuses."""
+        child = _strip_slash(msg.child_frame_id)
+        parent = _strip_slash(msg.header.frame_id)
         tr, rot = msg.transform.translation, msg.transform.rotation
+        ok = True
         if child == parent:
             log.error(
-                'TF_SELF_TRANSFORM: Ignoring transform from authority "%s" with frame_id and '
-                'child_frame_id  "%s" because they are the same',
+                'TF_SELF_TRANSFORM: Ignoring transform from authority "%s" with frame_id and  '
+                'child_frame_id "%s" because they are the same',
                 authority,
                 child,
             )
-            return False
+            ok = False
         if not child:
             log.error(
                 'TF_NO_CHILD_FRAME_ID: Ignoring transform from authority "%s" because '
                 "child_frame_id not set ",
                 authority,
             )
-            return False
+            ok = False
         if not parent:
             log.error(
                 'TF_NO_FRAME_ID: Ignoring transform with child_frame_id "%s"  from '
@@ -311,23 +354,28 @@ class Buffer:
                 child,
                 authority,
             )
-            return False
-        values = (tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w)
-        if any(math.isnan(v) for v in values):
+            ok = False
+        if any(math.isnan(v) for v in (tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w)):
             log.error(
-                'TF_NAN_INPUT: Ignoring transform for child_frame_id "%s" from authority '
-                '"%s" because of a nan value in the transform (%s)',
+                'TF_NAN_INPUT: Ignoring transform for child_frame_id "%s" from authority "%s" '
+                "because of a nan value in the transform (%f %f %f) (%f %f %f %f)",
                 child,
                 authority,
-                " ".join(str(v) for v in values),
+                tr.x,
+                tr.y,
+                tr.z,
+                rot.x,
+                rot.y,
+                rot.z,
+                rot.w,
             )
-            return False
-        norm = math.sqrt(rot.x**2 + rot.y**2 + rot.z**2 + rot.w**2)
-        if abs(norm - 1.0) >= 0.01:
+            ok = False
+        norm2 = rot.x * rot.x + rot.y * rot.y + rot.z * rot.z + rot.w * rot.w
+        if not abs(norm2 - 1.0) < QUATERNION_NORMALIZATION_TOLERANCE:  # NaN fails too, as tf2
             log.error(
                 'TF_DENORMALIZED_QUATERNION: Ignoring transform for child_frame_id "%s" '
                 'from authority "%s" because of an invalid quaternion in the transform '
-                "(%s %s %s %s)",
+                "(%f %f %f %f)",
                 child,
                 authority,
                 rot.x,
@@ -335,28 +383,21 @@ class Buffer:
                 rot.z,
                 rot.w,
             )
+            ok = False
+        if not ok:
             return False
+        norm = math.sqrt(norm2)
         q = (rot.x / norm, rot.y / norm, rot.z / norm, rot.w / norm)
+        # tf2 numbers the child, then the parent, before it tries the insert
+        self._ids.setdefault(child)
+        self._ids.setdefault(parent)
         cache = self._frames.get(child)
-        if cache is None:
+        if cache is None or cache.static != static:
+            # a new frame, or a dynamic frame turned static (or back): tf2 allocates a new cache
             cache = _TimeCache(self.cache_time_ns, static=static)
             self._frames[child] = cache
-        elif static and not cache.static:
-            cache.static = True
         stamp = msg.header.stamp.ns
-        try:
-            inserted = cache.insert(_Sample(stamp, parent, (tr.x, tr.y, tr.z), q))
-        except _Repeated:
-            log.warning(
-                "TF_REPEATED_DATA ignoring data with redundant timestamp for frame %s (parent "
-                "%s) at time %s according to authority %s",
-                child,
-                parent,
-                _seconds(stamp),
-                authority,
-            )
-            return False
-        if not inserted:
+        if not cache.insert(_Sample(stamp, parent, (tr.x, tr.y, tr.z), q)):
             log.warning(
                 "TF_OLD_DATA ignoring data from the past for frame %s at time %s according to "
                 "authority %s\nPossible reasons are listed at "
@@ -366,15 +407,13 @@ class Buffer:
                 authority,
             )
             return False
-        self._known.add(child)
-        self._known.add(parent)
         self._authority[child] = authority
         return True
 
     def clear(self) -> None:
-        self._frames.clear()
-        self._known.clear()
-        self._authority.clear()
+        """tf2's ``clear``: dynamic histories empty; frame ids and static transforms stay."""
+        for cache in self._frames.values():
+            cache.clear()
 
     # -- looking up ----------------------------------------------------------------------------
 
@@ -382,27 +421,67 @@ class Buffer:
     def _ns(time: int | msgs.Time) -> int:
         return time.ns if isinstance(time, msgs.Time) else int(time)
 
+    def _check(self, where: str, frame: str) -> str:
+        """tf2's ``validateFrameId`` in its no-throw form: "" when valid, else the reason."""
+        if not frame:
+            return (
+                f'Invalid frame ID "{frame}" passed to {where} - in tf2 frame_ids cannot be empty'
+            )
+        if frame[0] == "/":
+            return (
+                f'Invalid frame ID "{frame}" passed to {where} - in tf2 frame_ids cannot start '
+                "with a '/'"
+            )
+        if frame not in self._ids:
+            return f'Invalid frame ID "{frame}" passed to {where} - frame does not exist'
+        return ""
+
     def _validate(self, where: str, frame: str) -> None:
+        """tf2's throwing ``validateFrameId``."""
         if not frame:
             raise InvalidArgumentException(
-                f"Invalid argument passed to {where} in tf2 frame_ids cannot be empty"
+                f'Invalid argument "{frame}" passed to {where} - in tf2 frame_ids cannot be empty'
             )
-        if frame.startswith("/"):
+        if frame[0] == "/":
             raise InvalidArgumentException(
-                f'Invalid argument "{frame}" passed to {where} in tf2 frame_ids cannot start '
-                "with a '/' like: "
+                f'Invalid argument "{frame}" passed to {where} - in tf2 frame_ids cannot start '
+                "with a '/'"
             )
-        if frame not in self._known:
+        if frame not in self._ids:
             raise LookupException(f'"{frame}" passed to {where} does not exist. ')
+
+    def _identity_time(self, frame: str, time: int) -> int:
+        """The stamp of a lookup of a frame in itself: ``time``, or for time 0 the frame's
+        newest stamp (0 when it is static, has no history, or is unknown), as tf2."""
+        if time == 0:
+            cache = self._frames.get(frame)
+            if cache is not None:
+                return cache.latest()[0]
+        return time
 
     def lookup_transform(
         self, target_frame: str, source_frame: str, time: int | msgs.Time
     ) -> msgs.TransformStamped:
-        """The pose of ``source_frame`` in ``target_frame`` at ``time`` (0: latest common)."""
+        """The pose of ``source_frame`` in ``target_frame`` at ``time`` (0: latest common).
+
+        A frame looked up in itself is the identity, before any check of the frame (tf2's
+        short cut: even an unknown or empty frame id answers).
+        """
+        ns = time.ns if isinstance(time, msgs.Time) else int(time)
+        if target_frame == source_frame:
+            return _stamped(
+                target_frame, source_frame, self._identity_time(target_frame, ns), _ZERO, _UNIT
+            )
         self._validate("lookupTransform argument target_frame", target_frame)
         self._validate("lookupTransform argument source_frame", source_frame)
-        t, q, stamp = self._walk(target_frame, source_frame, self._ns(time))
+        t, q, stamp = self._walk(target_frame, source_frame, ns)
         return _stamped(target_frame, source_frame, stamp, t, q)
+
+    def _lookup_impl(self, target: str, source: str, time: int) -> tuple[Vec, Quat, int]:
+        """tf2's ``lookupTransformImpl`` after validation (the full lookup's two halves)."""
+        if target == source:
+            return _ZERO, _UNIT, self._identity_time(target, time)
+        return self._walk(target, source, time)
 
     def lookup_transform_full(
         self,
@@ -413,28 +492,96 @@ class Buffer:
         fixed_frame: str,
     ) -> msgs.TransformStamped:
         """tf2's time travel: ``source`` at ``source_time`` into ``target`` at ``target_time``,
-        through ``fixed_frame`` (a frame assumed not to move between the two times)."""
+        through ``fixed_frame`` (a frame assumed not to move between the two times).
+
+        As tf2: all three frames must exist (no identity short cut here), and the stamp is the
+        target half's (``fixed -> target`` at ``target_time``).
+        """
         self._validate("lookupTransform argument target_frame", target_frame)
         self._validate("lookupTransform argument source_frame", source_frame)
         self._validate("lookupTransform argument fixed_frame", fixed_frame)
-        t1, q1, s1 = self._walk(fixed_frame, source_frame, self._ns(source_time))
-        t2, q2, s2 = self._walk(target_frame, fixed_frame, self._ns(target_time))
+        t1, q1, _ = self._lookup_impl(fixed_frame, source_frame, self._ns(source_time))
+        t2, q2, s2 = self._lookup_impl(target_frame, fixed_frame, self._ns(target_time))
         t = _qrot(q2, t1)
         return _stamped(
             target_frame,
             source_frame,
-            min(s1, s2),
+            s2,
             (t[0] + t2[0], t[1] + t2[1], t[2] + t2[2]),
             _qmul(q2, q1),
         )
 
-    def can_transform(self, target_frame: str, source_frame: str, time: int | msgs.Time) -> bool:
-        """Whether :meth:`lookup_transform` would succeed; never raises."""
+    @overload
+    def can_transform(
+        self,
+        target_frame: str,
+        source_frame: str,
+        time: int | msgs.Time,
+        return_debug_tuple: Literal[False] = False,
+    ) -> bool: ...
+
+    @overload
+    def can_transform(
+        self,
+        target_frame: str,
+        source_frame: str,
+        time: int | msgs.Time,
+        return_debug_tuple: Literal[True],
+    ) -> tuple[bool, str]: ...
+
+    def can_transform(
+        self,
+        target_frame: str,
+        source_frame: str,
+        time: int | msgs.Time,
+        return_debug_tuple: bool = False,
+    ) -> bool | tuple[bool, str]:
+        """Whether :meth:`lookup_transform` would succeed; never raises. With
+        ``return_debug_tuple`` it answers ``(ok, tf2's error text)``, as tf2_ros."""
+        result = self._can(target_frame, source_frame, self._ns(time))
+        return result if return_debug_tuple else result[0]
+
+    def _can(self, target: str, source: str, time: int) -> tuple[bool, str]:
+        if target == source:
+            return True, ""  # tf2's short cut, before the frames are checked
+        err = self._check("canTransform argument target_frame", target) or self._check(
+            "canTransform argument source_frame", source
+        )
+        if err:
+            return False, err
+        return self._can_internal(target, source, time)
+
+    def _can_internal(self, target: str, source: str, time: int) -> tuple[bool, str]:
+        """tf2's ``canTransformInternal`` on validated frames."""
+        if target == source:
+            return True, ""
         try:
-            self.lookup_transform(target_frame, source_frame, time)
-        except TransformException:
-            return False
-        return True
+            self._walk(target, source, time)
+        except TransformException as e:
+            return False, str(e)
+        return True, ""
+
+    @overload
+    def can_transform_full(
+        self,
+        target_frame: str,
+        target_time: int | msgs.Time,
+        source_frame: str,
+        source_time: int | msgs.Time,
+        fixed_frame: str,
+        return_debug_tuple: Literal[False] = False,
+    ) -> bool: ...
+
+    @overload
+    def can_transform_full(
+        self,
+        target_frame: str,
+        target_time: int | msgs.Time,
+        source_frame: str,
+        source_time: int | msgs.Time,
+        fixed_frame: str,
+        return_debug_tuple: Literal[True],
+    ) -> tuple[bool, str]: ...
 
     def can_transform_full(
         self,
@@ -443,29 +590,43 @@ class Buffer:
         source_frame: str,
         source_time: int | msgs.Time,
         fixed_frame: str,
-    ) -> bool:
-        try:
-            self.lookup_transform_full(
-                target_frame, target_time, source_frame, source_time, fixed_frame
-            )
-        except TransformException:
-            return False
-        return True
+        return_debug_tuple: bool = False,
+    ) -> bool | tuple[bool, str]:
+        """Whether :meth:`lookup_transform_full` would succeed (all three frames must exist)."""
+        err = (
+            self._check("canTransform argument target_frame", target_frame)
+            or self._check("canTransform argument source_frame", source_frame)
+            or self._check("canTransform argument fixed_frame", fixed_frame)
+        )
+        result = (False, err)
+        if not err:
+            result = self._can_internal(target_frame, fixed_frame, self._ns(target_time))
+            if result[0]:
+                result = self._can_internal(fixed_frame, source_frame, self._ns(source_time))
+        return result if return_debug_tuple else result[0]
 
     def get_latest_common_time(self, target_frame: str, source_frame: str) -> int:
-        """tf2's ``getLatestCommonTime`` in nanoseconds (0 when the path is all static)."""
-        self._validate("getLatestCommonTime argument target_frame", target_frame)
-        self._validate("getLatestCommonTime argument source_frame", source_frame)
-        return self._latest_common_time(target_frame, source_frame)
+        """tf2_py's ``get_latest_common_time`` in nanoseconds (0 when the path is all static).
+
+        As tf2_py: both frames are validated (also when they are the same frame), and a
+        failure of the walk is a plain :class:`TransformException` (not its subclasses).
+        """
+        self._validate("get_latest_common_time", target_frame)
+        self._validate("get_latest_common_time", source_frame)
+        try:
+            return self._latest_common_time(target_frame, source_frame)
+        except TransformException as e:
+            raise TransformException(str(e)) from None
 
     def _latest_common_time(self, target: str, source: str) -> int:
         inf = math.inf
         if source == target:
             cache = self._frames.get(source)
             return cache.latest()[0] if cache else 0
+        # tf2's order: the source's chain first, then the target's up to a common parent
         lct: list[tuple[int, str]] = []
         common: float = inf
-        frame = target
+        frame = source
         depth = 0
         while frame:
             cache = self._frames.get(frame)
@@ -478,12 +639,12 @@ class Buffer:
                 common = min(common, latest)
             lct.append((latest, parent))
             frame = parent
-            if frame == source:
+            if frame == target:
                 return 0 if common == inf else int(common)
             depth += 1
             if depth > MAX_GRAPH_DEPTH:
-                raise _loop_error(target, source)
-        frame = source
+                raise self._loop_error()
+        frame = target
         common_parent = ""
         common = inf
         depth = 0
@@ -500,11 +661,11 @@ class Buffer:
                 common_parent = parent
                 break
             frame = parent
-            if frame == target:
+            if frame == source:
                 return 0 if common == inf else int(common)
             depth += 1
             if depth > MAX_GRAPH_DEPTH:
-                raise _loop_error(target, source)
+                raise self._loop_error()
         if not common_parent:
             raise ConnectivityException(_connectivity_text(target, source))
         for latest, parent in lct:
@@ -517,10 +678,7 @@ class Buffer:
     def _walk(self, target: str, source: str, time: int) -> tuple[Vec, Quat, int]:
         """tf2's ``walkToTopParent`` + ``TransformAccum``: (translation, rotation, time used)."""
         if source == target:
-            if time == 0:
-                cache = self._frames.get(source)
-                time = cache.latest()[0] if cache else 0
-            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0), time
+            return _ZERO, _UNIT, time  # tf2's ``Identity`` ending (callers short-cut before)
         if time == 0:
             time = self._latest_common_time(target, source)
         # walk from the source toward the root
@@ -550,7 +708,7 @@ class Buffer:
             frame = sample.parent
             depth += 1
             if depth > MAX_GRAPH_DEPTH:
-                raise _loop_error(target, source)
+                raise self._loop_error()
         # walk from the target toward the same top
         t_t: Vec = (0.0, 0.0, 0.0)
         t_q: Quat = (0.0, 0.0, 0.0, 1.0)
@@ -573,7 +731,7 @@ class Buffer:
             frame = sample.parent
             depth += 1
             if depth > MAX_GRAPH_DEPTH:
-                raise _loop_error(target, source)
+                raise self._loop_error()
         if frame != top_parent:
             if extrapolation_might_have_occurred:
                 raise ExtrapolationException(
@@ -612,7 +770,24 @@ class Buffer:
         return "\n".join(lines) + ("\n" if lines else "")
 
     def all_frames_as_string(self) -> str:
-        return "".join(f"Frame {c} exists with parent {p}.\n" for c, p in self.frames().items())
+        """tf2's ``allFramesAsString``: every frame with a cache, in tf2's frame-number order
+        (first seen), its parent at time 0 or ``NO_PARENT`` when its history is empty."""
+        lines = []
+        for frame in self._ids:
+            cache = self._frames.get(frame)
+            if cache is not None:
+                sample, _ = cache.get(0)
+                parent = sample.parent if sample is not None else "NO_PARENT"
+                lines.append(f"Frame {frame} exists with parent {parent}.\n")
+        return "".join(lines)
+
+    def _loop_error(self) -> LookupException:
+        """tf2 reports a loop in the tree as a LookupException listing every frame."""
+        return LookupException(
+            "The tf tree is invalid because it contains a loop.\n"
+            + self.all_frames_as_string()
+            + "\n"
+        )
 
 
 def _stamped(target: str, source: str, stamp: int, t: Vec, q: Quat) -> msgs.TransformStamped:
@@ -631,13 +806,6 @@ def _connectivity_text(target: str, source: str) -> str:
     return (
         f"Could not find a connection between '{target}' and '{source}' because they are not "
         "part of the same tree.Tf has two or more unconnected trees."
-    )
-
-
-def _loop_error(target: str, source: str) -> ConnectivityException:
-    return ConnectivityException(
-        "The tf tree is invalid because it contains a loop.\n"
-        f"when looking up transform from frame [{source}] to frame [{target}]"
     )
 
 

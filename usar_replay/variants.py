@@ -33,6 +33,7 @@ import numpy as np
 
 from usar_replay.errors import InvalidScenario
 from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
+from usar_replay.rotations import wrap_angle
 from usar_replay.scenario import Box, Marker, Scenario
 
 __all__ = [
@@ -129,7 +130,7 @@ def _place(face: Face, rng: np.random.Generator) -> tuple[float, float, float]:
 def _sees(grid: OccupancyGrid, target: tuple[float, float], m: Marker) -> tuple[bool, float]:
     d = math.dist(target, (m.x, m.y))
     to_target = math.atan2(target[1] - m.y, target[0] - m.x)
-    oblique = abs(math.atan2(math.sin(to_target - m.yaw), math.cos(to_target - m.yaw)))
+    oblique = abs(wrap_angle(to_target - m.yaw))
     visible = oblique < math.pi / 2 and grid.line_clear(target, (m.x, m.y), skip_end=0.08)
     return visible, d
 
