@@ -34,6 +34,13 @@ CORE_MODULES = (
     "nav",
     "scenario",
     "variants",
+    # the node API: what a mission process loads (it must stay light and never reach the log)
+    "cdr",
+    "node",
+    "executor",
+    "tf2",
+    "navigation",
+    "worker",
 )
 HEAVY = ("pybullet", "mcap", "rerun")
 

@@ -239,7 +239,7 @@ class BagWriter:
                     "end_time_ns": str(self._last_time),
                 },
             )
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self._file.close()
         os.replace(self.part_path, self.path)
@@ -380,7 +380,7 @@ class BagReader:
         schemas: dict[int, Schema] = {}
         channels: dict[int, Channel] = {}
         with open(self.path, "rb") as f:
-            stream = StreamReader(io.BufferedReader(f), skip_magic=False)  # type: ignore[arg-type]
+            stream = StreamReader(io.BufferedReader(f), skip_magic=False)
             try:
                 for rec in stream.records:
                     inner: Iterable[Any] = breakup_chunk(rec) if isinstance(rec, Chunk) else (rec,)

@@ -31,7 +31,14 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from usar_replay import contract, msgs
-from usar_replay.node import Node, Subscription, Timer, _reset_current, _set_current
+from usar_replay.node import (
+    Node,
+    Subscription,
+    Timer,
+    _reset_current,
+    _set_current,
+    current_executor,
+)
 
 __all__ = ["MAX_LOCAL_DELIVERIES", "Executor", "PublishPolicy", "shutdown"]
 
@@ -218,6 +225,4 @@ class Executor:
 
 def shutdown(reason: str = "") -> None:
     """rclpy.shutdown(): the mission is done; the run ends after the current tick."""
-    from usar_replay.node import current_executor
-
     current_executor().request_shutdown(reason)

@@ -22,7 +22,7 @@ import dataclasses
 import functools
 import typing
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 __all__ = [
     "Message",
@@ -494,9 +494,13 @@ def message_class(msgtype: str) -> type[Message]:
 FieldKind = typing.Literal["msg", "msgs", "bytes", "floats", "float", "int", "bool", "str"]
 
 
-@functools.cache
 def field_kinds(cls: type[Message]) -> tuple[tuple[str, FieldKind, Any], ...]:
     """(name, kind, element class or None) for each field of ``cls``, resolved once per class."""
+    return _field_kinds(cast(Any, cls))
+
+
+@functools.cache
+def _field_kinds(cls: Any) -> tuple[tuple[str, FieldKind, Any], ...]:
     hints = typing.get_type_hints(cls)
     out: list[tuple[str, FieldKind, Any]] = []
     for f in dataclasses.fields(cls):

@@ -24,12 +24,9 @@ import contextvars
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from usar_replay import msgs
-
-if TYPE_CHECKING:
-    from usar_replay.executor import Executor
 
 __all__ = [
     "Clock",
@@ -46,6 +43,25 @@ __all__ = [
 ]
 
 M = TypeVar("M", bound=msgs.Message)
+
+
+class Executor(Protocol):
+    """What a node needs from the executor it belongs to (:class:`usar_replay.executor.Executor`
+    implements it; a protocol keeps this module free of the executor's import)."""
+
+    now_ns: int
+    parameters: dict[str, Any]
+
+    def add_node(self, node: Node) -> None: ...
+    def remove_node(self, node: Node) -> None: ...
+    def add_subscription(self, sub: Subscription) -> None: ...
+    def add_timer(self, timer: Timer) -> None: ...
+    def subscription_count(self, topic: str) -> int: ...
+    def check_publish_topic(self, topic: str) -> None: ...
+    def publish(self, topic: str, msg: msgs.Message) -> None: ...
+    def log(self, name: str, level: int, text: str) -> None: ...
+    def request_shutdown(self, reason: str = "") -> None: ...
+
 
 _CURRENT: contextvars.ContextVar[Executor | None] = contextvars.ContextVar(
     "usar_executor", default=None

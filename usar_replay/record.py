@@ -303,11 +303,11 @@ def record(
             )
         sim_duration = (sim.now_ns - t0) / 1e9
         message_count = writer.message_count
-    truth = {m.id: m for m in scenario.markers}
+    true_markers = {m.id: m for m in scenario.markers}
     errors = {
-        mid: math.dist(p, (truth[mid].x, truth[mid].y, truth[mid].z))
+        mid: math.dist(p, (true_markers[mid].x, true_markers[mid].y, true_markers[mid].z))
         for mid, p in markers.items()
-        if mid in truth
+        if mid in true_markers
     }
     return RecordResult(
         path=Path(out),

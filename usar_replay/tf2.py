@@ -59,7 +59,7 @@ class Buffer(tf_tree.Buffer):
             seconds = 10.0 if cache_time is None else float(cache_time)
         super().__init__(cache_time=seconds)
 
-    def lookup_transform(  # type: ignore[override]
+    def lookup_transform(
         self,
         target_frame: str,
         source_frame: str,
