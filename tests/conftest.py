@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from usar_replay.record import RecordResult, record
-from usar_replay.settings import RunSettings
 from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
+from usar_replay.settings import RunSettings
 
 
 def one_room() -> Scenario:

@@ -1,4 +1,4 @@
-"""The built-in mission's own ideas (usar_replay/missions/usar.py): follower approach points, range gating, a target with no marker."""
+"""The built-in mission's own ideas (missions/usar.py): approach points, range gate, no marker."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from usar_replay import bag, msgs
 from usar_replay.missions.usar import approach_point
 from usar_replay.nav import OccupancyGrid, robot_disc
 from usar_replay.record import record
-from usar_replay.settings import MissionSettings, RunSettings
 from usar_replay.scenario import Marker, course_world
+from usar_replay.settings import MissionSettings, RunSettings
 
 COURSE = course_world()
 GRID = OccupancyGrid.from_scenario(COURSE)

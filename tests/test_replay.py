@@ -41,8 +41,15 @@ def test_replay_reproduces_the_recording(
     # every output topic of the log is compared, every message identical
     report = replay(path, window=1)  # and the same with one tick in flight
     assert report.identical and report.digest == digest and report.divergence is None
-    mission_topics = {m.topic for m in open_run(path).messages(decode=False) if m.publisher == "mission"}
-    assert {"/fiducial_transforms", "/explorer/cmd_vel", "/follower/cmd_vel", "/rosout"} <= mission_topics
+    mission_topics = {
+        m.topic for m in open_run(path).messages(decode=False) if m.publisher == "mission"
+    }
+    assert {
+        "/fiducial_transforms",
+        "/explorer/cmd_vel",
+        "/follower/cmd_vel",
+        "/rosout",
+    } <= mission_topics
     for topic in mission_topics - {"/tf"}:
         t = report.topics[topic]
         assert t.recorded == t.replayed == t.identical > 0, topic
@@ -166,7 +173,9 @@ def test_regression_mode_via_the_command(
     path = str(room_log[0])
     assert main(["replay", "--set", "detector.dictionary=DICT_5X5_50", path]) == 1
     capsys.readouterr()
-    assert main(["replay", "--expect-changes", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
+    assert (
+        main(["replay", "--expect-changes", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
+    )
     out = capsys.readouterr().out
     assert "Changes with changed settings:" in out and "marker 0: stored pose lost" in out
     toml = tmp_path / "settings.toml"
