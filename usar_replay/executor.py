@@ -106,6 +106,7 @@ class Executor:
         self._local = 0
         self.shutdown_requested = False
         self.shutdown_reason = ""
+        self._started = False
 
     @contextlib.contextmanager
     def activate(self) -> Iterator[Executor]:
@@ -178,6 +179,12 @@ class Executor:
         """Run one simulator tick (see the module docstring); returns what was published."""
         if t_ns < self.now_ns:
             raise ValueError(f"time went backwards: {t_ns} < {self.now_ns}")
+        if not self._started:
+            # the sim clock starts with the first tick: timers created before it (in main())
+            # count their first period from then, as rclpy's do once /clock arrives
+            self._started = True
+            for tm in self._timers:
+                tm.next_due_ns = t_ns + tm.timer_period_ns
         self.now_ns = t_ns
         self._outputs = []
         self._local = 0

@@ -441,9 +441,7 @@ class OccupancyGrid(Message):
     """
 
     __msgtype__: ClassVar[str] = "nav_msgs/msg/OccupancyGrid"
-    __msgdef__: ClassVar[str] = (
-        "std_msgs/Header header\nnav_msgs/MapMetaData info\nint8[] data\n"
-    )
+    __msgdef__: ClassVar[str] = "std_msgs/Header header\nnav_msgs/MapMetaData info\nint8[] data\n"
     header: Header = field(default_factory=Header)
     info: MapMetaData = field(default_factory=MapMetaData)
     data: bytes = b""

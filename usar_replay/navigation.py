@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -116,7 +117,7 @@ class NavigateClient:
         self._goal_seq = 0
         self._started_ns = 0
         self._done: Callable[[NavResult], None] | None = None
-        self._pending: tuple[float, float, float | None, float, float] | None = None
+        self._waiting: tuple[Any, ...] | None = None
         self._cmd = node.create_publisher(msgs.Twist, contract.cmd_vel(robot))
         self._goal_pub = node.create_publisher(msgs.PoseStamped, contract.goal(robot))
         self._plan_pub = node.create_publisher(msgs.Path, contract.plan(robot))
@@ -129,6 +130,13 @@ class NavigateClient:
     def _on_map(self, msg: msgs.OccupancyGrid) -> None:
         self._base_grid = grid_from_msg(msg)
         self._rebuild()
+        if self._waiting is not None:
+            goal, done, name, ignore_yaw, xy, yt = self._waiting
+            self._waiting = None
+            self._goal_seq -= 1
+            self.send_goal(
+                goal, done, name=name, ignore_yaw=ignore_yaw, xy_tolerance=xy, yaw_tolerance=yt
+            )
 
     def mark_obstacle(self, x: float, y: float, radius: float) -> None:
         """Add a round obstacle to this robot's costmap, as its laser would mark another robot
@@ -188,7 +196,8 @@ class NavigateClient:
             )
         )
         if self._nav is None:
-            self._finish(NavStatus.FAILED, "no map received on /map yet")
+            # as move_base waits for its costmap: the goal starts when /map arrives
+            self._waiting = (goal, done_callback, self._goal_name, ignore_yaw, xy, yt)
             return
         path = self._nav.set_goal(
             p.x, p.y, yaw, xy_tolerance=xy, yaw_tolerance=yt, t_ns=t_ns, start=self.pose
