@@ -15,6 +15,8 @@ from usar_replay import bag, msgs
 from usar_replay.missions.usar import approach_point
 from usar_replay.nav import OccupancyGrid, robot_disc
 from usar_replay.record import record
+from usar_replay.replay import replay
+from usar_replay.run import open_run
 from usar_replay.scenario import Marker, course_world
 from usar_replay.settings import MissionSettings, RunSettings
 
@@ -97,6 +99,11 @@ def test_a_marker_beyond_range_is_refused_and_the_mission_goes_on(tmp_path: Path
     assert spins >= 2 * math.pi / 0.1 * 20 * 0.95
     assert any("no marker found at target_1 after a full turn" in s for s in lines)
     assert lines[-1] == "mission complete"
+    # the log carries its non-default setting, and replay uses it: bit for bit, no flag needed
+    run = open_run(tmp_path / "gated.mcap")
+    assert run.settings_recorded and run.settings.mission.max_detection_range == 0.5
+    report = replay(run)
+    assert report.identical and not report.regression, report.lines()
 
 
 def test_the_approach_point_keeps_clear_of_the_parked_explorer() -> None:

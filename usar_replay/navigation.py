@@ -199,6 +199,8 @@ class NavigateClient:
             # as move_base waits for its costmap: the goal starts when /map arrives
             self._waiting = (goal, done_callback, self._goal_name, ignore_yaw, xy, yt)
             return
+        if self.pose is None:  # a goal before this robot's first odometry: ask tf
+            self.pose = self._lookup_pose(stamp)
         path = self._nav.set_goal(
             p.x, p.y, yaw, xy_tolerance=xy, yaw_tolerance=yt, t_ns=t_ns, start=self.pose
         )
