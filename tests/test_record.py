@@ -12,7 +12,7 @@ from logtools import digest
 from usar_replay import bag, msgs
 from usar_replay.cli import main
 from usar_replay.record import RecordResult, record
-from usar_replay.replay import load_scenario
+from usar_replay.run import open_run
 from usar_replay.scenario import save
 
 CONTRACT = {
@@ -33,6 +33,7 @@ CONTRACT = {
     "/ground_truth/explorer/pose": "geometry_msgs/msg/PoseStamped",
     "/ground_truth/follower/pose": "geometry_msgs/msg/PoseStamped",
     "/ground_truth/markers": "fiducial_msgs/msg/FiducialTransformArray",
+    "/map": "nav_msgs/msg/OccupancyGrid",
 }
 
 
@@ -54,9 +55,18 @@ def test_log_holds_the_whole_contract(room_log: tuple[Path, RecordResult]) -> No
     assert frames == result.frames == r.topics["/explorer/camera/rgb/camera_info"].count
     # every frame at 10 Hz of sim time, none skipped
     assert frames == math.floor((r.end_ns - r.start_ns) / 1e8) + 1
-    assert load_scenario(r) == one_room()
+    opened = open_run(path)
+    assert opened.scenario == one_room()
+    assert opened.settings_recorded and opened.settings.record.renderer == result.renderer
+    assert opened.mission.target == "builtin" and len(opened.mission.sha256) == 64
+    assert opened.outcome == "done" and opened.file_state == "complete"
     run = r.metadata[bag.RUN_METADATA]
     assert run["renderer"] == result.renderer and run["software"].startswith("usar-replay")
+    # who published what: the simulator's and the mission's /tf are separate channels
+    publishers = {(m.topic, m.publisher) for m in opened.messages(decode=False)}
+    assert ("/tf", "sim") in publishers and ("/tf", "mission") in publishers
+    assert {p for t, p in publishers if t.startswith("/ground_truth/")} == {"recorder"}
+    assert {p for t, p in publishers if t == "/explorer/cmd_vel"} == {"mission"}
 
 
 def test_marker_frame_only_with_detections(room_log: tuple[Path, RecordResult]) -> None:
@@ -84,7 +94,7 @@ def test_same_scenario_gives_the_same_messages_via_the_cli(
     code = main(["record", "--scenario", str(scenario), "--out", str(out), "--quiet"])
     assert code == 0
     text = capsys.readouterr().out
-    assert "Mission complete" in text and "real-time factor" in text and "error" in text
+    assert "the mission said it was done" in text and "x real time" in text and "error" in text
     assert digest(out) == digest(room_log[0])
 
 
