@@ -317,9 +317,9 @@ def test_grader_memory_does_not_grow_with_the_log() -> None:
 @pytest.mark.parametrize(
     ("text", "needle"),
     [
-        ("[thresholds]\nhome_m = -1\n", "positive"),
-        ("[thresholds]\nhome_m = true\n", "positive"),
-        ("[thresholds]\nhome_meters = 0.2\n", "unknown threshold"),
+        ("[thresholds]\nhome_m = -1\n", "out of range"),
+        ("[thresholds]\nhome_m = true\n", "expected a number"),
+        ("[thresholds]\nhome_meters = 0.2\n", "unknown setting"),
         ("[thresholds\nhome_m = 0.2\n", "invalid TOML"),
         ("home_m = 0.2\n", "[thresholds] table"),
     ],
@@ -368,7 +368,7 @@ def test_grade_exit_codes_and_outputs(room_log: tuple[Path, RecordResult], tmp_p
         assert code == 1
         results[jobs] = j.read_text()
     assert results[1] == results[2]
-    data = json.loads(results[1])
+    data = json.loads(results[1])["recordings"]
     assert [d["source"] for d in data] == [str(good), str(bad_order)]
     assert [d["passed"] for d in data] == [True, False]
     failed = [c["id"] for c in data[1]["checks"] if not c["passed"]]

@@ -265,6 +265,8 @@ class Grader:
         self.without_detection_ns: int | None = None
         self.wrong_parent = 0
         self.wrong_parent_ns: int | None = None
+        self.bad_broadcasts = 0
+        """Broadcasts without a detection *or* with another parent (each counted once)."""
         self.start_ns: int | None = None
         self.end_ns = 0
 
@@ -334,6 +336,8 @@ class Grader:
             self.without_detection += 1
             if self.without_detection_ns is None:
                 self.without_detection_ns = t_ns
+        if not detections or tf.header.frame_id != contract.OPTICAL_FRAME:
+            self.bad_broadcasts += 1
         try:
             in_map = self.buffer.lookup_transform(
                 contract.MAP, contract.MARKER_FRAME, tf.header.stamp
@@ -568,7 +572,7 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
 
 def only_on_detection(g: Grader) -> Check:
     """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera."""
-    bad = g.without_detection + g.wrong_parent
+    bad = g.bad_broadcasts
     first_bad = min(
         (t for t in (g.without_detection_ns, g.wrong_parent_ns) if t is not None), default=None
     )
