@@ -168,7 +168,10 @@ def test_a_robot_that_never_moved_has_no_evidence_time() -> None:
     drive(g, "follower", [FOLLOWER_HOME, FOLLOWER_HOME], S)
     for line in follower_markers(g):
         assert not line.passed and line.evidence_ns is None and line.evidence == ""
-        assert line.measured.startswith("never visited (closest") and "where it started" in line.measured
+        assert (
+            line.measured.startswith("never visited (closest")
+            and "where it started" in line.measured
+        )
         assert "never" in line.measured and "at never" not in line.measured
 
 
@@ -232,7 +235,9 @@ def test_explorer_never_home_has_no_home_time() -> None:
     drive(g, "explorer", [EXPLORER_HOME, TARGETS[0]], S)
     line = explorer_home_before_follower(g, 2 * S, "target_1")
     assert not line.passed and line.value is None and line.evidence_ns is None
-    assert line.measured == "never home after target_1 (ended 2.00 m away); the follower never moved"
+    assert (
+        line.measured == "never home after target_1 (ended 2.00 m away); the follower never moved"
+    )
 
 
 def test_follower_markers_in_id_order_then_home() -> None:

@@ -21,8 +21,8 @@ from usar_replay.rubric import (
     MAX_VISITS,
     REQUIRED_TOPICS,
     Check,
-    GradeReport,
     Grader,
+    GradeReport,
 )
 from usar_replay.run import Run, open_run
 from usar_replay.scenario import Scenario
@@ -71,9 +71,7 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
     return replace(report, seconds=time.perf_counter() - began)
 
 
-def grade_file(
-    path: str | os.PathLike[str], thresholds: Thresholds | None = None
-) -> GradeReport:
+def grade_file(path: str | os.PathLike[str], thresholds: Thresholds | None = None) -> GradeReport:
     """Open a recording and grade it (:func:`grade_run`)."""
     return grade_run(open_run(path), thresholds)
 
@@ -97,8 +95,10 @@ def load_scenario(reader: bag.BagReader) -> Scenario:
     try:
         source = text.decode("utf-8")
     except UnicodeDecodeError as err:
-        raise LogError(f"{reader.path}: the attached {contract.SCENARIO_ATTACHMENT} is not text") from err
+        raise LogError(
+            f"{reader.path}: the attached {contract.SCENARIO_ATTACHMENT} is not text"
+        ) from err
     try:
         return from_toml(source, source=f"{reader.path}:{contract.SCENARIO_ATTACHMENT}")
-    except Exception as err:  # noqa: BLE001 - a bad attachment is a corrupt log (3)
+    except Exception as err:  # a bad attachment is a corrupt log (3)
         raise LogError(str(err)) from err

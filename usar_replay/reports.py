@@ -121,18 +121,21 @@ def to_table(report: GradeReport, width: int | None = None) -> str:
 
 
 def summary_line(report: GradeReport | None, source: str, error: str = "") -> str:
-    """One line per recording for a batch: verdict, points, path, what failed (<= 100 cols)."""
+    """One line per recording for a batch: verdict, points, path, what failed; it fits the
+    terminal (a long path loses its middle, never its file name)."""
     if report is None:
-        text = f"ERROR  {'-':>5}  {source}: {error}"
+        head, tail = f"ERROR  {'-':>5}  ", f": {error}"
     else:
         verdict = "PASS" if report.passed and report.log_complete else "FAIL"
-        text = f"{verdict:<5}  {report.points:>2.4g}/{report.max_points:.4g}  {source}"
+        head = f"{verdict:<5}  {report.points:>2.4g}/{report.max_points:.4g}  "
+        tail = " (incomplete log)" if not report.log_complete else ""
         failed = report.failed_ids()
-        if not report.log_complete:
-            text += " (incomplete log)"
         if failed:
-            text += f" (failed: {', '.join(failed)})"
+            tail += f" (failed: {', '.join(failed)})"
     width = table_width()
+    room = max(width - len(head) - len(tail), 24)
+    path = source if len(source) <= room else "..." + source[-(room - 3) :]
+    text = head + path + tail
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
@@ -291,8 +294,8 @@ def to_junit(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
         ET.SubElement(case, "error", message=msg)
         total["tests"] += 1
         total["errors"] += 1
-    for key, value in total.items():
-        suites.set(key, str(value))
+    for key, count in total.items():
+        suites.set(key, str(count))
     suites.set("time", f"{seconds:.3f}")
     ET.indent(suites)
     return ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"

@@ -433,9 +433,7 @@ def in_order(discs: Sequence[Disc]) -> list[int | None]:
     return out
 
 
-def _last_reached(
-    names: Sequence[str], arrivals: Sequence[int | None]
-) -> tuple[int, str]:
+def _last_reached(names: Sequence[str], arrivals: Sequence[int | None]) -> tuple[int, str]:
     """(time, name) of the last item reached in order; (-1, "") when none was."""
     last = (-1, "")
     for name, t in zip(names, arrivals, strict=True):
@@ -463,6 +461,8 @@ def _visit_checks(
     for i, d in enumerate(discs):
         t = arrivals[i]
         after = f", after {prev_name}" if prev_name else ""
+        value: float | None
+        evidence_ns: int | None
         if t is not None:
             stay = d.stay_at(t)
             measured = f"{verb} at {_s(t)} (closest {stay:.3f} m)"
@@ -687,7 +687,7 @@ def time_limit(g: Grader, follower_home_ns: int | None) -> Check:
         passed=ok,
         points=4.0 if ok else 0.0,
         max_points=4.0,
-        measured="not completed (the follower never came home)" if took is None else f"{took:.1f} s",
+        measured=f"{took:.1f} s" if took is not None else "not completed (follower never home)",
         threshold=f"<= {limit:g} s",
         evidence_ns=follower_home_ns,
         value=took,
@@ -720,4 +720,3 @@ def judge(g: Grader) -> tuple[Check, ...]:
         time_limit(g, home.evidence_ns),
     ]
     return tuple(lines)
-
