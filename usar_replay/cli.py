@@ -354,6 +354,54 @@ def _cmd_grade(args: argparse.Namespace) -> int:
     return EXIT_OK if all(r.passed for r in reports) else EXIT_FAIL
 
 
+def _report_one(
+    path: str, th: Thresholds | None, page: Path, overwrite: bool
+) -> GradeReport | tuple[str, int]:
+    """Grade one recording and write its page; a user error becomes (message, exit code)."""
+    from usar_replay.grade import grade_run
+    from usar_replay.htmlreport import collect, run_page
+    from usar_replay.outfiles import write_text
+    from usar_replay.run import open_run
+
+    try:
+        run = open_run(path)
+        report = grade_run(run, th)
+        write_text(page, run_page(run, report, collect(run)), overwrite=overwrite, inputs=[path])
+        return report
+    except UsarError as err:
+        return (str(err), err.exit_code)
+    except OSError as err:
+        return (f"{path}: cannot read the file: {err.strerror or err}", EXIT_USAGE)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from usar_replay.htmlreport import index_page, output_paths
+    from usar_replay.outfiles import check_output, write_text
+
+    files = _find_recordings(args.files)
+    th = _thresholds(args)
+    outputs = output_paths(args.out, files)
+    for p in outputs:
+        check_output(p, overwrite=args.overwrite, inputs=files, option="-o")
+    entries = []
+    worst = EXIT_OK
+    for f, page in zip(files, outputs, strict=False):
+        result = _report_one(f, th, page, args.overwrite)
+        if isinstance(result, tuple):
+            print(f"usar: error: {result[0]}", file=sys.stderr)
+            entries.append((f, page.name, None, result[0]))
+            worst = max(worst, result[1])
+            continue
+        entries.append((f, page.name, result, ""))
+        print(f"wrote {page}")
+        if not result.log_complete:
+            print(f"usar: {f}: the log is incomplete ({result.log_problem})", file=sys.stderr)
+            worst = max(worst, EXIT_INCOMPLETE)
+    write_text(outputs[-1], index_page(entries), overwrite=args.overwrite, inputs=files)
+    print(f"wrote {outputs[-1]} ({len(files)} recordings)")
+    return worst
+
+
 def _cmd_replay(args: argparse.Namespace) -> int:
     from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader
     from usar_replay.mission import MissionSettings
@@ -507,6 +555,15 @@ def _parser() -> argparse.ArgumentParser:
     )
     _grade_outputs(p)
     p.set_defaults(func=_cmd_grade)
+
+    p = sub.add_parser("report", help="write an HTML page per recording (map, rubric, frames)")
+    p.add_argument("files", nargs="+", metavar="FILE|DIR")
+    p.add_argument("-o", "--out", required=True, metavar="DIR", help="folder for the pages")
+    p.add_argument(
+        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace existing pages")
+    p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("view", help="show a recording's timeline in the rerun viewer")
     p.add_argument("file", metavar="FILE")
