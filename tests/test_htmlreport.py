@@ -1,4 +1,4 @@
-"""`usar report`: a self-contained HTML page per run (map, rubric, detection frames) and an index."""
+"""`usar report`: a self-contained HTML page per run (map, rubric, detection frames), an index."""
 
 from __future__ import annotations
 

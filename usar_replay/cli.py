@@ -383,7 +383,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     outputs = output_paths(args.out, files)
     for p in outputs:
         check_output(p, overwrite=args.overwrite, inputs=files, option="-o")
-    entries = []
+    entries: list[tuple[str, str, GradeReport | None, str]] = []
     worst = EXIT_OK
     for f, page in zip(files, outputs, strict=False):
         result = _report_one(f, th, page, args.overwrite)

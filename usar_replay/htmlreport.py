@@ -26,7 +26,7 @@ from pathlib import Path
 from usar_replay import __version__, contract, msgs
 from usar_replay.rubric import Check, GradeReport
 from usar_replay.run import Run
-from usar_replay.scenario import Box, Scenario
+from usar_replay.scenario import Box, Cylinder, Scenario, Sphere
 
 __all__ = ["RunPicture", "collect", "index_page", "map_png", "run_page"]
 
@@ -134,7 +134,8 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
         ax.add_patch(patches.Polygon(_box_corners(b), closed=True, color="#555555", lw=0))
     for b in scenario.boxes:
         ax.add_patch(patches.Polygon(_box_corners(b), closed=True, color="#b08d57", lw=0))
-    for c in (*scenario.cylinders, *scenario.spheres):
+    round_things: list[Cylinder | Sphere] = [*scenario.cylinders, *scenario.spheres]
+    for c in round_things:
         ax.add_patch(patches.Circle((c.x, c.y), c.radius, color="#b08d57", lw=0))
     for robot, color in (("explorer", _EXPLORER_COLOR), ("follower", _FOLLOWER_COLOR)):
         path = pic.paths.get(robot, [])
@@ -149,19 +150,23 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
                     fontsize=8)  # fmt: skip
     for i, m in enumerate(sorted(scenario.markers, key=lambda m: m.id)):
         ax.plot(m.x, m.y, marker="D", ms=8, color="#2ca02c", label="true marker" if not i else None)
-        ax.annotate(f"marker {m.id}", (m.x, m.y), xytext=(6, 5), textcoords="offset points",
-                    fontsize=8, color="#2ca02c")  # fmt: skip
+        right = m.x > sum(t[0] for t in scenario.targets) / max(len(scenario.targets), 1)
+        ax.annotate(f"marker {m.id}", (m.x, m.y), xytext=(-6 if right else 6, 6),
+                    textcoords="offset points", ha="right" if right else "left", fontsize=8,
+                    color="#2ca02c")  # fmt: skip
     for i, (_mid, (x, y)) in enumerate(sorted(pic.stored.items())):
         ax.plot(x, y, marker="o", ms=5, color="#ff7f0e", label="stored marker" if not i else None)
+    spots: dict[tuple[float, float], list[tuple[int, bool]]] = {}
     for n, c in enumerate(report.checks, start=1):
-        if c.evidence_ns is None:
-            continue
-        at = pic.position(_robot_of(c), c.evidence_ns)
-        if at is None:
-            continue
-        color = "#2ca02c" if c.passed else "#d62728"
-        ax.plot(*at, marker="o", ms=13, mfc="white", mec=color, mew=2, zorder=5)
-        ax.annotate(str(n), at, ha="center", va="center", fontsize=7, color=color, zorder=6)
+        at = None if c.evidence_ns is None else pic.position(_robot_of(c), c.evidence_ns)
+        if at is not None:  # lines evidenced at one place share a circle: "7,8"
+            spots.setdefault((round(at[0], 2), round(at[1], 2)), []).append((n, c.passed))
+    for at, lines in spots.items():
+        color = "#2ca02c" if all(ok for _, ok in lines) else "#d62728"
+        label = ",".join(str(n) for n, _ in lines)
+        ax.plot(*at, marker="o", ms=9 + 4 * len(label) ** 0.5, mfc="white", mec=color, mew=2,
+                zorder=5)  # fmt: skip
+        ax.annotate(label, at, ha="center", va="center", fontsize=7, color=color, zorder=6)
     ax.plot([], [], marker="o", ms=10, mfc="white", mec="#2ca02c", mew=2, ls="none",
             label="evidence (rubric line #)")  # fmt: skip
     ax.set_aspect("equal")
@@ -217,7 +222,9 @@ def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
         f"<h1>{e(str(run.path))}</h1>",
         f"<p>{verdict} &nbsp; <b>{report.points:.4g} / {report.max_points:.4g}</b> points"
         f" &middot; world <b>{e(scenario.name)}</b> &middot; {run.duration_s:.1f} s of sim time"
-        f" &middot; file {e(run.file_state)} &middot; mission {e(run.outcome)}</p>",
+        f" &middot; file {e(run.file_state)}"
+        + ("" if run.outcome == "unknown" else f" &middot; mission {e(run.outcome)}")
+        + "</p>",
     ]
     if not report.log_complete:
         parts.append(
