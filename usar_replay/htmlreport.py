@@ -135,8 +135,8 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
     for b in scenario.boxes:
         ax.add_patch(patches.Polygon(_box_corners(b), closed=True, color="#b08d57", lw=0))
     round_things: list[Cylinder | Sphere] = [*scenario.cylinders, *scenario.spheres]
-    for c in round_things:
-        ax.add_patch(patches.Circle((c.x, c.y), c.radius, color="#b08d57", lw=0))
+    for r in round_things:
+        ax.add_patch(patches.Circle((r.x, r.y), r.radius, color="#b08d57", lw=0))
     for robot, color in (("explorer", _EXPLORER_COLOR), ("follower", _FOLLOWER_COLOR)):
         path = pic.paths.get(robot, [])
         if path:
