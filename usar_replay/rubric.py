@@ -412,6 +412,11 @@ def _s(t_ns: int) -> str:
     return f"{t_ns / 1e9:.1f} s"
 
 
+def _n(count: int, word: str) -> str:
+    """``1 frame``, ``2 frames``."""
+    return f"{count} {word}" + ("" if count == 1 else "s")
+
+
 def _xy(p: tuple[float, float]) -> str:
     return f"({p[0]:.2f}, {p[1]:.2f})"
 
@@ -529,7 +534,7 @@ def marker_detected(g: Grader, mid: int) -> Check:
         passed=t is not None,
         points=each if t is not None else 0.0,
         max_points=each,
-        measured="never detected" if t is None else f"in {frames} frames, first at {_s(t)}",
+        measured="never detected" if t is None else f"in {_n(frames, 'frame')}, first at {_s(t)}",
         threshold=f"at least 1 frame on {contract.FIDUCIALS}",
         evidence_ns=t,
         value=float(frames),
@@ -548,9 +553,9 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
     if b.count == 0:
         measured = "no broadcast"
     elif b.failed_lookups:
-        measured = f"{b.count} broadcasts, {b.failed_lookups} not found in {contract.MAP}"
+        measured = f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
     else:
-        measured = f"{b.count} broadcasts, worst error {b.worst_m * 100:.1f} cm"
+        measured = f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
     each = 8.0 / max(len(g.markers), 1)
     evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
     return Check(
@@ -582,8 +587,8 @@ def only_on_detection(g: Grader) -> Check:
         passed=bad == 0,
         points=4.0 if bad == 0 else 0.0,
         max_points=4.0,
-        measured=f"{g.broadcast_count} broadcasts, {g.without_detection} without a detection, "
-        f"{g.wrong_parent} with another parent",
+        measured=f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
+        f"detection, {g.wrong_parent} with another parent",
         threshold=f"0 without a detection; parent {contract.OPTICAL_FRAME}",
         evidence_ns=first_bad,
         value=float(bad),
