@@ -33,7 +33,7 @@ from usar_replay.grade import (
     load_thresholds,
 )
 from usar_replay.record import RecordResult
-from usar_replay.replay import load_scenario
+from usar_replay.run import open_run
 from usar_replay.scenario import course_world
 
 COURSE_LINES = 20  # 4 targets, 4 x (detected, broadcast), only_on_detection, home, 4 follower, 2
@@ -227,7 +227,7 @@ def test_a_run_longer_than_10_minutes_fails_the_time_limit(
 ) -> None:
     """The course's 600 s limit, and a 10-minute pause after the explorer is home."""
     src = room_log[0]
-    scenario = replace(load_scenario(bag.BagReader(src)), time_limit_s=600.0)
+    scenario = replace(open_run(src).require_scenario(), time_limit_s=600.0)
     before = grade_file(src)
     home = before.check("explorer.home_before_follower").evidence_ns
     assert home is not None
@@ -317,9 +317,9 @@ def test_grader_memory_does_not_grow_with_the_log() -> None:
 @pytest.mark.parametrize(
     ("text", "needle"),
     [
-        ("[thresholds]\nhome_m = -1\n", "positive"),
-        ("[thresholds]\nhome_m = true\n", "positive"),
-        ("[thresholds]\nhome_meters = 0.2\n", "unknown threshold"),
+        ("[thresholds]\nhome_m = -1\n", "out of range"),
+        ("[thresholds]\nhome_m = true\n", "expected a number"),
+        ("[thresholds]\nhome_meters = 0.2\n", "unknown setting"),
         ("[thresholds\nhome_m = 0.2\n", "invalid TOML"),
         ("home_m = 0.2\n", "[thresholds] table"),
     ],
@@ -368,7 +368,7 @@ def test_grade_exit_codes_and_outputs(room_log: tuple[Path, RecordResult], tmp_p
         assert code == 1
         results[jobs] = j.read_text()
     assert results[1] == results[2]
-    data = json.loads(results[1])
+    data = json.loads(results[1])["recordings"]
     assert [d["source"] for d in data] == [str(good), str(bad_order)]
     assert [d["passed"] for d in data] == [True, False]
     failed = [c["id"] for c in data[1]["checks"] if not c["passed"]]

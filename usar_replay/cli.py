@@ -27,10 +27,10 @@ from usar_replay import __version__
 from usar_replay.errors import UsageError, UsarError
 
 if TYPE_CHECKING:
-    from usar_replay.grade import GradeReport, Thresholds
+    from usar_replay.grade import GradeReport
     from usar_replay.record import Progress
     from usar_replay.scenario import Scenario
-    from usar_replay.settings import RunSettings
+    from usar_replay.settings import RunSettings, Thresholds
     from usar_replay.worker import MissionLimits
 
 __all__ = ["main"]
@@ -230,14 +230,44 @@ def _cmd_record(args: argparse.Namespace) -> int:
     return EXIT_OK if result.mission_done else EXIT_FAIL
 
 
+_OUTPUT_OPTIONS = (("--json", "json"), ("--junit", "junit"), ("--csv", "csv"))
+
+
+def _output_inputs(args: argparse.Namespace, inputs: Sequence[str]) -> list[str]:
+    """The files a grade output may never replace: the recordings read (and a replayed one)."""
+    return [*inputs, *([args.file] if getattr(args, "file", None) else [])]
+
+
+def _check_outputs(args: argparse.Namespace, inputs: Sequence[str]) -> None:
+    """Refuse bad outputs before any work: an input, a directory, an existing file without
+    ``--overwrite``, or one path given to two options."""
+    from usar_replay.outfiles import check_output
+
+    seen: dict[Path, str] = {}
+    for opt, name in _OUTPUT_OPTIONS:
+        path = getattr(args, name, None)
+        if not path:
+            continue
+        p = check_output(
+            path, overwrite=args.overwrite, inputs=_output_inputs(args, inputs), option=opt
+        )
+        key = p.resolve()
+        if key in seen:
+            raise UsageError(f"{opt} {p}: also given to {seen[key]}; choose another path")
+        seen[key] = opt
+
+
 def _reports_out(
     args: argparse.Namespace,
     reports: Sequence[GradeReport],
     errors: Sequence[tuple[str, str]] = (),
+    inputs: Sequence[str] = (),
 ) -> None:
-    """Write the machine-readable reports asked for; a recording that could not be graded at all
-    is in them too (``errors``: (path, message)), so a CI run never loses one silently."""
+    """Write the machine-readable reports asked for, each atomically; a recording that could
+    not be graded at all is in them too (``errors``: (path, message)), so a CI run never loses
+    one silently."""
     from usar_replay import reports as rep
+    from usar_replay.outfiles import write_text
 
     for opt, path, fmt in (
         ("--json", args.json, rep.to_json),
@@ -245,10 +275,13 @@ def _reports_out(
         ("--csv", args.csv, rep.to_csv),
     ):
         if path:
-            try:
-                Path(path).write_text(fmt(reports, errors), encoding="utf-8")
-            except OSError as err:
-                raise UsageError(f"{opt} {path}: cannot write: {err.strerror or err}") from err
+            write_text(
+                path,
+                fmt(reports, errors),
+                overwrite=args.overwrite,
+                inputs=_output_inputs(args, inputs),
+                option=opt,
+            )
 
 
 def _thresholds(args: argparse.Namespace) -> Thresholds | None:
@@ -266,36 +299,100 @@ def _grade_one(path: str, thresholds: Thresholds | None) -> GradeReport | tuple[
         return grade_file(path, thresholds)
     except UsarError as err:
         return (str(err), err.exit_code)
+    except OSError as err:  # vanished or unreadable while the batch ran
+        return (f"{path}: cannot read the file: {err.strerror or err}", EXIT_USAGE)
 
 
-def _cmd_grade(args: argparse.Namespace) -> int:
-    from concurrent.futures import ProcessPoolExecutor
+def _ignore_sigint() -> None:
+    """Grading workers leave Ctrl-C to the parent, which stops the batch with one line."""
+    import signal
 
-    from usar_replay.reports import to_table
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
-    if args.jobs < 1:
-        raise UsageError(f"--jobs {args.jobs}: expected 1 or more")
+
+def _find_recordings(names: Sequence[str]) -> list[str]:
+    """Files as given; a folder is searched with its sub-folders for ``*.mcap`` (sorted; hidden
+    files and folders and unfinished ``.part`` files are skipped)."""
     files: list[str] = []
-    for name in args.files:
+    for name in names:
         p = Path(name)
         if p.is_dir():
-            found = sorted(str(f) for f in p.glob("*.mcap"))
+            found = sorted(
+                str(f)
+                for f in p.rglob("*.mcap")
+                if f.is_file() and not any(s.startswith(".") for s in f.relative_to(p).parts)
+            )
             if not found:
-                raise UsageError(f"{p}: no .mcap files in this directory")
+                raise UsageError(f"{p}: no .mcap files in this folder or its sub-folders")
             files += found
         else:
             files.append(name)
+    return files
+
+
+def _grade_all(
+    files: Sequence[str], th: Thresholds | None, jobs: int
+) -> list[GradeReport | tuple[str, int]]:
+    """Grade every file (``jobs`` processes), with a progress bar on a terminal."""
+    from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    console = Console(stderr=True)
+    progress = Progress(
+        TextColumn("grading"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.description}"),
+        console=console,
+        transient=True,
+        disable=not console.is_terminal or len(files) < 2,
+    )
+    results: list[GradeReport | tuple[str, int] | None] = [None] * len(files)
+    with progress:
+        task = progress.add_task("", total=len(files))
+        if jobs > 1 and len(files) > 1:
+            pool = ProcessPoolExecutor(
+                max_workers=min(jobs, len(files)), initializer=_ignore_sigint
+            )
+            try:
+                futures: dict[Future[GradeReport | tuple[str, int]], int] = {
+                    pool.submit(_grade_one, f, th): i for i, f in enumerate(files)
+                }
+                for fut in as_completed(futures):
+                    i = futures[fut]
+                    results[i] = fut.result()
+                    progress.update(task, advance=1, description=Path(files[i]).name)
+            except KeyboardInterrupt:
+                import signal
+
+                signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: still one line
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
+            pool.shutdown()
+        else:
+            for i, f in enumerate(files):
+                results[i] = _grade_one(f, th)
+                progress.update(task, advance=1, description=Path(f).name)
+    return [r for r in results if r is not None]
+
+
+def _cmd_grade(args: argparse.Namespace) -> int:
+    from usar_replay.reports import summary_line, to_table
+
+    if args.jobs < 1:
+        raise UsageError(f"--jobs {args.jobs}: expected 1 or more")
+    files = _find_recordings(args.files)
     th = _thresholds(args)
-    if args.jobs > 1 and len(files) > 1:
-        with ProcessPoolExecutor(max_workers=min(args.jobs, len(files))) as pool:
-            results = list(pool.map(_grade_one, files, [th] * len(files)))
-    else:
-        results = [_grade_one(f, th) for f in files]
+    _check_outputs(args, files)
+    results = _grade_all(files, th, args.jobs)
     reports = [r for r in results if not isinstance(r, tuple)]
     errors = [(f, r[0]) for f, r in zip(files, results, strict=True) if isinstance(r, tuple)]
     for r in reports:
-        print(to_table(r))
-        print()
+        if len(files) == 1 or args.details:
+            print(to_table(r))
+            print()
         if not r.log_complete:
             print(
                 f"usar: {r.source}: the log is incomplete ({r.log_problem}); "
@@ -304,16 +401,70 @@ def _cmd_grade(args: argparse.Namespace) -> int:
             )
     for _, message in errors:
         print(f"usar: error: {message}", file=sys.stderr)
-    _reports_out(args, reports, errors)
     if len(files) > 1:
+        print(f"Grade of {len(files)} recordings:")
+        for f, res in zip(files, results, strict=True):
+            if isinstance(res, tuple):
+                print(summary_line(None, f, res[0].removeprefix(f"{f}: ")))
+            else:
+                print(summary_line(res, f))
         passed = sum(r.passed and r.log_complete for r in reports)
         print(f"{passed}/{len(files)} recordings pass")
+    _reports_out(args, reports, errors, files)
     codes = [r[1] for r in results if isinstance(r, tuple)]
     if codes:
         return max(codes)
     if any(not r.log_complete for r in reports):
         return EXIT_INCOMPLETE
     return EXIT_OK if all(r.passed for r in reports) else EXIT_FAIL
+
+
+def _report_one(
+    path: str, th: Thresholds | None, page: Path, overwrite: bool
+) -> GradeReport | tuple[str, int]:
+    """Grade one recording and write its page; a user error becomes (message, exit code)."""
+    from usar_replay.grade import grade_run
+    from usar_replay.htmlreport import collect, run_page
+    from usar_replay.outfiles import write_text
+    from usar_replay.run import open_run
+
+    try:
+        run = open_run(path)
+        report = grade_run(run, th)
+        write_text(page, run_page(run, report, collect(run)), overwrite=overwrite, inputs=[path])
+        return report
+    except UsarError as err:
+        return (str(err), err.exit_code)
+    except OSError as err:
+        return (f"{path}: cannot read the file: {err.strerror or err}", EXIT_USAGE)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from usar_replay.htmlreport import index_page, output_paths
+    from usar_replay.outfiles import check_output, write_text
+
+    files = _find_recordings(args.files)
+    th = _thresholds(args)
+    outputs = output_paths(args.out, files)
+    for p in outputs:
+        check_output(p, overwrite=args.overwrite, inputs=files, option="-o")
+    entries: list[tuple[str, str, GradeReport | None, str]] = []
+    worst = EXIT_OK
+    for f, page in zip(files, outputs, strict=False):
+        result = _report_one(f, th, page, args.overwrite)
+        if isinstance(result, tuple):
+            print(f"usar: error: {result[0]}", file=sys.stderr)
+            entries.append((f, page.name, None, result[0]))
+            worst = max(worst, result[1])
+            continue
+        entries.append((f, page.name, result, ""))
+        print(f"wrote {page}")
+        if not result.log_complete:
+            print(f"usar: {f}: the log is incomplete ({result.log_problem})", file=sys.stderr)
+            worst = max(worst, EXIT_INCOMPLETE)
+    write_text(outputs[-1], index_page(entries), overwrite=args.overwrite, inputs=files)
+    print(f"wrote {outputs[-1]} ({len(files)} recordings)")
+    return worst
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
@@ -433,6 +584,9 @@ def _grade_outputs(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", metavar="PATH", help="write the grade as JSON")
     p.add_argument("--junit", metavar="PATH", help="write JUnit XML (a test case per rubric line)")
     p.add_argument("--csv", metavar="PATH", help="write CSV (a row per recording)")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace existing --json/--junit/--csv files"
+    )
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -480,8 +634,20 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("grade", help="grade recordings against the course rubric")
     p.add_argument("files", nargs="+", metavar="FILE|DIR")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="grade N files in parallel")
+    p.add_argument(
+        "--details", action="store_true", help="the full table of every recording of a batch"
+    )
     _grade_outputs(p)
     p.set_defaults(func=_cmd_grade)
+
+    p = sub.add_parser("report", help="write an HTML page per recording (map, rubric, frames)")
+    p.add_argument("files", nargs="+", metavar="FILE|DIR")
+    p.add_argument("-o", "--out", required=True, metavar="DIR", help="folder for the pages")
+    p.add_argument(
+        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace existing pages")
+    p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("view", help="show a recording's timeline in the rerun viewer")
     p.add_argument("file", metavar="FILE")

@@ -1,0 +1,277 @@
+"""The pure rubric, one line at a time, on hand-made message streams (no log file, no mcap).
+
+Each test builds a tiny world, feeds a :class:`Grader` the messages a run would publish, and
+asserts one rubric function's verdict, its numbers and units, and its evidence time; a line
+whose event never happened has no evidence time.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from usar_replay import contract, msgs
+from usar_replay.rubric import (
+    Disc,
+    Grader,
+    explorer_home_before_follower,
+    explorer_targets,
+    follower_home,
+    follower_markers,
+    in_order,
+    judge,
+    marker_broadcast,
+    marker_detected,
+    only_on_detection,
+    time_limit,
+)
+from usar_replay.scenario import Marker, RobotStart, Scenario
+from usar_replay.settings import Thresholds
+
+S = 1_000_000_000
+EXPLORER_HOME = (0.0, 0.0)
+FOLLOWER_HOME = (0.0, -1.0)
+TARGETS = ((2.0, 0.0), (4.0, 0.0))
+MARKERS = {0: (2.0, 1.0, 0.2), 1: (4.0, 1.0, 0.2)}
+
+
+def world(time_limit_s: float = 100.0) -> Scenario:
+    return Scenario(
+        name="hand-made",
+        walls=(),
+        markers=tuple(Marker(id=k, x=x, y=y, z=z) for k, (x, y, z) in MARKERS.items()),
+        targets=TARGETS,
+        explorer=RobotStart(name="explorer", x=EXPLORER_HOME[0], y=EXPLORER_HOME[1]),
+        follower=RobotStart(name="follower", x=FOLLOWER_HOME[0], y=FOLLOWER_HOME[1]),
+        time_limit_s=time_limit_s,
+    )
+
+
+def pose(x: float, y: float) -> msgs.PoseStamped:
+    return msgs.PoseStamped(pose=msgs.Pose(position=msgs.Point(x=x, y=y)))
+
+
+def drive(g: Grader, robot: str, points: list[tuple[float, float]], t: int) -> int:
+    """The robot's true pose at each point, 1 s apart, starting at ``t``; returns the next t."""
+    for x, y in points:
+        g.feed(contract.truth_pose(robot), pose(x, y), t)
+        t += S
+    return t
+
+
+def detect(g: Grader, ids: list[int], t: int) -> msgs.FiducialTransformArray:
+    arr = msgs.FiducialTransformArray(
+        header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.OPTICAL_FRAME),
+        transforms=tuple(
+            msgs.FiducialTransform(
+                fiducial_id=k, transform=msgs.Transform(translation=msgs.Vector3(z=1.0 + k))
+            )
+            for k in ids
+        ),
+    )
+    g.feed(contract.FIDUCIALS, arr, t)
+    return arr
+
+
+def broadcast(
+    g: Grader, mid: int, t: int, *, error_m: float = 0.0, parent: str = contract.OPTICAL_FRAME
+) -> None:
+    """The camera at the origin of ``map`` (identity) and ``marker_frame`` at the true marker
+    plus ``error_m`` along x, stamped ``t`` (the image's stamp)."""
+    stamp = msgs.Time.from_ns(t)
+    x, y, z = MARKERS[mid]
+    cam = msgs.TransformStamped(
+        header=msgs.Header(stamp=stamp, frame_id=contract.MAP),
+        child_frame_id=contract.OPTICAL_FRAME,
+        transform=msgs.Transform(rotation=msgs.Quaternion(w=1.0)),
+    )
+    marker = msgs.TransformStamped(
+        header=msgs.Header(stamp=stamp, frame_id=parent),
+        child_frame_id=contract.MARKER_FRAME,
+        transform=msgs.Transform(
+            translation=msgs.Vector3(x=x + error_m, y=y, z=z), rotation=msgs.Quaternion(w=1.0)
+        ),
+    )
+    g.feed(contract.TF, msgs.TFMessage(transforms=(cam,)), t)
+    g.feed(contract.TF, msgs.TFMessage(transforms=(marker,)), t)
+
+
+def good_run(g: Grader) -> None:
+    """Every line passes: targets in order, both markers detected and broadcast, home, then the
+    follower visits 0 and 1 (within 0.4 m) and comes home."""
+    t = drive(g, "follower", [FOLLOWER_HOME], S)
+    t = drive(g, "explorer", [EXPLORER_HOME, (1.0, 0.0), TARGETS[0]], t)
+    detect(g, [0], t)
+    broadcast(g, 0, t)
+    t = drive(g, "explorer", [(3.0, 0.0), TARGETS[1]], t + S)
+    detect(g, [1], t)
+    broadcast(g, 1, t)
+    t = drive(g, "explorer", [(2.0, 0.0), EXPLORER_HOME], t + S)
+    drive(g, "follower", [(1.0, -1.0), (2.0, 0.7), (4.0, 0.7), (1.0, -1.0), FOLLOWER_HOME], t)
+
+
+# --- the one in-order check ----------------------------------------------------------------------
+
+
+def test_in_order_is_a_greedy_subsequence_of_arrivals() -> None:
+    def disc(*entries: int) -> Disc:
+        return Disc((0.0, 0.0), 1.0, 1.1, True, entries=list(entries))
+
+    assert in_order([disc(5), disc(9), disc(12)]) == [5, 9, 12]
+    # 2 reached only before 1: it fails, and 3 still counts after 1
+    assert in_order([disc(5), disc(3), disc(12)]) == [5, None, 12]
+    # passing 3 early does not matter when it is reached again in order
+    assert in_order([disc(5), disc(9), disc(2, 14)]) == [5, 9, 14]
+    # a skipped item does not block the later ones
+    assert in_order([disc(), disc(9)]) == [None, 9]
+
+
+# --- each line -----------------------------------------------------------------------------------
+
+
+def test_a_clean_stream_passes_every_line() -> None:
+    g = Grader(world())
+    good_run(g)
+    checks = judge(g)
+    assert [c.id for c in checks if not c.passed] == []
+    assert sum(c.points for c in checks) == pytest.approx(60.0)
+    assert len(checks) == 2 + 2 + 2 + 1 + 1 + 2 + 1 + 1
+
+
+def test_explorer_targets_in_order_with_units_and_evidence() -> None:
+    g = Grader(world())
+    t = drive(g, "explorer", [EXPLORER_HOME, TARGETS[1], TARGETS[0]], S)
+    first, second = explorer_targets(g)
+    assert first.passed and first.evidence_ns == 3 * S and first.evidence == "reached"
+    assert first.value == pytest.approx(0.0) and first.unit == "m" and first.limit == 0.15
+    assert not second.passed and second.points == 0 and second.max_points == 6
+    assert "only before target_1" in second.measured and "out of order" in second.measured
+    assert second.threshold == "<= 0.15 m, after target_1"
+    assert t == 4 * S
+
+
+def test_a_target_never_reached_says_how_close_and_when() -> None:
+    g = Grader(world())
+    drive(g, "explorer", [EXPLORER_HOME, (1.0, 0.0), (1.58, 0.0), (1.0, 0.0)], S)
+    line = explorer_targets(g)[0]
+    assert not line.passed
+    assert line.measured == "never reached (closest 0.42 m at 3.0 s)"
+    assert line.evidence_ns == 3 * S and line.evidence == "closest approach"
+    assert line.value == pytest.approx(0.42)
+
+
+def test_a_robot_that_never_moved_has_no_evidence_time() -> None:
+    """Nothing happened: the closest approach is where it started, not something to look at."""
+    g = Grader(world())
+    drive(g, "follower", [FOLLOWER_HOME, FOLLOWER_HOME], S)
+    for line in follower_markers(g):
+        assert not line.passed and line.evidence_ns is None and line.evidence == ""
+        assert (
+            line.measured.startswith("never visited (closest")
+            and "where it started" in line.measured
+        )
+        assert "never" in line.measured and "at never" not in line.measured
+
+
+def test_marker_detected_counts_frames() -> None:
+    g = Grader(world())
+    detect(g, [0], 5 * S)
+    detect(g, [0], 6 * S)
+    seen, unseen = marker_detected(g, 0), marker_detected(g, 1)
+    assert seen.passed and seen.value == 2 and seen.unit == "frames" and seen.evidence_ns == 5 * S
+    assert seen.measured == "in 2 frames, first at 5.0 s"
+    assert not unseen.passed and unseen.value == 0 and unseen.evidence_ns is None
+    assert unseen.measured == "never detected"
+
+
+def test_marker_broadcast_worst_error_against_the_threshold() -> None:
+    g = Grader(world())
+    detect(g, [0], 5 * S)
+    broadcast(g, 0, 5 * S, error_m=0.02)
+    detect(g, [0], 6 * S)
+    broadcast(g, 0, 6 * S, error_m=0.3)
+    line = marker_broadcast(g, 0)
+    assert not line.passed and line.value == pytest.approx(0.3) and line.limit == 0.10
+    assert line.evidence_ns == 6 * S and line.evidence == "worst broadcast"
+    assert line.measured == "2 broadcasts, worst error 30.0 cm"
+    none = marker_broadcast(g, 1)
+    assert none.measured == "no broadcast" and none.value is None and none.evidence_ns is None
+    loose = Grader(world(), Thresholds(marker_map_error_m=0.5))
+    detect(loose, [0], 5 * S)
+    broadcast(loose, 0, 5 * S, error_m=0.3)
+    assert marker_broadcast(loose, 0).passed
+
+
+def test_only_on_detection_counts_broadcasts_without_one_or_off_the_camera() -> None:
+    g = Grader(world())
+    detect(g, [0], 5 * S)
+    broadcast(g, 0, 5 * S)
+    assert only_on_detection(g).passed and only_on_detection(g).evidence_ns is None
+    broadcast(g, 0, 7 * S)  # no detection at 7 s
+    broadcast(g, 0, 8 * S, parent=contract.MAP)
+    line = only_on_detection(g)
+    assert not line.passed and line.value == 2 and line.limit == 0
+    assert line.measured == "3 broadcasts, 2 without a detection, 1 with another parent"
+    assert line.evidence_ns == 7 * S
+
+
+def test_explorer_home_before_the_follower_moved() -> None:
+    g = Grader(world())
+    drive(g, "follower", [FOLLOWER_HOME], S)
+    t = drive(g, "explorer", [EXPLORER_HOME, TARGETS[0], TARGETS[1]], S)
+    drive(g, "follower", [(0.5, -1.0)], t)  # moves at 4 s, explorer still out
+    drive(g, "explorer", [EXPLORER_HOME], t + S)  # home at 5 s
+    line = explorer_home_before_follower(g, 3 * S, "target_2")
+    assert not line.passed
+    assert line.measured == "home at 5.0 s; follower moved at 4.0 s"
+    assert line.evidence_ns == 4 * S and line.evidence == "follower moved"
+    assert line.value == 5.0 and line.limit == 4.0 and line.unit == "s"
+
+
+def test_explorer_never_home_has_no_home_time() -> None:
+    g = Grader(world())
+    drive(g, "explorer", [EXPLORER_HOME, TARGETS[0]], S)
+    line = explorer_home_before_follower(g, 2 * S, "target_1")
+    assert not line.passed and line.value is None and line.evidence_ns is None
+    assert (
+        line.measured == "never home after target_1 (ended 2.00 m away); the follower never moved"
+    )
+
+
+def test_follower_markers_in_id_order_then_home() -> None:
+    g = Grader(world())
+    drive(g, "follower", [FOLLOWER_HOME, (4.0, 0.7), (2.0, 0.7), FOLLOWER_HOME], S)
+    m0, m1 = follower_markers(g)
+    assert m0.passed and m0.evidence_ns == 3 * S and m0.value == pytest.approx(0.3)
+    assert not m1.passed and "out of ID order" in m1.measured
+    home = follower_home(g, 3 * S, "marker 0")
+    assert home.passed and home.evidence_ns == 4 * S and home.value == pytest.approx(0.0)
+    never = follower_home(g, 5 * S, "marker 0")
+    assert not never.passed and never.evidence_ns is None
+    assert follower_home(g, -1, "").measured == "visited no marker"
+
+
+def test_time_limit_counts_from_the_log_start() -> None:
+    g = Grader(world(time_limit_s=3.0))
+    g.feed(contract.ROSOUT, None, S)
+    assert time_limit(g, 3 * S).passed
+    late = time_limit(g, 5 * S)
+    assert not late.passed and late.measured == "4.0 s" and late.threshold == "<= 3 s"
+    assert late.value == 4.0 and late.limit == 3.0
+    never = time_limit(g, None)
+    assert not never.passed and never.value is None and never.evidence_ns is None
+    th = Grader(world(), Thresholds(time_limit_s=50.0))
+    assert th.resolved_thresholds().time_limit_s == 50.0
+    assert Grader(world()).resolved_thresholds().time_limit_s == 100.0
+
+
+def test_the_rubric_imports_no_mcap_and_no_simulator() -> None:
+    code = (
+        "import sys, usar_replay.rubric; "
+        "bad = [m for m in ('mcap', 'usar_replay.bag', 'pybullet', 'rerun') if m in sys.modules]; "
+        "print(bad)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
