@@ -95,8 +95,10 @@ from usar_replay.replay import replay
 if __name__ == "__main__":
     t = time.perf_counter(); r = record(one_room(), {out!r}, S()); w = time.perf_counter() - t
     t = time.perf_counter(); rep = replay({out!r}); w2 = time.perf_counter() - t
-    ru = resource.getrusage(resource.RUSAGE_SELF); rc = resource.getrusage(resource.RUSAGE_CHILDREN)
-    print(r.sim_duration_s, w, w2, ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime, rep.identical)
+    ru = resource.getrusage(resource.RUSAGE_SELF)
+    rc = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime
+    print(r.sim_duration_s, w, w2, cpu, rep.identical)
 """
 
 
