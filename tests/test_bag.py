@@ -33,6 +33,8 @@ def _plain(value: Any) -> Any:
     if isinstance(value, bytes):
         return list(value)
     if isinstance(value, np.ndarray):
+        if value.dtype == np.int8:  # int8[] (OccupancyGrid.data) is carried as raw bytes
+            value = value.view(np.uint8)
         return [_plain(v) for v in value.tolist()]
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
