@@ -16,8 +16,9 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from usar_replay.grade import grade_file
-from usar_replay.record import RecordSettings, record
+from usar_replay.record import record
 from usar_replay.scenario import course_world
+from usar_replay.settings import RunSettings
 from usar_replay.variants import make_variant
 
 
@@ -26,7 +27,7 @@ def run(seed: int | None, out_dir: Path) -> str:
     name = "course" if seed is None else f"seed{seed}"
     path = out_dir / f"{name}.mcap"
     t0 = time.perf_counter()
-    result = record(scn, path, RecordSettings())
+    result = record(scn, path, RunSettings())
     wall = time.perf_counter() - t0
     grade = grade_file(path)
     worst = max(result.marker_errors_m.values(), default=float("nan"))
