@@ -158,6 +158,46 @@ def _truth_markers(scenario: Scenario, t_ns: int) -> msgs.FiducialTransformArray
     )
 
 
+@dataclass(slots=True)
+class _Observed:
+    """One tick of the simulator's messages, encoded once for the log and the mission."""
+
+    t: int
+    wire: list[tuple[str, str, bytes]]
+    truth: list[tuple[str, msgs.Message]]
+    frame: int
+
+
+def _observe(
+    sim: Simulator, scenario: Scenario, first: list[tuple[str, msgs.Message]]
+) -> _Observed:
+    """What the simulator publishes now: ``first`` (``/tf_static``, ``/map`` at the start),
+    ``/tf``, a camera frame when one is due, odometry; and the ground truth of the moment."""
+    t = sim.now_ns
+    batch = [*first, (contract.TF, sim.tf())]
+    frame = 0
+    if sim.camera_due():
+        cam = sim.camera_info()
+        data = encode_image(sim.render_camera(), scenario.camera.encoding)
+        image = msgs.CompressedImage(header=cam.header, format=scenario.camera.encoding, data=data)
+        batch += [(contract.CAMERA_INFO, cam), (contract.IMAGE, image)]
+        frame = 1
+    batch += [(contract.odom(r), sim.odometry(r)) for r in contract.ROBOTS]
+    wire = [(topic, msg.__msgtype__, cdr.encode(msg)) for topic, msg in batch]
+    stamp = msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP)
+    truth: list[tuple[str, msgs.Message]] = [
+        (contract.truth_pose(r), msgs.PoseStamped(header=stamp, pose=sim.true_pose(r)))
+        for r in contract.ROBOTS
+    ]
+    return _Observed(t, wire, truth, frame)
+
+
+def _step(sim: Simulator, commands: list[tuple[str, msgs.Twist]], steps: int) -> None:
+    for robot, twist in commands:
+        sim.set_cmd_vel(robot, twist)
+    sim.step(steps)
+
+
 def record(
     scenario: Scenario,
     out: str | os.PathLike[str],
@@ -219,6 +259,7 @@ def record(
         ]
         steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
         end_ns = t0 + int(limit_s * 1e9)
+        last_t = t0
         try:
             with MissionProcess(
                 target,
@@ -227,35 +268,31 @@ def record(
                 sim_frames=contract.sim_frames(),
                 limits=limits,
             ) as proc:
-                while sim.now_ns <= end_ns:
-                    t = sim.now_ns
-                    batch, first = [*first, (contract.TF, sim.tf())], []
-                    if sim.camera_due():
-                        cam = sim.camera_info()
-                        data = encode_image(sim.render_camera(), scenario.camera.encoding)
-                        image = msgs.CompressedImage(
-                            header=cam.header, format=scenario.camera.encoding, data=data
-                        )
-                        batch += [(contract.CAMERA_INFO, cam), (contract.IMAGE, image)]
-                        frames += 1
-                    batch += [(contract.odom(r), sim.odometry(r)) for r in contract.ROBOTS]
-                    wire = []
-                    for topic, msg in batch:
-                        raw = cdr.encode(msg)
-                        writer.write_raw(topic, msg.__msgtype__, raw, t, publisher="sim")
-                        wire.append((topic, msg.__msgtype__, raw))
-                    for r in contract.ROBOTS:
-                        truth = msgs.PoseStamped(
-                            header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP),
-                            pose=sim.true_pose(r),
-                        )
-                        writer.write(contract.truth_pose(r), truth, t, publisher="recorder")
-                    for topic, msgtype, raw, value in proc.tick(t, wire):
-                        writer.write_raw(topic, msgtype, raw, t, publisher="mission")
+                latency = rs.actuation_latency_ticks
+                tick: _Observed | None = _observe(sim, scenario, first)
+                commands: list[tuple[str, msgs.Twist]] = []
+                while tick is not None:
+                    for topic, msgtype, raw in tick.wire:
+                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="sim")
+                    for topic, msg in tick.truth:
+                        writer.write(topic, msg, tick.t, publisher="recorder")
+                    frames += tick.frame
+                    last_t = tick.t
+                    proc.send(tick.t, tick.wire)
+                    nxt: _Observed | None = None
+                    if latency:
+                        # the mission thinks about this tick while the simulator steps with the
+                        # previous tick's commands and renders the next frame (two cores busy);
+                        # each cmd_vel acts one tick later, always: recorded, deterministic
+                        _step(sim, commands, steps_per_tick)
+                        nxt = _observe(sim, scenario, []) if sim.now_ns <= end_ns else None
+                    commands = []
+                    for topic, msgtype, raw, value in proc.receive():
+                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="mission")
                         robot = contract.robot_of_topic(topic)
                         if robot is not None and topic == contract.cmd_vel(robot):
                             assert isinstance(value, msgs.Twist)
-                            sim.set_cmd_vel(robot, value)
+                            commands.append((robot, value))
                         elif topic == contract.MARKER_POSES and isinstance(
                             value, msgs.FiducialTransformArray
                         ):
@@ -272,7 +309,7 @@ def record(
                     if progress is not None:
                         progress(
                             Progress(
-                                (t - t0) / 1e9,
+                                (tick.t - t0) / 1e9,
                                 len(markers),
                                 len(scenario.markers),
                                 frames,
@@ -282,7 +319,10 @@ def record(
                     if proc.shutdown_requested:
                         outcome, reason = "done", "the mission said it was done"
                         break
-                    sim.step(steps_per_tick)
+                    if not latency:
+                        _step(sim, commands, steps_per_tick)
+                        nxt = _observe(sim, scenario, []) if sim.now_ns <= end_ns else None
+                    tick = nxt
         except MissionEnded as ended:
             outcome, reason = ended.verdict, ended.detail
         except KeyboardInterrupt:
@@ -293,15 +333,15 @@ def record(
             writer.write(
                 contract.ROSOUT,
                 msgs.Log(
-                    stamp=msgs.Time.from_ns(sim.now_ns),
+                    stamp=msgs.Time.from_ns(last_t),
                     level=msgs.Log.ERROR,
                     name="record",
                     msg=f"run ended: {OUTCOMES.get(outcome, outcome)}",
                 ),
-                sim.now_ns,
+                last_t,
                 publisher="recorder",
             )
-        sim_duration = (sim.now_ns - t0) / 1e9
+        sim_duration = (last_t - t0) / 1e9
         message_count = writer.message_count
     true_markers = {m.id: m for m in scenario.markers}
     errors = {

@@ -120,6 +120,9 @@ class RecordSettings:
     max_sim_time_s: float | None = setting(None, unit="s", lo=0.0, lo_open=True, hi=86_400.0)
     """Hard stop; unset: 1.5 x the scenario's time limit (a run past the limit fails grading)."""
     renderer: str = setting("auto", choices=RENDERERS)
+    actuation_latency_ticks: int = setting(0, unit="ticks", lo=0, hi=1)
+    """1: each tick's ``cmd_vel`` acts from the step after the next one, so the mission thinks
+    while the simulator renders (both cores busy); 0: it acts at once (one core at a time)."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
