@@ -80,6 +80,9 @@ def setting(
 class DetectorParams:
     """The ArUco detector's settings (aruco_detect's parameters that matter here)."""
 
+    def __post_init__(self) -> None:
+        _validate(self, "detector.")
+
     dictionary: str = setting("DICT_4X4_50", choices=DICTIONARIES)
     marker_size: float = setting(0.15, unit="m", lo=0.0, lo_open=True, hi=10.0)
     """The printed marker's side including its black border."""
@@ -91,6 +94,9 @@ class DetectorParams:
 @dataclass(frozen=True, slots=True, kw_only=True)
 class MissionSettings:
     """Every tunable of the built-in mission's thinking (a user's mission has its own)."""
+
+    def __post_init__(self) -> None:
+        _validate(self, "mission.")
 
     spin_speed: float = setting(0.1, unit="rad/s", lo=0.0, lo_open=True, hi=1.82)
     """While looking for a marker (the assignment's ``angular.z = 0.1``)."""
@@ -113,6 +119,9 @@ class MissionSettings:
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RecordSettings:
     """How a run is simulated (the scenario says what world; this says how it is stepped)."""
+
+    def __post_init__(self) -> None:
+        _validate(self, "record.")
 
     physics_hz: int = setting(100, unit="Hz", lo=1, hi=10_000)
     control_hz: int = setting(20, unit="Hz", lo=1, hi=1_000)
@@ -143,6 +152,9 @@ class Thresholds:
     assignment's suggested follower tolerance (markers are on walls).
     """
 
+    def __post_init__(self) -> None:
+        _validate(self, "thresholds.")
+
     target_reached_m: float = setting(0.15, unit="m", lo=0.0, lo_open=True, hi=100.0)
     """The explorer's true base position must come this close to each lookup target."""
     marker_map_error_m: float = setting(0.10, unit="m", lo=0.0, lo_open=True, hi=100.0)
@@ -159,6 +171,18 @@ class Thresholds:
     counts as a new visit (jitter on the edge is one visit, not many)."""
     time_limit_s: float | None = setting(None, unit="s", lo=0.0, lo_open=True, hi=86_400.0)
     """Unset: the scenario's limit (600 s in the course)."""
+
+
+def _validate(obj: Any, prefix: str) -> None:
+    """Check every field's type and range, however the object was built (TOML, ``--set``, or
+    Python): a settings object that exists is a valid one."""
+    hints = _hints(type(obj))
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        kind, optional = _scalar_type(hints[f.name])
+        if value is None and optional:
+            continue
+        _check(prefix + f.name, value, f, kind)
 
 
 # --- the codec --------------------------------------------------------------------------------
@@ -189,7 +213,8 @@ def _check(key: str, value: Any, f: dataclasses.Field[Any], kind: type[Any]) -> 
             raise UsageError(f"{key}: expected a string, got {value!r}")
         choices = meta.get("choices", ())
         if choices and value not in choices:
-            raise UsageError(f"{key}: {value!r} is not one of {', '.join(choices)}")
+            shown = ", ".join(choices[:6]) + (", ..." if len(choices) > 6 else "")
+            raise UsageError(f"{key}: {value!r} is not one of {shown}")
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise UsageError(f"{key}: expected a number, got {value!r}")
