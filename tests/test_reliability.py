@@ -109,14 +109,21 @@ def test_info_detects_the_damage_and_says_what_to_do(corpus: dict[str, Path], da
     out = usar("info", str(corpus[damage]))
     assert out.returncode == 3, out.stderr
     assert "Traceback" not in out.stderr
-    text = out.stdout
-    assert "Damage:" in text and "read " in text and "messages up to sim time" in text
+    assert max(len(line) for line in out.stdout.splitlines()) <= 100
+    text = " ".join(out.stdout.split())  # lines are wrapped at 100 columns
+    assert "Damage: " in text and "messages up to sim time" in text
     assert "usar recover" in text
-    assert max(len(line) for line in text.splitlines()) <= 100
 
 
-@pytest.mark.parametrize("damage", DAMAGE)
-@pytest.mark.parametrize("command", ["grade", "replay", "view"])
+# replay and view take seconds each: they see one log of each reading path (a scan of a file
+# without a summary, a chunk failing its CRC, a damaged header over intact chunks)
+SLOW = ["truncated-half", "bitflip-frames", "header-bytes", "killed-part"]
+
+
+@pytest.mark.parametrize(
+    ("command", "damage"),
+    [("grade", d) for d in DAMAGE] + [(c, d) for c in ("replay", "view") for d in SLOW],
+)
 def test_every_command_exits_3_with_one_line(
     corpus: dict[str, Path], damage: str, command: str, tmp_path: Path
 ) -> None:
@@ -148,7 +155,7 @@ def test_recover_a_killed_recording(corpus: dict[str, Path], tmp_path: Path) -> 
     part = tmp_path / "run.mcap.part"
     shutil.copy(corpus["killed-part"], part)
     info = usar("info", str(part))
-    assert info.returncode == 3 and f"usar recover {part}" in info.stdout
+    assert info.returncode == 3 and f"usar recover {part}" in " ".join(info.stdout.split())
     out = usar("recover", str(part))
     assert out.returncode == 0, out.stderr
     fixed = tmp_path / "run.mcap"
@@ -226,9 +233,9 @@ def _handlers_installed(pid: int) -> bool:
 def _record(tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     scenario, out = tmp_path / "room.toml", tmp_path / "cut.mcap"
     save(one_room(), scenario)
+    argv = ["record", "--scenario", str(scenario), "--out", str(out)]
     proc = subprocess.Popen(
-        [sys.executable, "-m", "usar_replay.cli", "record", "--scenario", str(scenario)]
-        + ["--out", str(out)],
+        [sys.executable, "-m", "usar_replay.cli", *argv],
         stderr=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
@@ -260,10 +267,9 @@ def test_early_double_ctrl_c_claims_no_file_and_prints_no_noise(tmp_path: Path) 
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "Exception ignored" not in err
-    claims = "closed and readable" in err
-    assert claims == out.exists(), err
-    if not claims:
-        assert "no log was written" in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("usar: interrupted by the user (Ctrl-C)"), err
+    assert ("closed and readable" in err) == out.exists(), err
 
 
 # --- command lines --------------------------------------------------------------------------

@@ -700,11 +700,8 @@ class BagReader:
                     end_ns is not None and ref.start_ns >= end_ns
                 ):
                     continue
-                if wanted is not None and ref.channel_ids is not None:
-                    if not any(
-                        lay.channels[c].topic in wanted for c in ref.channel_ids if c in lay.channels
-                    ):
-                        continue
+                if wanted is not None and not self._may_hold(ref, wanted):
+                    continue
                 try:
                     found = list(mcapfile.chunk_messages(f, ref, self.size_bytes, lay))
                 except mcapfile.Broken as err:
@@ -719,6 +716,13 @@ class BagReader:
                         continue
                     yield _bag_message(info.topic, info.msgtype, t, data, decode_messages)
                 del found
+
+    def _may_hold(self, ref: mcapfile.ChunkRef, wanted: set[str]) -> bool:
+        """Whether the chunk may hold a wanted topic (always, when the summary does not say)."""
+        if ref.channel_ids is None:
+            return True
+        chans = self._layout.channels
+        return any(chans[c].topic in wanted for c in ref.channel_ids if c in chans)
 
 
 def _bag_message(topic: str, msgtype: str, t: int, data: bytes, dec: bool) -> BagMessage:

@@ -16,10 +16,10 @@ import os
 import textwrap
 
 from usar_replay import settings
-from usar_replay.run import Run, open_run
 
 # Re-exported for record.py, which still imports it from here (contract.py is its home).
 from usar_replay.contract import SCENARIO_ATTACHMENT
+from usar_replay.run import Run, open_run
 
 __all__ = ["SCENARIO_ATTACHMENT", "describe", "is_whole", "open_checked"]
 
@@ -57,10 +57,9 @@ def is_whole(run: Run) -> bool:
 def _size(n: int) -> str:
     if n < 1024:
         return f"{n} B"
-    value = float(n)
-    unit = "B"
-    for unit in ("KiB", "MiB", "GiB"):
-        value /= 1024
+    value, unit = float(n), "B"
+    for name in ("KiB", "MiB", "GiB"):
+        value, unit = value / 1024, name
         if value < 1024:
             break
     return f"{value:.1f} {unit}"
@@ -77,9 +76,7 @@ def _field(label: str, text: str) -> list[str]:
 def _advice(run: Run) -> str:
     name = str(run.path)
     if run.file_state == "truncated":
-        return (
-            f"`usar recover {name}` writes what it holds to an indexed log, marked interrupted"
-        )
+        return f"`usar recover {name}` writes what it holds to an indexed log, marked interrupted"
     if run.damage is not None:
         return f"`usar recover {name} -o OUT.mcap` copies the readable messages to a new log"
     return ""

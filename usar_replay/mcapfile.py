@@ -167,13 +167,19 @@ def _parse(opcode: int, body: bytes, offset: int) -> object:
         return None
     stream = ReadDataStream(io.BytesIO(body))
     try:
-        rec = reader(stream)  # type: ignore[operator]
-    except Exception as err:  # noqa: BLE001 - struct, UTF-8 and EOF errors: all mean "damaged"
-        raise Broken(offset, f"the {Opcode(opcode).name.lower()} record at byte {offset} is "
-                     f"damaged ({type(err).__name__})") from err
+        rec = reader(stream)
+    except Exception as err:
+        raise Broken(
+            offset,
+            f"the {Opcode(opcode).name.lower()} record at byte {offset} is "
+            f"damaged ({type(err).__name__})",
+        ) from err
     if stream.count > len(body):
-        raise Broken(offset, f"the {Opcode(opcode).name.lower()} record at byte {offset} is "
-                     "damaged (its fields run past its length)")
+        raise Broken(
+            offset,
+            f"the {Opcode(opcode).name.lower()} record at byte {offset} is "
+            "damaged (its fields run past its length)",
+        )
     return rec
 
 
@@ -217,9 +223,7 @@ def read_summary(f: IO[bytes], size: int) -> Layout | None:
     return layout
 
 
-def _fill_from_summary(
-    f: IO[bytes], size: int, section: bytes, base: int, layout: Layout
-) -> None:
+def _fill_from_summary(f: IO[bytes], size: int, section: bytes, base: int, layout: Layout) -> None:
     channels: list[Channel] = []
     pos = 0
     while pos < len(section):
@@ -338,7 +342,7 @@ def chunk_messages(
     assert isinstance(chunk, Chunk)
     try:
         data = _decompress(chunk)
-    except Exception as err:  # noqa: BLE001 - zstd/lz4 errors on damaged bytes
+    except Exception as err:
         raise Broken(ref.offset, f"{where} cannot be decompressed ({_short(err)})") from err
     if len(data) != chunk.uncompressed_size:
         raise Broken(ref.offset, f"{where} has the wrong size after decompression")
