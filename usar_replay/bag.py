@@ -538,7 +538,7 @@ class BagReader:
         if lay.stopped_at is not None and not any(p.startswith("the header") for p in why):
             why.insert(
                 0,
-                "the file was not closed (no summary: the recorder was killed or the copy is "
+                "the file is truncated (no summary: the recorder was killed or the copy is "
                 f"partial); readable up to byte {lay.stopped_at} of {self.size_bytes}",
             )
         elif lay.stopped_at is None:

@@ -29,7 +29,7 @@ _LABEL = 15
 _STATES = {
     "complete": "complete (closed and indexed)",
     "interrupted": "interrupted (closed and indexed, but the recording was stopped early)",
-    "truncated": "INCOMPLETE (never closed: no summary or index)",
+    "truncated": "INCOMPLETE (no usable summary or index: never closed, or damaged)",
     "corrupt": "CORRUPT (closed, but its data is damaged)",
     "unknown": "unknown (closed and indexed, but no usar status record)",
 }
