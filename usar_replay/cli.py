@@ -500,8 +500,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"usar: error: {err}", file=sys.stderr)
             return err.exit_code
         except KeyboardInterrupt as err:
-            print(f"usar: {err or 'interrupted'}", file=sys.stderr)
-            return signals.exit_code(err)
+            # a plain Ctrl-C is "interrupted"; SIGTERM/SIGHUP say which signal ended the command
+            code = signals.exit_code(err)
+            text = str(err) if code != EXIT_INTERRUPTED else "interrupted"
+            print(f"usar: {text}", file=sys.stderr)
+            return code
         except BrokenPipeError:
             return EXIT_OK
     return code

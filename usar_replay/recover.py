@@ -71,7 +71,10 @@ def recover(
     check_output(out, overwrite=overwrite, inputs=[src], option="-o")
     count, last = 0, 0
     problem = reader.damage.describe() if reader.damage is not None else ""
-    with bag.BagWriter(out) as w:
+    # X.mcap.part -> X.mcap: the writer's own .part would be the source, so write beside it
+    # under a hidden name and give it the final name at the end (never over an existing file)
+    staging = out.with_name(f".{out.name}.recovering")
+    with bag.BagWriter(staging) as w:
         for name, data in sorted(reader.attachments.items()):
             media = "application/toml" if name.endswith(".toml") else "application/octet-stream"
             w.add_attachment(name, media, data, reader.start_ns)
@@ -84,7 +87,16 @@ def recover(
         problem = reader.damage.describe() if reader.damage is not None else problem
         w.close("interrupted", reason=f"recovered by `usar recover` from {src.name}: {problem}")
     if count == 0:
-        out.unlink(missing_ok=True)
+        staging.unlink(missing_ok=True)
         raise UsageError(f"{src}: no message could be recovered ({problem})")
+    try:
+        if overwrite:
+            os.replace(staging, out)
+        else:
+            os.link(staging, out)
+            staging.unlink()
+    except FileExistsError:
+        staging.unlink(missing_ok=True)
+        raise UsageError(f"-o {out}: appeared while recovering; it was left as it is") from None
     total = reader.damage.messages_total if reader.damage is not None else None
     return Recovered(src, out, count, total, last, problem)
