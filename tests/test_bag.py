@@ -15,7 +15,7 @@ from msg_strategies import message
 from rosbags.highlevel import AnyReader
 
 from usar_replay import bag, msgs
-from usar_replay.errors import NotAnMcapFile
+from usar_replay.errors import NotAnMcapFile, UsageError
 
 T0 = 1_000_000_000
 
@@ -210,15 +210,19 @@ def test_reading_streams_chunk_by_chunk(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("content", "expected"),
-    [(None, "no such file"), (b"", "empty"), (b"hello, not mcap at all", "not an MCAP file")],
+    ("content", "expected", "error"),
+    [
+        (None, "no such file", UsageError),  # a wrong path is a usage error (2), not a bad log
+        (b"", "empty", NotAnMcapFile),
+        (b"hello, not mcap at all", "not an MCAP file", NotAnMcapFile),
+    ],
 )
 def test_bad_paths_raise_one_line_errors(
-    tmp_path: Path, content: bytes | None, expected: str
+    tmp_path: Path, content: bytes | None, expected: str, error: type[Exception]
 ) -> None:
     path = tmp_path / "x.mcap"
     if content is not None:
         path.write_bytes(content)
-    with pytest.raises(NotAnMcapFile, match=expected) as info:
+    with pytest.raises(error, match=expected) as info:
         bag.BagReader(path)
     assert "\n" not in str(info.value)

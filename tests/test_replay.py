@@ -254,7 +254,7 @@ def test_settings_toml_errors(tmp_path: Path) -> None:
 def test_replay_bad_inputs_are_one_line(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
-    one_error_line(usar("replay", str(tmp_path / "none.mcap")), 3, "no such file")
+    one_error_line(usar("replay", str(tmp_path / "none.mcap")), 2, "no such file")
     text = tmp_path / "text.mcap"
     text.write_text("hello")
     one_error_line(usar("replay", str(text)), 3, "not an MCAP")

@@ -419,10 +419,10 @@ def test_cli_truncated_log_writes_what_it_read_and_exits_3(
     assert "incomplete" in str(note[0])
 
 
-def test_cli_missing_file_is_one_line_exit_3(tmp_path: Path) -> None:
+def test_cli_missing_file_is_one_line_exit_2(tmp_path: Path) -> None:
     out = tmp_path / "never.rrd"
     done = _usar("view", str(tmp_path / "missing.mcap"), "--save", str(out), env=_no_display())
-    assert done.returncode == 3
+    assert done.returncode == 2  # a wrong path is a usage error
     assert done.stderr.count("\n") == 1 and "no such file" in done.stderr
     assert "Traceback" not in done.stderr
     assert not out.exists() and not out.with_name("never.rrd.part").exists()

@@ -21,22 +21,20 @@ Why this shape:
 
 from __future__ import annotations
 
-import io
+import contextlib
+import errno
+import fcntl
 import os
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from mcap.reader import SeekingReader
-from mcap.records import Attachment, Channel, Chunk, Metadata, Schema
-from mcap.records import Message as McapMessage
-from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
-from usar_replay import __version__, contract, msgs
+from usar_replay import __version__, contract, mcapfile, msgs
 from usar_replay.cdr import decode, encode, schema_text, typestore
-from usar_replay.errors import LogError, NotAnMcapFile
+from usar_replay.errors import LogError, NotAnMcapFile, UsageError
 
 __all__ = [
     "PROFILE",
@@ -61,7 +59,7 @@ STATUS_METADATA = contract.STATUS_METADATA
 RUN_METADATA = contract.RUN_METADATA
 """Metadata record with the run's settings and software version (written by the recorder)."""
 MCAP_MAGIC = b"\x89MCAP0\r\n"
-PUBLISHER_KEY = "usar.publisher"
+PUBLISHER_KEY = mcapfile.PUBLISHER_KEY
 """Channel metadata key: who published the channel's messages (sim, mission, recorder)."""
 
 # rosbag2's QoS profile, in the integer form rosbag2 expects when the file has no rosbag2
@@ -87,9 +85,6 @@ LATCHED_TOPICS = frozenset({contract.TF_STATIC, contract.MAP_TOPIC})
 # --- CDR lives in usar_replay.cdr (re-exported here for older callers) ------------------------
 
 
-# --- writing ------------------------------------------------------------------------------------
-
-
 class BagWriter:
     """Writes a usar log: one MCAP file, ``ros2`` profile, zstd chunks, indexes and summary.
 
@@ -108,12 +103,17 @@ class BagWriter:
     ) -> None:
         self.path = Path(path)
         self.part_path = self.path.with_name(self.path.name + ".part")
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file: IO[bytes] = open(self.part_path, "wb")  # noqa: SIM115 - closed in close()
+        self._file: IO[bytes] = _open_part(self.part_path)
+        self._existing = _identity(self.path)
+        """The file at the output path when we started (None: none); replaced at close only if it
+        is still that file (the caller allowed it: ``--overwrite``)."""
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4}.get(compression)
         if comp is None:
             comp = CompressionType.NONE
-        self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)
+        # data CRCs on: a reader can check every byte of the file, not only the chunks
+        self._writer = Writer(
+            self._file, chunk_size=chunk_size, compression=comp, enable_data_crcs=True
+        )
         self._writer.start(profile=PROFILE, library=f"usar-replay/{__version__}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[tuple[str, str], tuple[int, str]] = {}
@@ -136,11 +136,30 @@ class BagWriter:
         if exc_type is None:
             self.close("complete", outcome=self.outcome, outcome_reason=self.outcome_reason)
         elif issubclass(exc_type, KeyboardInterrupt):
-            reason = "interrupted by the user (Ctrl-C)"
+            # str() of a plain KeyboardInterrupt is empty; signals.Terminated names its signal
+            reason = str(exc) or "interrupted by the user (Ctrl-C)"
             self.close("interrupted", reason=reason, outcome="interrupted", outcome_reason=reason)
+        elif isinstance(exc, OSError) and exc.errno in _DISK_ERRORS:
+            raise self._disk_failure(exc) from exc
         else:
             reason = f"{exc_type.__name__}: {exc}"
             self.close("interrupted", reason=reason, outcome="interrupted", outcome_reason=reason)
+
+    def _disk_failure(self, err: OSError) -> UsageError:
+        """The disk filled (or failed) while recording: keep what was written, say how to save
+        it. Closing would need more space, so the ``.part`` is left for ``usar recover``."""
+        with contextlib.suppress(OSError):
+            self._file.close()
+        self.closed = True
+        what = "the disk is full" if err.errno == errno.ENOSPC else f"cannot write ({err.strerror})"
+        if self.message_count == 0:
+            with contextlib.suppress(OSError):
+                self.part_path.unlink()
+            return UsageError(f"{self.path}: {what}; nothing was recorded; free some space")
+        return UsageError(
+            f"{self.path}: {what} after {self.message_count} messages; free some space, then "
+            f"`usar recover {self.part_path}` saves them as a log"
+        )
 
     def _channel(self, topic: str, msgtype: str, publisher: str) -> int:
         known = self._channels.get((topic, publisher))
@@ -223,7 +242,12 @@ class BagWriter:
         """Write the status record, the summary and indexes; rename ``.part`` to the final name.
 
         ``status`` is the file's state; ``outcome`` how the run ended (``done``, ``time_limit``,
-        ``crashed``, ...: set :attr:`outcome` while writing, or pass it here)."""
+        ``crashed``, ...: set :attr:`outcome` while writing, or pass it here).
+
+        A file that appeared at the final name while we wrote (another program, a second
+        recording) is never replaced: the log is kept under a free name beside it
+        (``NAME.2.mcap``) and :class:`UsageError` says where. Returns the final path.
+        """
         if self.closed:
             return self.path
         self.closed = True
@@ -239,11 +263,115 @@ class BagWriter:
                     "end_time_ns": str(self._last_time),
                 },
             )
-            self._writer.finish()  # type: ignore[no-untyped-call]
+            self._writer.finish()
+            self._file.flush()
+        except OSError as err:
+            raise self._disk_failure(err) from err
         finally:
-            self._file.close()
-        os.replace(self.part_path, self.path)
+            with contextlib.suppress(OSError):
+                self._file.close()
+        now = _identity(self.path)
+        if now is not None and now != self._existing:
+            kept = _free_name(self.path)
+            _link_or_rename(self.part_path, kept)
+            raise UsageError(
+                f"{self.path} appeared while recording and was left as it is; this recording "
+                f"was saved as {kept}"
+            )
+        if now is None:
+            try:
+                _link_or_rename(self.part_path, self.path)
+            except FileExistsError:  # it appeared in the last instant
+                kept = _free_name(self.path)
+                _link_or_rename(self.part_path, kept)
+                raise UsageError(
+                    f"{self.path} appeared while recording and was left as it is; this "
+                    f"recording was saved as {kept}"
+                ) from None
+        else:
+            os.replace(self.part_path, self.path)
         return self.path
+
+
+def _open_part(part: Path) -> IO[bytes]:
+    """Create ``part`` exclusively and hold a lock on it while the log is written.
+
+    Two recordings to one output must not both proceed (they corrupted each other): the second
+    finds the ``.part`` and is refused. A ``.part`` nobody holds is what a killed recording left:
+    it is refused too, since it may be all that is left of a run (``usar recover`` saves it).
+    """
+    try:
+        part.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+    except FileExistsError:
+        if _locked(part):
+            raise UsageError(
+                f"{part}: another `usar record` is writing this output now; wait for it or "
+                "choose another --out"
+            ) from None
+        raise UsageError(
+            f"{part}: left by a recording that was killed; `usar recover {part}` saves what it "
+            "holds (or delete it), then record again"
+        ) from None
+    except OSError as err:
+        raise _write_error(part, err) from err
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    return os.fdopen(fd, "wb")
+
+
+def _locked(part: Path) -> bool:
+    try:
+        fd = os.open(part, os.O_RDONLY)
+    except OSError:
+        return True  # unreadable or gone: treat as in use, the safe answer
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _write_error(p: Path, err: OSError) -> UsageError:
+    if err.errno == errno.ENOSPC:
+        return UsageError(f"{p}: the disk is full; free some space and run again")
+    if err.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        return UsageError(f"{p}: cannot write here (permission denied); choose another --out")
+    return UsageError(f"{p}: cannot write: {err.strerror or err}")
+
+
+_DISK_ERRORS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS})
+
+
+def _identity(p: Path) -> tuple[int, int, int] | None:
+    try:
+        st = p.stat()
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_mtime_ns)
+
+
+def _free_name(p: Path) -> Path:
+    for k in range(2, 10_000):
+        candidate = p.with_name(f"{p.stem}.{k}{p.suffix}")
+        if not candidate.exists() and not candidate.with_name(candidate.name + ".part").exists():
+            return candidate
+    raise UsageError(f"{p}: no free name beside it")  # pragma: no cover
+
+
+def _link_or_rename(src: Path, dst: Path) -> None:
+    """Give ``src`` the name ``dst`` without ever replacing a file there (FileExistsError)."""
+    try:
+        os.link(src, dst)
+    except FileExistsError:
+        raise
+    except OSError:  # a file system without hard links: check, then rename (a small window)
+        if dst.exists():
+            raise FileExistsError(dst) from None
+        os.rename(src, dst)
+        return
+    src.unlink()
 
 
 # --- reading ------------------------------------------------------------------------------------
@@ -273,180 +401,234 @@ class TopicInfo:
 
 @dataclass(slots=True)
 class Damage:
-    """How far a damaged (truncated or corrupt) log could be read."""
+    """What is damaged in a log, and how much of it could still be read."""
 
     reason: str
+    """What is damaged, for a person: ``chunk 12 of 80 (sim time 30.1-31.4 s) fails its CRC
+    check``; several findings are joined with ``; ``."""
     messages_read: int = 0
+    """Messages that can still be read (all of them when only a header or attachment is hit)."""
     last_time_ns: int = 0
+    messages_total: int | None = None
+    """How many messages the file's summary says it holds (None without a summary)."""
 
     def describe(self) -> str:
-        """One line for a person."""
+        """One line for a person: what is damaged, then what was recovered."""
+        of = ""
+        if self.messages_total is not None and self.messages_total > 0:
+            share = self.messages_read / self.messages_total
+            of = f" ({share:.1%} of {self.messages_total})"
         return (
             f"{self.reason}; read {self.messages_read} messages up to sim time "
-            f"{self.last_time_ns / 1e9:.3f} s"
+            f"{self.last_time_ns / 1e9:.3f} s{of}"
         )
 
 
-@dataclass(slots=True)
-class _Index:
-    topics: dict[str, TopicInfo] = field(default_factory=dict)
-    start_ns: int = 0
-    end_ns: int = 0
-    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
-    attachments: dict[str, bytes] = field(default_factory=dict)
+CHECKS = ("summary", "data", "full")
+"""How much :class:`BagReader` checks when it opens a file: ``summary`` trusts the summary (fast,
+``usar info --quick``); ``data`` (the default) also checks the data CRC over the whole file, the
+header and the attachments' CRCs (decompressing every chunk only when that CRC fails, to find
+which are damaged); ``full`` decompresses and checks every chunk (``usar info``). Whatever the
+level, every chunk that :meth:`BagReader.messages` reads is CRC-checked."""
 
 
 class BagReader:
-    """Reads a usar log (or any ROS 2 MCAP whose types usar-replay knows).
+    """Reads a usar log (or any ROS 2 MCAP whose types usar-replay knows), checking it.
 
-    ``BagReader(path)`` checks that the file exists and is MCAP, and reads its summary. When the
-    summary is missing (a truncated file) it scans the file once, streaming, to learn what is
-    there; :attr:`damage` then says how far the file could be read and :attr:`complete` is False.
+    ``BagReader(path)`` checks that the file exists and is MCAP, reads its summary and checks the
+    data against it (see :data:`CHECKS`). When the summary is missing or damaged (a killed
+    recorder, a partial copy) it scans the file once, streaming, checking every chunk.
+    :attr:`damage` then says what is damaged and how much can still be read; :meth:`messages`
+    yields every message of every intact chunk (skipping damaged ones) and never raises for a
+    damaged file. Chunks read by :meth:`messages` are always CRC-checked.
     """
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
+    def __init__(self, path: str | os.PathLike[str], *, check: str = "data") -> None:
+        if check not in CHECKS:
+            raise ValueError(f"check must be one of {CHECKS}")
         self.path = Path(path)
         if not self.path.exists():
-            raise NotAnMcapFile(f"{self.path}: no such file; check the path")
+            raise UsageError(f"{self.path}: no such file; check the path")
         if self.path.is_dir():
-            raise NotAnMcapFile(f"{self.path}: is a directory, not an .mcap file")
-        size = self.path.stat().st_size
-        if size == 0:
-            raise NotAnMcapFile(f"{self.path}: the file is empty; record a run with `usar record`")
-        with open(self.path, "rb") as f:
-            magic = f.read(len(MCAP_MAGIC))
-        if magic != MCAP_MAGIC:
-            raise NotAnMcapFile(
-                f"{self.path}: not an MCAP file (bad magic); expected a log from `usar record`"
-            )
-        self.size_bytes = size
-        self.damage: Damage | None = None
-        self.has_summary = False
-        self._index = self._read_summary() or self._scan()
-
-    # -- summary -----------------------------------------------------------------------------
-
-    def _read_summary(self) -> _Index | None:
+            raise UsageError(f"{self.path}: is a directory, not an .mcap file")
         try:
             with open(self.path, "rb") as f:
-                reader = SeekingReader(f)
-                summary = reader.get_summary()
-                if summary is None or summary.statistics is None:
-                    return None
-                stats = summary.statistics
-                idx = _Index(start_ns=stats.message_start_time, end_ns=stats.message_end_time)
-                for cid, ch in sorted(summary.channels.items()):
-                    schema = summary.schemas.get(ch.schema_id)
-                    name = schema.name if schema else ""
-                    count = stats.channel_message_counts.get(cid, 0)
-                    prior = idx.topics.get(ch.topic)
-                    total = count + (prior.count if prior else 0)
-                    idx.topics[ch.topic] = TopicInfo(ch.topic, name, total)
-                for md in reader.iter_metadata():
-                    idx.metadata[md.name] = dict(md.metadata)
-                for att in reader.iter_attachments():
-                    idx.attachments[att.name] = bytes(att.data)
-        except Exception:  # noqa: BLE001 - mcap raises assorted errors on a bad footer: no summary
+                magic = f.read(len(mcapfile.MAGIC))
+                size = os.fstat(f.fileno()).st_size
+                if size == 0:
+                    raise NotAnMcapFile(
+                        f"{self.path}: the file is empty; record a run with `usar record`"
+                    )
+                if magic != mcapfile.MAGIC:
+                    raise NotAnMcapFile(
+                        f"{self.path}: not an MCAP file (bad magic); expected a log from "
+                        "`usar record`"
+                    )
+                self.size_bytes = size
+                self.damage: Damage | None = None
+                layout = mcapfile.read_summary(f, size)
+                self.has_summary = layout is not None
+                if layout is None:
+                    layout = mcapfile.scan(f, size)
+                    self._layout = layout
+                    self.damage = self._scan_damage()
+                else:
+                    self._layout = layout
+                    self.damage = self._check(f, check)
+        except PermissionError as err:
+            raise UsageError(f"{self.path}: cannot read the file (permission denied)") from err
+        except IsADirectoryError as err:  # pragma: no cover - raced with the check above
+            raise UsageError(f"{self.path}: is a directory, not an .mcap file") from err
+        self.part = self.path.name.endswith(".part")
+
+    # -- checks ------------------------------------------------------------------------------
+
+    def _scan_damage(self) -> Damage:
+        lay = self._layout
+        why = [*lay.problems]
+        bad = [c for c in lay.chunks if c.problem]
+        why += [c.problem for c in bad[:2]]
+        if len(bad) > 2:
+            why.append(f"{len(bad) - 2} more chunks are damaged")
+        if lay.stopped_at is not None and not any(p.startswith("the header") for p in why):
+            why.insert(
+                0,
+                "the file is truncated (no summary: the recorder was killed or the copy is "
+                f"partial); readable up to byte {lay.stopped_at} of {self.size_bytes}",
+            )
+        elif lay.stopped_at is None:
+            why.insert(0, "the file's summary (its index) is missing or damaged")
+        good = sum(c.message_count or 0 for c in lay.chunks if not c.problem)
+        last = max((c.end_ns for c in lay.chunks if not c.problem), default=0)
+        return Damage("; ".join(why), good, last)
+
+    def _check(self, f: IO[bytes], check: str) -> Damage | None:
+        lay = self._layout
+        why = [*lay.problems]
+        if check == "summary":
+            return Damage("; ".join(why), *self._totals()) if why else None
+        header = mcapfile.header_problem(f, self.size_bytes)
+        if header:
+            why.append(header)
+        crc_ok = mcapfile.data_crc_matches(f, lay)
+        if check == "full" or crc_ok is False:
+            for ref in lay.chunks:
+                try:
+                    for _ in mcapfile.chunk_messages(f, ref, self.size_bytes, lay):
+                        pass
+                except mcapfile.Broken as err:
+                    ref.problem = str(err)
+            bad = [c for c in lay.chunks if c.problem]
+            if bad:
+                why.append(self._chunk_phrase(bad))
+            elif crc_ok is False and not header:
+                why.append(
+                    "the data CRC fails: bytes outside the message chunks were changed "
+                    "(metadata, attachments or indexes)"
+                )
+        if not why:
             return None
-        self.has_summary = True
-        return idx
+        return Damage("; ".join(why), *self._totals())
 
-    def _scan(self) -> _Index:
-        idx = _Index()
-        counts: dict[str, int] = {}
-        types: dict[str, str] = {}
-        first = True
-        for rec in self._stream_records():
-            if isinstance(rec, _Msg):
-                counts[rec.topic] = counts.get(rec.topic, 0) + 1
-                types[rec.topic] = rec.msgtype
-                if first:
-                    idx.start_ns, first = rec.log_time, False
-                idx.end_ns = rec.log_time
-            elif isinstance(rec, Metadata):
-                idx.metadata[rec.name] = dict(rec.metadata)
-            elif isinstance(rec, Attachment):
-                idx.attachments[rec.name] = bytes(rec.data)
-        for topic in sorted(counts):
-            idx.topics[topic] = TopicInfo(topic, types[topic], counts[topic])
-        if self.damage is None:
-            self.damage = Damage("the file has no summary (it was not closed)")
-        self.damage.messages_read = sum(counts.values())
-        self.damage.last_time_ns = idx.end_ns
-        return idx
+    def _chunk_phrase(self, bad: list[mcapfile.ChunkRef]) -> str:
+        n = len(self._layout.chunks)
+        first = bad[0]
+        phrase = (
+            f"chunk {first.number} of {n} (sim time {first.start_ns / 1e9:.1f}-"
+            f"{first.end_ns / 1e9:.1f} s) is damaged: "
+            + first.problem.removeprefix(f"chunk {first.number} ")
+        )
+        if len(bad) > 1:
+            phrase += f"; {len(bad) - 1} more of the {n} chunks are damaged"
+        return phrase
 
-    def _stream_records(self) -> Iterator[Any]:
-        """Every record in file order, chunks expanded; stops (and notes why) at damage."""
-        schemas: dict[int, Schema] = {}
-        channels: dict[int, Channel] = {}
+    def _totals(self) -> tuple[int, int, int | None]:
+        """(messages readable, last readable time, messages in the file) for a summary file."""
+        lay = self._layout
+        total = lay.message_count
+        bad = [c for c in lay.chunks if c.problem]
+        if not bad:
+            return total or 0, lay.end_ns, total
+        lost = 0
         with open(self.path, "rb") as f:
-            stream = StreamReader(io.BufferedReader(f), skip_magic=False)
-            try:
-                for rec in stream.records:
-                    inner: Iterable[Any] = breakup_chunk(rec) if isinstance(rec, Chunk) else (rec,)
-                    for r in inner:
-                        if isinstance(r, Schema):
-                            schemas[r.id] = r
-                        elif isinstance(r, Channel):
-                            channels[r.id] = r
-                        elif isinstance(r, McapMessage):
-                            ch = channels[r.channel_id]
-                            schema = schemas.get(ch.schema_id)
-                            yield _Msg(
-                                ch.topic,
-                                schema.name if schema else "",
-                                r,
-                                ch.metadata.get(PUBLISHER_KEY, ""),
-                            )
-                        else:
-                            yield r
-            except Exception as err:  # noqa: BLE001 - any decode failure means: damaged here
-                prior = self.damage
-                self.damage = Damage(f"the file is truncated or corrupt ({_short(err)})")
-                if prior is not None:
-                    self.damage.messages_read = prior.messages_read
-                    self.damage.last_time_ns = prior.last_time_ns
+            for c in bad:
+                lost += mcapfile.indexed_count(f, c, self.size_bytes) or 0
+        last = max((c.end_ns for c in lay.chunks if not c.problem), default=0)
+        return max((total or 0) - lost, 0), last, total
+
+    def _note_bad_chunk(self, ref: mcapfile.ChunkRef, problem: str) -> None:
+        """A chunk found damaged while reading messages (not known when the file was opened)."""
+        ref.problem = problem
+        bad = [c for c in self._layout.chunks if c.problem]
+        prior = self.damage.reason if self.damage is not None else ""
+        parts = [p for p in prior.split("; ") if p and not p.startswith(("chunk ", "1 more"))]
+        parts = [p for p in parts if "more of the" not in p]
+        parts.append(self._chunk_phrase(bad))
+        if self.has_summary:
+            read, last, total = self._totals()
+            self.damage = Damage("; ".join(parts), read, last, total)
+        else:
+            good = sum(c.message_count or 0 for c in self._layout.chunks if not c.problem)
+            last = max((c.end_ns for c in self._layout.chunks if not c.problem), default=0)
+            self.damage = Damage("; ".join(parts), good, last)
 
     # -- public view -------------------------------------------------------------------------
 
     @property
     def complete(self) -> bool:
-        """True when the file has its summary and was closed as ``complete``."""
-        return self.has_summary and self.status == "complete"
+        """True when the file has its summary, is undamaged and was closed as ``complete``."""
+        return self.has_summary and self.damage is None and self.status == "complete"
 
     @property
     def status(self) -> str:
         """``complete``, ``interrupted``, ``truncated`` (no summary), or ``unknown``."""
         if not self.has_summary:
             return "truncated"
-        return self._index.metadata.get(STATUS_METADATA, {}).get("status", "unknown")
+        return self._layout.metadata.get(STATUS_METADATA, {}).get("status", "unknown")
 
     @property
     def topics(self) -> dict[str, TopicInfo]:
         """Topic -> (type, message count), sorted by topic name."""
-        return dict(sorted(self._index.topics.items()))
+        lay = self._layout
+        out: dict[str, TopicInfo] = {}
+        for cid, ch in lay.channels.items():
+            count = lay.channel_counts.get(cid, 0)
+            if not self.has_summary and count == 0:
+                continue
+            prior = out.get(ch.topic)
+            out[ch.topic] = TopicInfo(ch.topic, ch.msgtype, count + (prior.count if prior else 0))
+        return dict(sorted(out.items()))
 
     @property
     def start_ns(self) -> int:
-        return self._index.start_ns
+        return self._layout.start_ns
 
     @property
     def end_ns(self) -> int:
-        return self._index.end_ns
+        return self._layout.end_ns
 
     @property
     def message_count(self) -> int:
-        return sum(t.count for t in self._index.topics.values())
+        return sum(t.count for t in self.topics.values())
+
+    @property
+    def chunk_count(self) -> int:
+        return len(self._layout.chunks)
+
+    @property
+    def data_crc_recorded(self) -> bool:
+        """Whether the writer recorded a data CRC (logs before usar-replay 0.2 have none)."""
+        return self._layout.data_crc != 0
 
     @property
     def metadata(self) -> dict[str, dict[str, str]]:
         """Metadata records by name (the run settings, the status)."""
-        return dict(self._index.metadata)
+        return dict(self._layout.metadata)
 
     @property
     def attachments(self) -> dict[str, bytes]:
         """Attached files by name (``scenario.toml``)."""
-        return dict(self._index.attachments)
+        return dict(self._layout.attachments)
 
     def messages(
         self,
@@ -458,70 +640,46 @@ class BagReader:
     ) -> Iterator[BagMessage]:
         """Messages in log-time order, filtered by topic and ``[start_ns, end_ns)``; streaming.
 
-        A damaged file yields what it holds up to the damage and sets :attr:`damage`; the caller
-        decides whether that is an error (the CLI reports it and exits 3).
+        Every chunk read is decompressed and its CRC checked; a damaged chunk is skipped and
+        noted in :attr:`damage` (the caller decides whether that is an error: the CLI reports it
+        and exits 3). Messages are yielded in file order, which is log-time order in a usar log
+        (the writer refuses times that go backwards).
         """
         wanted = None if topics is None else set(topics)
-        if self.has_summary:
-            yield from self._messages_indexed(wanted, start_ns, end_ns, decode_messages)
-            return
-        count, last = 0, 0
-        for rec in self._stream_records():
-            if not isinstance(rec, _Msg):
-                continue
-            t = rec.log_time
-            count, last = count + 1, t
-            if self.damage is not None:
-                self.damage.messages_read, self.damage.last_time_ns = count, last
-            if wanted is not None and rec.topic not in wanted:
-                continue
-            if (start_ns is not None and t < start_ns) or (end_ns is not None and t >= end_ns):
-                continue
-            yield _bag_message(rec.topic, rec.msgtype, t, rec.data, decode_messages, rec.publisher)
-
-    def _messages_indexed(
-        self, wanted: set[str] | None, start_ns: int | None, end_ns: int | None, dec: bool
-    ) -> Iterator[BagMessage]:
-        count, last = 0, 0
+        lay = self._layout
         with open(self.path, "rb") as f:
-            reader = SeekingReader(f)
-            try:
-                it = reader.iter_messages(
-                    topics=None if wanted is None else sorted(wanted),
-                    starting_at=start_ns,
-                    ending_before=end_ns,
-                    log_time_order=True,
-                )
-                for schema, channel, message in it:
-                    msgtype = schema.name if schema else ""
-                    out = _bag_message(
-                        channel.topic,
-                        msgtype,
-                        message.log_time,
-                        message.data,
-                        dec,
-                        channel.metadata.get(PUBLISHER_KEY, ""),
+            for ref in list(lay.chunks):
+                if ref.problem:
+                    continue
+                if (start_ns is not None and ref.end_ns < start_ns) or (
+                    end_ns is not None and ref.start_ns >= end_ns
+                ):
+                    continue
+                if wanted is not None and not self._may_hold(ref, wanted):
+                    continue
+                try:
+                    found = list(mcapfile.chunk_messages(f, ref, self.size_bytes, lay))
+                except mcapfile.Broken as err:
+                    self._note_bad_chunk(ref, str(err))
+                    continue
+                for info, t, data in found:
+                    if wanted is not None and info.topic not in wanted:
+                        continue
+                    if (start_ns is not None and t < start_ns) or (
+                        end_ns is not None and t >= end_ns
+                    ):
+                        continue
+                    yield _bag_message(
+                        info.topic, info.msgtype, t, data, decode_messages, info.publisher
                     )
-                    count, last = count + 1, message.log_time
-                    yield out
-            except Exception as err:  # noqa: BLE001 - zstd and struct errors from a bad chunk
-                self.damage = Damage(f"the file is corrupt ({_short(err)})", count, last)
+                del found
 
-
-@dataclass(frozen=True, slots=True)
-class _Msg:
-    topic: str
-    msgtype: str
-    record: McapMessage
-    publisher: str = ""
-
-    @property
-    def log_time(self) -> int:
-        return int(self.record.log_time)
-
-    @property
-    def data(self) -> bytes:
-        return bytes(self.record.data)
+    def _may_hold(self, ref: mcapfile.ChunkRef, wanted: set[str]) -> bool:
+        """Whether the chunk may hold a wanted topic (always, when the summary does not say)."""
+        if ref.channel_ids is None:
+            return True
+        chans = self._layout.channels
+        return any(chans[c].topic in wanted for c in ref.channel_ids if c in chans)
 
 
 def _bag_message(
@@ -538,8 +696,3 @@ def _bag_message(
                 f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}"
             ) from err
     return BagMessage(topic, msgtype, int(t), bytes(data), value, publisher)
-
-
-def _short(err: BaseException) -> str:
-    text = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-    return text[:120]

@@ -8,7 +8,8 @@ Exit codes (the same for every subcommand):
 * 3 - the log is incomplete or corrupt (what could be read was still used, and said so).
 * 4 - the mission's code crashed, hung, ran out of memory or published what it may not (the
   log is closed and records the verdict; the user's traceback is shown).
-* 130 - interrupted by Ctrl-C (a recording is still closed and readable).
+* 130, 143, 129 - interrupted by SIGINT (Ctrl-C), SIGTERM, SIGHUP (128 + the signal); a
+  recording is still closed, indexed and marked interrupted.
 
 User errors (:class:`usar_replay.errors.UsarError`) are printed as one line, ``usar: error: ...``,
 without a traceback; anything else is a bug and raises.
@@ -18,10 +19,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 from usar_replay import __version__
 from usar_replay.errors import UsageError, UsarError
@@ -44,17 +46,32 @@ EXIT_INTERRUPTED = 130
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from usar_replay.info import describe, read_info
+    from usar_replay.info import describe, is_whole, open_checked
 
     worst = EXIT_OK
     for i, path in enumerate(args.files):
-        info = read_info(path)
+        try:
+            run = open_checked(path, quick=args.quick)
+        except UsarError as err:  # one bad path among several is one line, not the end
+            print(f"usar: error: {err}", file=sys.stderr)
+            worst = max(worst, err.exit_code)
+            continue
         if i:
             print()
-        print(describe(info))
-        if not info.complete:
-            worst = EXIT_INCOMPLETE
+        print(describe(run, quick=args.quick))
+        if not is_whole(run):
+            worst = max(worst, EXIT_INCOMPLETE)
     return worst
+
+
+def _cmd_recover(args: argparse.Namespace) -> int:
+    from usar_replay.recover import recover
+
+    result = recover(args.file, args.out, overwrite=args.overwrite)
+    print(result.describe())
+    if result.damage:
+        print(f"what was damaged: {result.damage}")
+    return EXIT_OK
 
 
 def _parse_camera(text: str) -> tuple[int, int, float]:
@@ -91,34 +108,24 @@ def _load_scenario(args: argparse.Namespace) -> Scenario:
 
 
 def _cmd_scenario(args: argparse.Namespace) -> int:
+    from usar_replay.outfiles import write_text
     from usar_replay.scenario import to_toml
 
     scenario = _load_scenario(args)
     text = to_toml(scenario)
     if args.out:
-        out = Path(args.out)
-        if out.exists() and not args.overwrite:
-            raise UsageError(f"{out} exists; pass --overwrite to replace it, or --out another path")
-        out.write_text(text, encoding="utf-8")
+        inputs = [args.scenario] if args.scenario else []
+        out = write_text(args.out, text, overwrite=args.overwrite, inputs=inputs, option="--out")
         print(f"wrote {out}: {scenario.summary().splitlines()[0]}", file=sys.stderr)
-    else:
+    elif not args.check:
         print(text, end="")
     if not args.check:
         return EXIT_OK
-    from usar_replay.variants import MAX_DRIVE_FRACTION, check_variant, drive_time_s
+    from usar_replay.scenario_check import check
 
-    problem = check_variant(scenario)
-    if problem is not None:
-        print(f"usar: {scenario.name}: fails the variant rules: {problem}", file=sys.stderr)
-        return EXIT_FAIL
-    need = drive_time_s(scenario)
-    print(
-        f"usar: {scenario.name}: every target sees its own marker within range, every goal is "
-        f"reachable, driving takes {need:.0f} s of the {MAX_DRIVE_FRACTION:.0%} "
-        f"({MAX_DRIVE_FRACTION * scenario.time_limit_s:.0f} s) allowed",
-        file=sys.stderr,
-    )
-    return EXIT_OK
+    verdict = check(scenario)
+    print("\n".join(verdict.lines()))
+    return EXIT_OK if verdict.ok else EXIT_FAIL
 
 
 class _StatusLine:
@@ -205,6 +212,7 @@ def _cmd_record(args: argparse.Namespace) -> int:
     )
     settings = _run_settings(args, base)
     status = _StatusLine()
+    before = _identity(out)
     try:
         result = record(
             scenario,
@@ -214,15 +222,15 @@ def _cmd_record(args: argparse.Namespace) -> int:
             mission=args.mission,
             limits=_limits(args),
         )
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as err:
+        from usar_replay.signals import exit_code
+
         status.close()
-        what = (
-            f"{out} is closed and readable, marked interrupted"
-            if out.exists()
-            else ("nothing was written")
-        )
-        print(f"usar: interrupted; {what}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        if _identity(out) not in (None, before):
+            print(f"usar: {err}; {out} is closed and readable, marked interrupted", file=sys.stderr)
+        else:
+            print(f"usar: {err} before anything was recorded; no log was written", file=sys.stderr)
+        return exit_code(err)
     status.close()
     print_summary(result)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
@@ -255,6 +263,14 @@ def _check_outputs(args: argparse.Namespace, inputs: Sequence[str]) -> None:
         if key in seen:
             raise UsageError(f"{opt} {p}: also given to {seen[key]}; choose another path")
         seen[key] = opt
+
+
+def _identity(p: Path) -> tuple[int, int] | None:
+    try:
+        st = p.stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_mtime_ns)
 
 
 def _reports_out(
@@ -589,8 +605,28 @@ def _grade_outputs(p: argparse.ArgumentParser) -> None:
     )
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a bad command line is one ``usar: error:`` line and a hint (not a usage
+    block), like every other user error."""
+
+    def error(self, message: str) -> NoReturn:
+        print(f"usar: error: {message}; see `{self.prog} --help`", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
+
+
+def _positive_seconds(text: str) -> float:
+    """``--max-sim-time``: a finite number of seconds above 0 (nan, 0 and -1 are refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected seconds above 0, e.g. 60")
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="usar",
         description=(
             "Run, record, replay, grade and view the two-robot US&R mission "
@@ -598,7 +634,7 @@ def _parser() -> argparse.ArgumentParser:
         ),
         epilog=(
             "Exit codes: 0 ok, 1 a check failed, 2 usage error, 3 incomplete or corrupt log, "
-            "4 the mission's code failed, 130 interrupted."
+            "4 the mission's code failed, 130/143/129 interrupted by SIGINT/SIGTERM/SIGHUP."
         ),
     )
     parser.add_argument("--version", action="version", version=f"usar-replay {__version__}")
@@ -613,7 +649,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--renderer", choices=["auto", "tiny", "egl"], default="auto", help="pybullet renderer"
     )
-    p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
+    p.add_argument(
+        "--max-sim-time", type=_positive_seconds, metavar="S", help="hard stop in sim seconds (>0)"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress line")
     _mission_options(p, replay=False)
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -670,30 +708,51 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="FILE", help="write the TOML here instead of stdout")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument(
-        "--check", action="store_true", help="also check the variant rules (exit 1 if one fails)"
+        "--check",
+        action="store_true",
+        help="check that the world can be completed (prints a verdict; exit 1 if it cannot)",
     )
     p.set_defaults(func=_cmd_scenario)
 
-    p = sub.add_parser("info", help="summarise a recording (topics, counts, scenario, status)")
+    p = sub.add_parser("info", help="summarise and check a recording (topics, state, outcome)")
     p.add_argument("files", nargs="+", metavar="FILE", help="one or more .mcap files")
+    p.add_argument(
+        "--quick", action="store_true", help="trust the summary: do not check the data's CRCs"
+    )
     p.set_defaults(func=_cmd_info)
+
+    p = sub.add_parser(
+        "recover", help="turn a killed recording's .part (or a damaged log) into a whole log"
+    )
+    p.add_argument("file", metavar="FILE", help="the .part or damaged .mcap")
+    p.add_argument(
+        "-o", "--out", metavar="OUT", help="output (default: FILE without .part, or X.recovered)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    p.set_defaults(func=_cmd_recover)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``usar`` console script; returns the process exit code."""
-    parser = _parser()
-    args = parser.parse_args(argv)
-    try:
-        code: int = args.func(args)
-    except UsarError as err:
-        print(f"usar: error: {err}", file=sys.stderr)
-        return err.exit_code
-    except KeyboardInterrupt:
-        print("usar: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except BrokenPipeError:
-        return EXIT_OK
+    from usar_replay import signals
+
+    with signals.handled():
+        try:
+            parser = _parser()
+            args = parser.parse_args(argv)
+            code: int = args.func(args)
+        except UsarError as err:
+            print(f"usar: error: {err}", file=sys.stderr)
+            return err.exit_code
+        except KeyboardInterrupt as err:
+            # a plain Ctrl-C is "interrupted"; SIGTERM/SIGHUP say which signal ended the command
+            code = signals.exit_code(err)
+            text = str(err) if code != EXIT_INTERRUPTED else "interrupted"
+            print(f"usar: {text}", file=sys.stderr)
+            return code
+        except BrokenPipeError:
+            return EXIT_OK
     return code
 
 

@@ -176,17 +176,15 @@ class Run:
         return ""
 
 
-def open_run(path: str | os.PathLike[str]) -> Run:
+def open_run(path: str | os.PathLike[str], *, check: str = "data") -> Run:
     """Open a recording once: its summary (or a scan of a damaged file) and its attachments.
 
-    Raises :class:`NotAnMcapFile` for something that is not a log and :class:`UsageError` for a
-    file that cannot be read (permissions); a damaged log opens, and says what is damaged.
+    ``check``: how much of the file is checked on opening (:data:`bag.CHECKS`). Raises
+    :class:`NotAnMcapFile` for something that is not a log and :class:`UsageError` for a path that
+    is missing or cannot be read (permissions); a damaged log opens, and says what is damaged.
     """
     p = Path(path)
-    try:
-        reader = bag.BagReader(p)
-    except PermissionError as err:
-        raise UsageError(f"{p}: cannot read the file (permission denied)") from err
+    reader = bag.BagReader(p, check=check)
     problems: list[str] = []
     attachments = reader.attachments
     scenario: Scenario | None = None

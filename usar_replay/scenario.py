@@ -259,6 +259,48 @@ def course_world() -> Scenario:
 # first one: one line, what is wrong and where.
 
 FORMAT_VERSION = 1
+
+MAX_FILE_BYTES = 1 << 20
+"""A scenario file is at most 1 MiB (the course world is 4 KiB); a bigger one is refused before
+it is parsed, so a 50 MB file cannot tie up ``--check`` for minutes."""
+
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
+"""A scenario's ``name`` names its default recording (``recordings/NAME.mcap``), so it is a plain
+file name: letters, digits, ``_ . -``, at most 64 characters, no ``..``, no path separator."""
+
+RANGES: dict[str, tuple[float, float, str]] = {
+    "coordinate": (-100.0, 100.0, "m"),
+    "yaw": (-2 * math.pi, 2 * math.pi, "rad"),
+    "wall.length": (0.01, 50.0, "m"),
+    "wall.thickness": (0.01, 2.0, "m"),
+    "wall.height": (0.05, 10.0, "m"),
+    "box.z": (0.0, 10.0, "m"),
+    "box.size": (0.01, 50.0, "m"),
+    "cylinder.radius": (0.01, 10.0, "m"),
+    "cylinder.height": (0.01, 10.0, "m"),
+    "sphere.radius": (0.01, 10.0, "m"),
+    "marker.z": (0.05, 2.0, "m"),
+    "marker.size": (0.01, 1.0, "m"),
+    "camera.width": (16, 4096, "px"),
+    "camera.height": (16, 4096, "px"),
+    "camera.rate_hz": (0.5, 60.0, "Hz"),
+    "camera.hfov": (0.1, 3.0, "rad"),
+    "time_limit_s": (1.0, 3600.0, "s"),
+    "seed": (0, 2**32 - 1, ""),
+}
+"""Every number a scenario holds, with its range (inclusive) and unit: checked on load, listed
+in docs/scenario.md. Coordinates are x, y of everything in ``map``."""
+
+COUNTS: dict[str, tuple[int, int]] = {
+    "walls": (1, 1000),
+    "boxes": (0, 1000),
+    "cylinders": (0, 1000),
+    "spheres": (0, 1000),
+    "markers": (1, 250),
+    "aruco_lookup_locations": (1, 50),
+}
+"""How many of each a scenario may hold."""
+
 DICTIONARIES: dict[str, int] = {
     f"DICT_{n}X{n}_{k}": k for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)
 } | {"DICT_ARUCO_ORIGINAL": 1024}
@@ -267,6 +309,19 @@ DICTIONARIES: dict[str, int] = {
 
 def _err(source: str, path: str, problem: str) -> InvalidScenario:
     return InvalidScenario(f"{source}: {path}: {problem}")
+
+
+def _in_range(source: str, path: str, value: float, key: str) -> None:
+    lo, hi, unit = RANGES[key]
+    if not (lo <= value <= hi):
+        u = f" {unit}" if unit else ""
+        raise _err(source, path, f"must be between {lo:g} and {hi:g}{u}, got {value!r}")
+
+
+def _check_count(source: str, path: str, n: int) -> None:
+    lo, hi = COUNTS[path]
+    if not (lo <= n <= hi):
+        raise _err(source, path, f"holds {n}; a scenario has {lo} to {hi}")
 
 
 def _check_keys(
@@ -310,6 +365,7 @@ def _str(source: str, path: str, value: Any) -> str:
 def _list(source: str, path: str, value: Any) -> list[dict[str, Any]]:
     if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
         raise _err(source, path, "must be an array of tables ([[...]])")
+    _check_count(source, path, len(value))  # before parsing: a huge count is refused at once
     return value
 
 
@@ -381,6 +437,11 @@ def _parse_xy(src: str, path: str, value: Any) -> tuple[float, float]:
 
 def from_toml(text: str, source: str = "<string>") -> Scenario:
     """Parse and validate a scenario; :class:`InvalidScenario` names the first bad field."""
+    if len(text) > MAX_FILE_BYTES:
+        raise InvalidScenario(
+            f"{source}: the file holds {len(text)} characters; a scenario is at most "
+            f"{MAX_FILE_BYTES} (1 MiB)"
+        )
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -448,6 +509,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
     loc = data["aruco_lookup_locations"]
     if not isinstance(loc, dict) or not loc:
         raise _err(src, "aruco_lookup_locations", "must be a table of target_1 = [x, y], ...")
+    _check_count(src, "aruco_lookup_locations", len(loc))
     for key in loc:
         if not (key.startswith("target_") and key[7:].isdigit() and int(key[7:]) >= 1):
             raise _err(src, f"aruco_lookup_locations.{key}", "unknown field (expected target_N)")
@@ -517,12 +579,89 @@ def _parse_sphere(src: str, path: str, t: dict[str, Any]) -> Sphere:
     )
 
 
+def _check_name(source: str, name: str) -> None:
+    if not NAME_PATTERN.fullmatch(name) or ".." in name:
+        raise _err(
+            source,
+            "name",
+            f"{name!r} is not a plain file name (it names recordings/NAME.mcap): use letters, "
+            "digits, '_', '.', '-', at most 64 characters",
+        )
+
+
+def check_ranges(scn: Scenario, source: str = "scenario") -> None:
+    """Every number within :data:`RANGES`, every list within :data:`COUNTS` (names in messages
+    are the TOML file's: ``walls[3].length``)."""
+    for key, n in (
+        ("walls", len(scn.walls)),
+        ("boxes", len(scn.boxes)),
+        ("cylinders", len(scn.cylinders)),
+        ("spheres", len(scn.spheres)),
+        ("markers", len(scn.markers)),
+        ("aruco_lookup_locations", len(scn.targets)),
+    ):
+        _check_count(source, key, n)
+    checks: list[tuple[str, float, str]] = []
+
+    def xy(path: str, x: float, y: float) -> None:
+        checks.extend([(f"{path}.x", x, "coordinate"), (f"{path}.y", y, "coordinate")])
+
+    for i, w in enumerate(scn.walls):
+        p = f"walls[{i}]"
+        xy(p, w.x, w.y)
+        checks += [
+            (f"{p}.yaw", w.yaw, "yaw"),
+            (f"{p}.length", w.size_x, "wall.length"),
+            (f"{p}.thickness", w.size_y, "wall.thickness"),
+            (f"{p}.height", w.size_z, "wall.height"),
+        ]
+    for i, b in enumerate(scn.boxes):
+        p = f"boxes[{i}]"
+        xy(p, b.x, b.y)
+        checks += [(f"{p}.z", b.z, "box.z"), (f"{p}.yaw", b.yaw, "yaw")]
+        checks += [(f"{p}.size_{a}", getattr(b, f"size_{a}"), "box.size") for a in "xyz"]
+    for i, c in enumerate(scn.cylinders):
+        p = f"cylinders[{i}]"
+        xy(p, c.x, c.y)
+        checks += [(f"{p}.radius", c.radius, "cylinder.radius")]
+        checks += [(f"{p}.height", c.height, "cylinder.height")]
+    for i, sp in enumerate(scn.spheres):
+        xy(f"spheres[{i}]", sp.x, sp.y)
+        checks.append((f"spheres[{i}].radius", sp.radius, "sphere.radius"))
+    for i, m in enumerate(scn.markers):
+        p = f"markers[{i}]"
+        xy(p, m.x, m.y)
+        checks += [(f"{p}.z", m.z, "marker.z"), (f"{p}.yaw", m.yaw, "yaw")]
+        checks.append((f"{p}.size", m.size, "marker.size"))
+    for i, (tx, ty) in enumerate(scn.targets):
+        xy(f"aruco_lookup_locations.target_{i + 1}", tx, ty)
+    for r in (scn.explorer, scn.follower):
+        xy(f"robots.{r.name}", r.x, r.y)
+        checks.append((f"robots.{r.name}.yaw", r.yaw, "yaw"))
+    cam = scn.camera
+    checks += [
+        ("camera.width", cam.width, "camera.width"),
+        ("camera.height", cam.height, "camera.height"),
+        ("camera.rate_hz", cam.rate_hz, "camera.rate_hz"),
+        ("camera.hfov", cam.hfov, "camera.hfov"),
+        ("time_limit_s", scn.time_limit_s, "time_limit_s"),
+    ]
+    if scn.seed is not None:
+        checks.append(("seed", scn.seed, "seed"))
+    for path, value, key in checks:
+        if not math.isfinite(value):
+            raise _err(source, path, f"must be finite, got {value!r}")
+        _in_range(source, path, value, key)
+
+
 def validate(scn: Scenario, source: str = "scenario") -> None:
     """Semantic checks that hold for constructed values too (not only parsed files)."""
+    _check_name(source, scn.name)
     if not scn.walls:
         raise _err(source, "walls", "at least one wall is needed")
     if not scn.targets:
         raise _err(source, "aruco_lookup_locations", "at least one target is needed")
+    check_ranges(scn, source)
     seen: dict[int, int] = {}
     for i, m in enumerate(scn.markers):
         if m.id in seen:
@@ -627,12 +766,74 @@ def to_toml(scn: Scenario) -> str:
         for m in scn.markers
     ]
     # tomli_w splits every array over lines; keep [x, y] pairs on one line for people
-    return re.sub(r"\[\n\s+([^,\n]+),\n\s+([^,\n]+),\n\]", r"[\1, \2]", tomli_w.dumps(data))
+    text = re.sub(r"\[\n\s+([^,\n]+),\n\s+([^,\n]+),\n\]", r"[\1, \2]", tomli_w.dumps(data))
+    return _commented(text)
+
+
+_HEADER = """\
+# A usar-replay scenario: the world and the mission's parameters (docs/scenario.md).
+# Units: metres, radians (yaw counter-clockwise from +x, map frame: x east, y north), seconds.
+# Every number has a range checked on load; `usar scenario --scenario FILE --check` checks
+# that the world can be completed.
+"""
+
+_LINE_COMMENTS: dict[tuple[str, str], str] = {
+    ("", "format_version"): "file format (this usar-replay reads 1)",
+    ("", "name"): "names the default output recordings/NAME.mcap: letters, digits, _ . -",
+    ("", "time_limit_s"): "s, the mission's time limit (1..3600)",
+    ("", "seed"): "the variant seed this world came from",
+    ("", "walls"): "x, y: centre (m); yaw (rad); length (m, 0.01..50); thickness (m, 0.15); "
+    "height (m, 1)",
+    ("", "boxes"): "x, y, z: centre (m); size_x, size_y, size_z (m, 0.01..50); yaw (rad)",
+    ("", "cylinders"): "x, y: centre (m); radius (m, 0.01..10); height (m, 0.01..10)",
+    ("", "spheres"): "x, y: centre (m); radius (m, 0.01..10), resting on the floor",
+    ("", "markers"): "x, y, z: face centre (m, z 0.05..2); yaw (rad): the face looks along +x; "
+    "size (m)",
+    ("camera", "width"): "px (16..4096)",
+    ("camera", "height"): "px (16..4096)",
+    ("camera", "rate_hz"): "Hz, frames per second (0.5..60)",
+    ("camera", "hfov"): "rad, horizontal field of view (0.1..3.0)",
+    ("camera", "encoding"): "recorded frames: png (lossless) or jpeg",
+    ("robots", "x"): "m",
+    ("robots", "y"): "m",
+    ("robots", "yaw"): "rad",
+    ("aruco_lookup_locations", ""): "target_N = [x, y] in m, visited in order",
+}
+
+
+def _commented(text: str) -> str:
+    """``text`` with a header and a comment with units on each key (TOML ignores them)."""
+    out = [_HEADER]
+    section = ""
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("["):
+            section = stripped.strip("[]").split(".")[0]
+            out.append(line)
+            note = _LINE_COMMENTS.get((section, ""))
+            if note:
+                out.append(f"# {note}")
+            continue
+        key = line.split(" = ", 1)[0] if " = " in line and not line.startswith(" ") else ""
+        note = _LINE_COMMENTS.get((section, key)) if key else None
+        if note and section == "" and key in ("walls", "boxes", "cylinders", "spheres", "markers"):
+            out.append(f"# {key}: {note}")
+            out.append(line)
+        elif note:
+            out.append(f"{line}  # {note}")
+        else:
+            out.append(line)
+    return "\n".join(out) + "\n"
 
 
 def load(path: str | os.PathLike[str]) -> Scenario:
     """Read a scenario file (a missing file is an :class:`InvalidScenario` too)."""
     try:
+        size = Path(path).stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise InvalidScenario(
+                f"{path}: the file is {size} bytes; a scenario is at most {MAX_FILE_BYTES} (1 MiB)"
+            )
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError as err:
         raise InvalidScenario(f"{path}: no such scenario file") from err
@@ -641,5 +842,8 @@ def load(path: str | os.PathLike[str]) -> Scenario:
     return from_toml(text, source=str(path))
 
 
-def save(scn: Scenario, path: str | os.PathLike[str]) -> None:
-    Path(path).write_text(to_toml(scn), encoding="utf-8")
+def save(scn: Scenario, path: str | os.PathLike[str], *, overwrite: bool = False) -> None:
+    """Write ``scn`` as TOML, atomically (never a half-written or 0-byte file)."""
+    from usar_replay.outfiles import write_text
+
+    write_text(path, to_toml(scn), overwrite=overwrite)

@@ -398,9 +398,11 @@ def _child_entry(argv: Sequence[str]) -> None:
     """``python -m usar_replay.worker FD``: read the setup from the socket FD, then serve."""
     import signal
 
-    # Ctrl-C in a terminal reaches the whole process group: the recorder handles it (closing
-    # the log, then this process); the mission must not turn it into a "crash" of its own
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C, a closed terminal or `kill` of the group reach this process too: the recorder
+    # handles them (closing the log, then this process); the mission must not turn one into a
+    # "crash" of its own. If the recorder dies, the socket closes and this process ends.
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_IGN)
     conn = multiprocessing.connection.Connection(int(argv[1]))
     setup = pickle.loads(conn.recv_bytes())  # from the parent, which is trusted
     _child_main(conn, setup)
