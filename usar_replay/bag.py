@@ -263,7 +263,7 @@ class BagWriter:
                     "end_time_ns": str(self._last_time),
                 },
             )
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]
             self._file.flush()
         except OSError as err:
             raise self._disk_failure(err) from err
