@@ -270,3 +270,26 @@ def test_replay_bad_inputs_are_one_line(
     bad_th = tmp_path / "t.toml"
     bad_th.write_text("[thresholds]\nhome_m = 0\n")
     one_error_line(usar("replay", "--grade", "--thresholds", str(bad_th), str(room_log[0])), 2)
+
+
+def test_replay_writes_machine_reports_without_grading(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """--json/--junit/--csv work without --grade: the comparison itself, versioned."""
+    import json
+    import xml.etree.ElementTree as ET
+
+    js, xml, csv_ = tmp_path / "r.json", tmp_path / "r.xml", tmp_path / "r.csv"
+    args = ["replay", "--json", str(js), "--junit", str(xml), "--csv", str(csv_), str(room_log[0])]
+    assert main(args) == 0
+    doc = json.loads(js.read_text())
+    assert doc["schema_version"] == 1 and doc["recordings"] == []
+    rep = doc["replay"]
+    assert rep["identical"] and rep["first_divergence"] is None and rep["mission"] == "builtin"
+    assert rep["digest_sha256"] == outputs_digest(room_log[0])
+    assert {t["topic"] for t in rep["topics"]} >= {"/fiducial_transforms", "/follower/cmd_vel"}
+    root = ET.parse(xml).getroot()
+    assert root.get("failures") == "0" and int(root.get("tests", "0")) == len(rep["topics"]) + 1
+    assert csv_.read_text().splitlines()[0].startswith("schema_version,source,topic")
+    # an output over the input is refused before any work
+    one_error_line(usar("replay", "--json", str(room_log[0]), str(room_log[0])), 2, "input")

@@ -21,7 +21,7 @@ import argparse
 import dataclasses
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
@@ -31,6 +31,7 @@ from usar_replay.errors import UsageError, UsarError
 if TYPE_CHECKING:
     from usar_replay.grade import GradeReport
     from usar_replay.record import Progress
+    from usar_replay.replay import ReplayReport
     from usar_replay.scenario import Scenario
     from usar_replay.settings import RunSettings, Thresholds
     from usar_replay.worker import MissionLimits
@@ -489,6 +490,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     from usar_replay.reports import to_table
     from usar_replay.run import open_run
 
+    _check_outputs(args, [args.file])  # before minutes of work, not after
     run = open_run(args.file)
     changed = bool(args.set or args.settings)
     settings = _run_settings(args, run.settings) if changed else None
@@ -510,17 +512,19 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     code = EXIT_OK if report.identical or args.expect_changes else EXIT_FAIL
     if report.mission_failure is not None:
         code = EXIT_MISSION
+    grades = []
     if grader is not None:
         g = grader.report(
             f"{args.file} (replayed)",
             log_complete=not report.log_problem,
             log_problem=report.log_problem,
         )
+        grades.append(g)
         print()
         print(to_table(g))
-        _reports_out(args, [g])
         if not g.passed and code == EXIT_OK:
             code = EXIT_FAIL
+    _replay_reports_out(args, report, grades)
     if report.log_problem:
         print(
             f"usar: {args.file}: the log is incomplete ({report.log_problem}); "
@@ -529,6 +533,29 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         )
         return EXIT_INCOMPLETE
     return code
+
+
+def _replay_reports_out(
+    args: argparse.Namespace, report: ReplayReport, grades: Sequence[GradeReport]
+) -> None:
+    """``usar replay --json/--junit/--csv``: the comparison (and the grade with ``--grade``)."""
+    from usar_replay import reports as rep
+    from usar_replay.outfiles import write_text
+
+    outputs: tuple[tuple[str, str | None, Callable[[], str]], ...] = (
+        ("--json", args.json, lambda: rep.replay_to_json(report, grades)),
+        ("--junit", args.junit, lambda: rep.replay_to_junit(report, grades)),
+        ("--csv", args.csv, lambda: rep.to_csv(grades) if grades else rep.replay_to_csv(report)),
+    )
+    for opt, path, make in outputs:
+        if path:
+            write_text(
+                path,
+                make(),
+                overwrite=args.overwrite,
+                inputs=_output_inputs(args, ()),
+                option=opt,
+            )
 
 
 def _mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
