@@ -44,7 +44,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal, overload
 
-from usar_replay import msgs
+from usar_replay import contract, msgs
 
 __all__ = [
     "Buffer",
@@ -815,7 +815,7 @@ def _connectivity_text(target: str, source: str) -> str:
 class TransformBroadcaster:
     """Turns transforms into the ``TFMessage`` to publish on ``/tf`` (the caller publishes)."""
 
-    topic = "/tf"
+    topic = contract.TF
 
     def send_transform(
         self, transform: msgs.TransformStamped | Sequence[msgs.TransformStamped]
@@ -827,7 +827,7 @@ class TransformBroadcaster:
 class StaticTransformBroadcaster(TransformBroadcaster):
     """The same for ``/tf_static`` (latched: transient-local QoS in the log)."""
 
-    topic = "/tf_static"
+    topic = contract.TF_STATIC
 
 
 class TransformListener:
@@ -846,7 +846,7 @@ class TransformListener:
             self.buffer.set_transform_static(t, self.authority)
 
     def feed(self, topic: str, msg: msgs.TFMessage) -> None:
-        (self.on_tf_static if topic == "/tf_static" else self.on_tf)(msg)
+        (self.on_tf_static if topic == contract.TF_STATIC else self.on_tf)(msg)
 
 
 def frames_of(messages: Iterable[msgs.TFMessage]) -> set[str]:
