@@ -31,16 +31,16 @@ from usar_replay.cli import main
 from usar_replay.detect import DetectorParams, detect_with_corners
 from usar_replay.grade import grade_file
 from usar_replay.record import RecordResult
+from usar_replay.contract import IMAGE as CAMERA_TOPIC
+from usar_replay.run import open_run
+from usar_replay.scene import escape_path_part, frame_entity_path, frame_entity_paths
 from usar_replay.view import (
-    CAMERA_TOPIC,
     Output,
     ViewResult,
     choose_output,
     default_rrd_path,
-    frame_entity_path,
-    frame_entity_paths,
     open_command,
-    view_file,
+    view_run,
 )
 
 OPTICAL = (
@@ -128,7 +128,7 @@ def viewed(room_log: tuple[Path, RecordResult], tmp_path_factory: pytest.TempPat
     """The room mission written to an .rrd once (with the rubric), and read back."""
     log, _ = room_log
     rrd = tmp_path_factory.mktemp("view") / "room.rrd"
-    result = view_file(log, Output(rrd=rrd), grade=True)
+    result = view_run(open_run(log), Output(rrd=rrd), grade=True)
     return Viewed(log, rrd, result, read_rrd(rrd), BagReader(log))
 
 

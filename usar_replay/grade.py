@@ -647,3 +647,17 @@ def grade_file(path: str | Path, thresholds: Thresholds | None = None) -> GradeR
     elif reader.status != "complete":
         problem = f"the recording was {reader.status}"
     return grader.report(str(path), log_complete=not problem, log_problem=problem)
+
+
+from usar_replay.run import Run  # noqa: E402 - kept at the end: the grade branch has the real one
+
+
+def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
+    """:func:`grade_file` on an opened run (minimal stand-in; the grade branch has the real one)."""
+    grader = Grader(run.require_scenario(), thresholds)
+    grader.start_ns = run.start_ns
+    run.require_topics(REQUIRED_TOPICS)
+    for m in run.messages(GRADE_TOPICS):
+        grader.feed(m.topic, m.msg, m.log_time_ns)
+    problem = run.problem()
+    return grader.report(str(run.path), log_complete=not problem, log_problem=problem)
