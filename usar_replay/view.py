@@ -24,6 +24,7 @@ bag decoder and the grader are imported inside :func:`view_run`, the workflow en
 from __future__ import annotations
 
 import contextlib
+import errno
 import ipaddress
 import os
 import shlex
@@ -670,11 +671,26 @@ def _stream(
     return scene, problem
 
 
-def _write_failed(rrd: Path, err: BaseException) -> UsageError:
-    free = shutil.disk_usage(rrd.parent).free if rrd.parent.exists() else 0
-    if free < (16 << 20):
-        return UsageError(f"{rrd}: the disk is full; free some space and run again")
-    return UsageError(f"{rrd}: cannot write the view ({_first_line(err)}); choose another path")
+def _write_failed(rrd: Path, part: Path, err: BaseException) -> UsageError:
+    """rerun's file writer says only that it stopped; a probe write beside the file finds the
+    reason (a full disk, a file size limit) while the partial file still holds its space."""
+    probe = part.with_name(part.name + ".probe")
+    reason = ""
+    try:
+        with open(probe, "wb") as f:
+            f.write(bytes(1 << 20))
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as probe_err:
+        if probe_err.errno == errno.ENOSPC:
+            return UsageError(f"{rrd}: the disk is full; free some space and run again")
+        reason = probe_err.strerror or str(probe_err)
+    finally:
+        with contextlib.suppress(OSError):
+            probe.unlink()
+    return UsageError(
+        f"{rrd}: cannot write the view ({reason or _first_line(err)}); choose another path"
+    )
 
 
 def view_run(
@@ -745,7 +761,7 @@ def view_run(
             scene, problem = _stream(rec, run, report, grade_problem)
         except RuntimeError as err:  # rerun's sinks: the file writer or the viewer failed
             if output.rrd is not None and part is not None:
-                raise _write_failed(output.rrd, err) from err
+                raise _write_failed(output.rrd, part, err) from err
             raise UsageError(
                 f"the rerun viewer went away while the view was sent ({_first_line(err)}); "
                 "open it again, or write a file with --save OUT.rrd"
