@@ -472,6 +472,7 @@ def test_cli_web_serves_until_ctrl_c(room_log: tuple[Path, RecordResult]) -> Non
         _, err = proc.communicate(timeout=30)
         assert proc.returncode == 130
         assert err.strip() == "usar: interrupted"
+        assert _listening_on(web) == _listening_on(grpc) == set()  # its server stopped too
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -29,6 +29,7 @@ import ipaddress
 import os
 import shlex
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -437,6 +438,20 @@ def _rerun_executable() -> str | None:
     return str(sibling) if sibling.exists() else found
 
 
+def _rerun_binary() -> str | None:
+    """The viewer binary itself, for starting it as a child process: the ``rerun`` command is a
+    Python wrapper that runs this binary as *its* child, so stopping the wrapper would leave
+    the binary running (and its ports taken)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin is not None:
+        binary = Path(spec.origin).parent / "rerun"
+        if binary.is_file() and os.access(binary, os.X_OK):
+            return str(binary)
+    return _rerun_executable()
+
+
 def open_command(rrd: str | os.PathLike[str]) -> str:
     """The exact shell command that opens ``rrd`` in the viewer (``rerun PATH``)."""
     exe = _rerun_executable() or "rerun"
@@ -486,7 +501,7 @@ class ViewerProcess:
     def start(cls, *, web: bool, bind: str, grpc_port: int, web_port: int) -> ViewerProcess:
         """Start the native viewer (``web`` False) or the web viewer, and wait until it
         listens. Raises :class:`UsageError` when it cannot start, saying why in one line."""
-        exe = _rerun_executable()
+        exe = _rerun_binary()
         if exe is None:
             raise UsageError("the `rerun` command is not installed; use --save OUT.rrd")
         host = _local_host(bind)
@@ -511,7 +526,8 @@ class ViewerProcess:
                 stdout=subprocess.DEVNULL,
                 stderr=errors,
                 env=env,
-                start_new_session=not web,  # the native viewer outlives this command
+                start_new_session=True,  # the native viewer outlives this command; the web
+                # server is stopped as a group (stop()), whatever children it has
             )
         except OSError as err:
             errors.close()
@@ -526,25 +542,32 @@ class ViewerProcess:
         errors.close()
         web_url = None
         if web:
-            shown = "localhost" if host in ("127.0.0.1", "::1") else _shown_host(host)
+            shown = _shown_host(bind)
             data = f"rerun+http://{_url_host(shown)}:{grpc_port}/proxy"
             web_url = f"http://{_url_host(shown)}:{web_port}/?url={quote(data, safe=':/')}"
         return cls(grpc_url, proc, web_url)
 
     def stop(self) -> None:
         """Stop a web viewer's server (a native viewer is the user's to close)."""
-        if self.proc is not None and self.proc.poll() is None and self.web_url is not None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        if self.proc is None or self.web_url is None or self.proc.poll() is not None:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.proc.pid, signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
 
 
-def _shown_host(host: str) -> str:
-    """The name a remote browser uses for this machine when the server listens everywhere."""
-    return socket.gethostname() if host == "127.0.0.1" else host
+def _shown_host(bind: str) -> str:
+    """The name a browser uses for a server bound to ``bind``: ``localhost`` for loopback, this
+    machine's name when it listens on every interface (a remote browser needs it)."""
+    ip = ipaddress.ip_address(bind)
+    if ip.is_loopback:
+        return "localhost"
+    return socket.gethostname() if ip.is_unspecified else bind
 
 
 def _wait_listening(
