@@ -508,8 +508,9 @@ class ViewerProcess:
         grpc_url = f"rerun+http://{_url_host(host)}:{grpc_port}/proxy"
         if not web and _port_open(host, grpc_port):
             return cls(grpc_url)  # a viewer is already open there: use it, as rerun does
-        for port, option in ((grpc_port, "--grpc-port"), (web_port, "--web-port")):
-            if (web or option == "--grpc-port") and _port_open(host, port):
+        wanted = [(grpc_port, "--grpc-port"), *([(web_port, "--web-port")] if web else [])]
+        for port, option in wanted:
+            if _port_open(host, port):
                 raise UsageError(f"port {port} is in use; pick another with {option} N")
         args = [exe, "--bind", bind, "--port", str(grpc_port)]
         if web:
@@ -716,6 +717,40 @@ def _write_failed(rrd: Path, part: Path, err: BaseException) -> UsageError:
     )
 
 
+def _start_viewer(
+    log: Path, output: Output, *, overwrite: bool, grpc_port: int, web_port: int, bind: str
+) -> tuple[ViewerProcess | None, Output, str]:
+    """Start the viewer ``output`` asks for. A native viewer that cannot start is replaced by
+    the file next to the log (returned, with why); a web viewer that cannot start is an error."""
+    if not (output.spawn or output.web):
+        return None, output, ""
+    try:
+        viewer = ViewerProcess.start(
+            web=output.web, bind=bind, grpc_port=grpc_port, web_port=web_port
+        )
+    except UsageError as err:
+        if output.web:
+            raise
+        fallback = default_rrd_path(log)
+        try:
+            check_rrd(fallback, log, overwrite=overwrite, option="")
+        except UsageError as no_file:
+            raise UsageError(f"{err}; and {no_file}") from no_file
+        return None, Output(rrd=fallback), str(err)
+    return viewer, output, ""
+
+
+def _temporary(rrd: Path) -> Path:
+    """The temporary file beside ``rrd`` that rerun writes (renamed to ``rrd`` when done)."""
+    part = rrd.with_name(f".{rrd.name}.{os.getpid()}.part")
+    try:
+        rrd.parent.mkdir(parents=True, exist_ok=True)
+        part.touch()
+    except OSError as err:
+        raise UsageError(f"{rrd}: cannot write here ({err.strerror}); choose another path") from err
+    return part
+
+
 def view_run(
     run: Run,
     output: Output,
@@ -746,39 +781,18 @@ def view_run(
             report = grade_run(run)
         except UsarError as err:
             grade_problem = f"cannot grade: {err}"
-    viewer: ViewerProcess | None = None
-    viewer_problem = ""
-    if output.spawn or output.web:
-        try:
-            viewer = ViewerProcess.start(
-                web=output.web, bind=bind, grpc_port=grpc_port, web_port=web_port
-            )
-        except UsageError as err:
-            if output.web:
-                raise
-            viewer_problem = str(err)
-            fallback = default_rrd_path(run.path)
-            try:
-                check_rrd(fallback, run.path, overwrite=overwrite, option="")
-            except UsageError as no_file:
-                raise UsageError(f"{err}; and {no_file}") from no_file
-            output = Output(rrd=fallback)
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-    sinks: list[Any] = []
+    viewer, output, viewer_problem = _start_viewer(
+        run.path, output, overwrite=overwrite, grpc_port=grpc_port, web_port=web_port, bind=bind
+    )
     part: Path | None = None
-    if output.rrd is not None:
-        part = output.rrd.with_name(f".{output.rrd.name}.{os.getpid()}.part")
-        try:
-            output.rrd.parent.mkdir(parents=True, exist_ok=True)
-            part.touch()
-        except OSError as err:
-            raise UsageError(
-                f"{output.rrd}: cannot write here ({err.strerror}); choose another path"
-            ) from err
-        sinks.append(rr.FileSink(part))
-    if viewer is not None:
-        sinks.append(rr.GrpcSink(viewer.grpc_url))
     try:
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        sinks: list[Any] = []
+        if output.rrd is not None:
+            part = _temporary(output.rrd)
+            sinks.append(rr.FileSink(part))
+        if viewer is not None:
+            sinks.append(rr.GrpcSink(viewer.grpc_url))
         rec.set_sinks(*sinks)
         try:
             scene, problem = _stream(rec, run, report, grade_problem)
