@@ -2,7 +2,8 @@
 
     python bench/bench_view.py [LOG.mcap ...]   # default: recordings/course.mcap
 
-Measures :func:`usar_replay.view.view_file` in-process (module imports excluded), three times,
+Measures :func:`usar_replay.view.view_run` on an opened run (module imports excluded; the log is
+opened for each repeat, as the command does), three times,
 and prints the best and the median with camera frames per second. On the course log (477 sim-s,
 4776 frames of 640x480 PNG, 71736 messages) the write took about 5 s on a 2-core machine.
 The time splits roughly evenly between reading the MCAP, decoding CDR and collecting columns;
@@ -17,16 +18,17 @@ import tempfile
 import time
 from pathlib import Path
 
-from usar_replay.bag import BagReader
-from usar_replay.view import CAMERA_TOPIC, Output, view_file
+from usar_replay.contract import IMAGE
+from usar_replay.run import open_run
+from usar_replay.view import Output, view_run
 
 DEFAULT_LOG = Path("recordings/course.mcap")
 
 
 def bench(log: Path, repeats: int = 3, *, grade: bool = False) -> None:
     """Write ``log``'s view ``repeats`` times into a temporary directory and print the timings."""
-    reader = BagReader(log)
-    topic = reader.topics.get(CAMERA_TOPIC)
+    reader = open_run(log).reader
+    topic = reader.topics.get(IMAGE)
     frames = topic.count if topic else 0
     sim_s = (reader.end_ns - reader.start_ns) / 1e9
     times: list[float] = []
@@ -35,7 +37,7 @@ def bench(log: Path, repeats: int = 3, *, grade: bool = False) -> None:
         out = Path(tmp) / "bench.rrd"
         for _ in range(repeats):
             t0 = time.perf_counter()
-            view_file(log, Output(rrd=out), grade=grade)
+            view_run(open_run(log), Output(rrd=out), grade=grade, overwrite=True)
             times.append(time.perf_counter() - t0)
             size = out.stat().st_size
     best, median = min(times), statistics.median(times)

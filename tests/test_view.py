@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import resource
 import signal
 import socket
 import subprocess
@@ -24,23 +25,25 @@ import numpy as np
 import pyarrow as pa
 import pytest
 import rerun as rr
+from clitools import one_error_line, usar
 
-from usar_replay import msgs
+from usar_replay import bag, msgs
 from usar_replay.bag import BagReader
 from usar_replay.cli import main
+from usar_replay.contract import IMAGE as CAMERA_TOPIC
+from usar_replay.contract import SCENARIO_ATTACHMENT
 from usar_replay.detect import DetectorParams, detect_with_corners
 from usar_replay.grade import grade_file
 from usar_replay.record import RecordResult
+from usar_replay.run import open_run
+from usar_replay.scene import escape_path_part, frame_entity_path, frame_entity_paths
 from usar_replay.view import (
-    CAMERA_TOPIC,
     Output,
     ViewResult,
     choose_output,
     default_rrd_path,
-    frame_entity_path,
-    frame_entity_paths,
     open_command,
-    view_file,
+    view_run,
 )
 
 OPTICAL = (
@@ -128,7 +131,7 @@ def viewed(room_log: tuple[Path, RecordResult], tmp_path_factory: pytest.TempPat
     """The room mission written to an .rrd once (with the rubric), and read back."""
     log, _ = room_log
     rrd = tmp_path_factory.mktemp("view") / "room.rrd"
-    result = view_file(log, Output(rrd=rrd), grade=True)
+    result = view_run(open_run(log), Output(rrd=rrd), grade=True)
     return Viewed(log, rrd, result, read_rrd(rrd), BagReader(log))
 
 
@@ -200,6 +203,7 @@ def test_blueprint_and_footer_are_written(viewed: Viewed) -> None:
     assert len(reader.blueprints()) == 1
     assert len(reader.store()) > 10  # LazyStore needs the footer: the file was finalised
     assert not viewed.rrd.with_name("room.rrd.part").exists()
+    assert list(viewed.rrd.parent.iterdir()) == [viewed.rrd]  # no temporary file left
 
 
 def test_pinhole_matches_the_camera_info(viewed: Viewed) -> None:
@@ -310,6 +314,15 @@ def test_frame_entity_paths_follow_the_tree_and_sanitise() -> None:
     assert paths["/x"] == "/a/b/c/d\\ e/x"
     assert paths["loop1"].count("loop") <= 2  # a cycle is cut, not followed forever
     assert frame_entity_path({}, "camera") == "/camera"
+
+
+def test_escape_path_part_is_rerun_own_escaping() -> None:
+    """The pure part escapes frame ids without rerun; it must agree with rerun's function."""
+    chars = [chr(c) for c in range(0, 0x180)] + ["日", "\u00a0", "\u2028", "😀", "ß"]
+    for c in chars:
+        assert escape_path_part(c) == rr.escape_entity_path_part(c), repr(c)
+    for frame in ("explorer_tf/odom", "cam 1:left$", "a.b-c_d", "../x"):
+        assert escape_path_part(frame) == rr.escape_entity_path_part(frame)
 
 
 def test_choose_output_rules(tmp_path: Path) -> None:
@@ -426,6 +439,7 @@ def test_cli_missing_file_is_one_line_exit_2(tmp_path: Path) -> None:
     assert done.stderr.count("\n") == 1 and "no such file" in done.stderr
     assert "Traceback" not in done.stderr
     assert not out.exists() and not out.with_name("never.rrd.part").exists()
+    assert list(tmp_path.iterdir()) == []
 
 
 def _free_port() -> int:
@@ -452,11 +466,155 @@ def test_cli_web_serves_until_ctrl_c(room_log: tuple[Path, RecordResult]) -> Non
         with urllib.request.urlopen(m.group(0), timeout=20) as page:
             assert page.status == 200 and b"<html" in page.read().lower()
         assert proc.poll() is None  # still serving
+        # the page and its data port listen on the same address (--bind, 127.0.0.1 by default)
+        assert _listening_on(web) == _listening_on(grpc) == {"127.0.0.1"}
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=30)
         assert proc.returncode == 130
         assert err.strip() == "usar: interrupted"
+        assert _listening_on(web) == _listening_on(grpc) == set()  # its server stopped too
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def _listening_on(port: int) -> set[str]:
+    """The IPv4 addresses a TCP socket listens on at ``port`` (from /proc/net/tcp)."""
+    out: set[str] = set()
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        local, state = line.split()[1], line.split()[3]
+        addr, hex_port = local.split(":")
+        if state == "0A" and int(hex_port, 16) == port:
+            out.add(socket.inet_ntoa(bytes.fromhex(addr)[::-1]))
+    return out
+
+
+# --- outputs are never lost or left half-written (issue 13) --------------------------------------
+
+
+def test_cli_never_writes_over_the_log(room_log: tuple[Path, RecordResult], tmp_path: Path) -> None:
+    log = tmp_path / "a.mcap"
+    log.write_bytes(room_log[0].read_bytes())
+    before = log.read_bytes()
+    for extra in ([], ["--overwrite"]):
+        done = usar("view", str(log), "--save", str(log), *extra)
+        one_error_line(done, 2, "--save", "input")
+    same = usar("view", str(log), "--save", str(tmp_path / "." / "a.mcap"))
+    one_error_line(same, 2, "input")
+    assert log.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mcap"]
+
+
+def test_cli_existing_output_needs_overwrite(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    out = tmp_path / "old.rrd"
+    out.write_bytes(b"old view")
+    done = usar("view", str(room_log[0]), "--save", str(out))
+    one_error_line(done, 2, str(out), "exists", "--overwrite")
+    assert out.read_bytes() == b"old view"
+    done = usar("view", str(room_log[0]), "--save", str(out), "--overwrite")
+    assert done.returncode == 0, done.stderr
+    assert read_rrd(out)[IMAGE].rows("EncodedImage:blob") > 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.rrd"]
+
+
+def test_cli_default_output_next_to_the_log_is_not_replaced(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    log = tmp_path / "run.mcap"
+    log.write_bytes(room_log[0].read_bytes())
+    (tmp_path / "run.rrd").write_bytes(b"kept")
+    done = _usar("view", str(log), env=_no_display())
+    one_error_line(done, 2, "run.rrd", "exists", "--overwrite")
+    assert (tmp_path / "run.rrd").read_bytes() == b"kept"
+
+
+def test_cli_save_to_a_directory_is_one_line(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    target = tmp_path / "views"
+    target.mkdir()
+    done = usar("view", str(room_log[0]), "--save", str(target))
+    one_error_line(done, 2, "--save", "directory")
+    assert list(target.iterdir()) == [] and sorted(tmp_path.iterdir()) == [target]
+
+
+@pytest.mark.parametrize(
+    "option", [["--web-port", "99999"], ["--grpc-port", "0"], ["--web-port", "http"]]
+)
+def test_cli_ports_are_checked_by_the_parser(
+    room_log: tuple[Path, RecordResult], option: list[str]
+) -> None:
+    done = usar("view", str(room_log[0]), "--web", *option)
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert option[0] in last and "1-65535" in last
+
+
+def test_cli_bind_takes_an_ip_address(room_log: tuple[Path, RecordResult]) -> None:
+    done = usar("view", str(room_log[0]), "--web", "--bind", "example.org")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "--bind" in done.stderr.strip().splitlines()[-1]
+
+
+def _limit_file_size() -> None:
+    """In the child: files may not grow past 200 kB (what a full disk does to a writer)."""
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
+
+
+def test_cli_a_failed_write_leaves_nothing(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    out = tmp_path / "big.rrd"
+    done = subprocess.run(
+        [sys.executable, "-m", "usar_replay.cli", "view", str(room_log[0]), "--save", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+        preexec_fn=_limit_file_size,  # only sets a limit: safe before exec
+    )
+    one_error_line(done, 2, str(out), "File too large")
+    assert list(tmp_path.iterdir()) == []  # no .rrd, no 0-byte or partial temporary file
+
+
+def test_cli_invalid_scenario_attachment_is_shown_without_the_building_exit_3(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    src = BagReader(room_log[0])
+    bad = tmp_path / "bad.mcap"
+    with bag.BagWriter(bad) as w:
+        w.add_attachment(SCENARIO_ATTACHMENT, "application/toml", b"walls = 3", src.start_ns)
+        for m in src.messages(decode_messages=False):
+            w.write_raw(m.topic, m.msgtype, m.data, m.log_time_ns)
+    out = tmp_path / "bad.rrd"
+    done = usar("view", str(bad), "--save", str(out))
+    assert done.returncode == 3, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "scenario is invalid" in lines[0] and "Traceback" not in lines[0]
+    entities = read_rrd(out)
+    assert entities[IMAGE].rows("EncodedImage:blob") == src.topics[CAMERA_TOPIC].count
+    assert "/map/world/walls" not in entities
+    assert "scenario is invalid" in str(entities["/logs/view"].values("TextLog:text")[0])
+
+
+def test_cli_unusable_display_falls_back_to_a_file(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """DISPLAY names no X server: the viewer exits at once and the view goes to a file."""
+    if Path("/tmp/.X11-unix/X99").exists():
+        pytest.skip("display :99 exists here")
+    log = tmp_path / "shown.mcap"
+    log.write_bytes(room_log[0].read_bytes())
+    env = {**_no_display(), "DISPLAY": ":99"}
+    done = _usar("view", str(log), "--grpc-port", str(_free_port()), env=env)
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("usar: the rerun viewer did not start")
+    assert lines[0].endswith("wrote the view to a file")
+    assert done.stdout.strip().splitlines()[-1].endswith(str(tmp_path / "shown.rrd"))
+    assert read_rrd(tmp_path / "shown.rrd")[IMAGE].rows("EncodedImage:blob") > 0

@@ -593,12 +593,33 @@ def _mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
 def _cmd_view(args: argparse.Namespace) -> int:
     import os
 
-    from usar_replay.view import choose_output, open_command, view_file, wait_until_interrupted
+    # rerun's own log lines (a failed file write is two ERROR lines from its writer thread) would
+    # break the one-line error contract; the failure itself still raises and is reported below
+    os.environ.setdefault("RUST_LOG", "off")
+    from usar_replay.run import open_run
+    from usar_replay.view import (
+        check_rrd,
+        choose_output,
+        open_command,
+        view_run,
+        wait_until_interrupted,
+    )
 
     output = choose_output(args.file, save=args.save, web=args.web, env=os.environ)
-    result = view_file(
-        args.file, output, grade=args.grade, grpc_port=args.grpc_port, web_port=args.web_port
+    if output.rrd is not None:  # before any work: never over the log or an existing file
+        check_rrd(output.rrd, Path(args.file), overwrite=args.overwrite, option="--save")
+    run = open_run(args.file)
+    result = view_run(
+        run,
+        output,
+        grade=args.grade,
+        overwrite=args.overwrite,
+        grpc_port=args.grpc_port,
+        web_port=args.web_port,
+        bind=args.bind,
     )
+    if result.viewer_problem:
+        print(f"usar: {result.viewer_problem}; wrote the view to a file", file=sys.stderr)
     if result.rrd is not None:
         print(
             f"wrote {result.rrd} ({result.frames} camera frames, {result.messages} messages, "
@@ -607,8 +628,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
         print(open_command(result.rrd))
     if result.spawned:
         print(f"sent {args.file} to the rerun viewer ({result.frames} camera frames)")
-    if result.viewer_problem:
-        print(f"usar: {result.viewer_problem}; wrote the view to a file", file=sys.stderr)
     problems = [f"the log is incomplete ({result.problem})"] if result.problem else []
     problems += [result.grade_problem] if result.grade_problem else []
     if problems:
@@ -618,6 +637,27 @@ def _cmd_view(args: argparse.Namespace) -> int:
         print(f"serving the web viewer at {result.url} (Ctrl-C to stop)", flush=True)
         wait_until_interrupted(result)
     return EXIT_INCOMPLETE if problems else EXIT_OK
+
+
+def _address(text: str) -> str:
+    """An IP address for the parser (what ``rerun --bind`` takes)."""
+    import ipaddress
+
+    try:
+        return str(ipaddress.ip_address(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an IP address") from None
+
+
+def _port(text: str) -> int:
+    """A TCP port number for the parser (1-65535)."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number (1-65535)") from None
+    if not 1 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"{port} is not a port number (1-65535)")
+    return port
 
 
 def _grade_outputs(p: argparse.ArgumentParser) -> None:
@@ -721,8 +761,18 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--web", action="store_true", help="serve the web viewer until Ctrl-C")
     p.add_argument("--grade", action="store_true", help="add the rubric lines to the log view")
-    p.add_argument("--web-port", type=int, default=9090, metavar="N", help="web viewer port")
-    p.add_argument("--grpc-port", type=int, default=9876, metavar="N", help="viewer gRPC port")
+    p.add_argument("--web-port", type=_port, default=9090, metavar="N", help="web viewer port")
+    p.add_argument(
+        "--grpc-port", type=_port, default=9876, metavar="N", help="viewer data (gRPC) port"
+    )
+    p.add_argument(
+        "--bind",
+        type=_address,
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="address both viewer ports listen on (0.0.0.0: every interface; default 127.0.0.1)",
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing .rrd")
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser(

@@ -1,862 +1,344 @@
 """`usar view`: a recording in the rerun viewer. The only module that imports ``rerun``.
 
-What the viewer shows, on ONE timeline ``sim_time`` (a *duration* column: sim time is time since
-the simulator started, not a wall-clock date, so a timestamp column would print 1970 dates):
+What is shown is decided by :mod:`usar_replay.scene` (pure: messages -> columns per entity); this
+module hands those columns to rerun, lays the views out, and runs the viewer process:
 
-* the building (walls and box obstacles as ``Boxes3D``, cylinders as ``Cylinders3D``, spheres as
-  ``Ellipsoids3D``, markers as thin labelled boxes), the lookup targets ``target_1..N`` and the
-  robots' homes, all static;
-* the tf tree as rerun's entity tree (see :func:`frame_entity_paths`), with each robot's body
-  drawn under its ``base_footprint`` and the camera frustum (``Pinhole``, image plane ``RDF``)
-  under the optical frame, so the camera image appears in 3D where the camera looked;
-* each robot's true pose (``/ground_truth/<robot>/pose``) and its true path so far (a
-  ``LineStrips3D`` that grows once per sim second), its goals (``/<robot>/goal``) and plans;
-* the TRUE marker poses (``/ground_truth/markers``, green), the markers the explorer stored
-  (``/explorer/marker_poses``, orange) and every broadcast ``marker_frame`` looked up in ``map`` at
-  its own stamp with :class:`usar_replay.tf_tree.Buffer` (red, labelled with the nearest true
-  marker and the distance to it), so a map error is visible at a glance;
-* the camera image (the recorded PNG/JPEG bytes as ``EncodedImage``, never decoded here) with
-  each detection's outline and ID;
-* ``cmd_vel`` of both robots as time series, ``/rosout`` and goal outcomes as a text log, and with
-  ``--grade`` each rubric line at the sim time of its evidence (INFO passed, ERROR failed).
+* **sending**: each entity goes out with ONE ``send_columns`` call on one timeline,
+  :data:`TIMELINE` (a *duration* column: sim time is time since the simulator started, not a
+  wall-clock date, so a timestamp column would print 1970 dates). Only the camera images go out
+  while the log streams, in chunks of :data:`IMAGE_BATCH_BYTES`, so memory stays bounded. Row by
+  row, ``rr.log`` measured 80-110 us per row (archetype construction plus ``set_time``): 5-6 s for
+  the ~60k rows of an 8-minute course log on top of reading it;
+* **the layout**: :func:`build_blueprint`;
+* **where the view goes** (:class:`Output`): an ``.rrd`` written to a temporary name and renamed
+  when complete, the native viewer, or the web viewer. Both viewers are the ``rerun`` command of
+  this environment started as a child process (:class:`ViewerProcess`) that binds its ports to one
+  address (``--bind``, 127.0.0.1 by default), so the web page and its data port are reachable
+  from the same places. A viewer that cannot open a window exits within a fraction of a second;
+  that exit is watched for, so falling back to a file is quick.
 
-Why columnar: the log is read once, streaming, and every entity's values are collected into
-plain lists; each entity is then sent with ONE ``send_columns`` call (only the camera images go
-out in chunks of :data:`IMAGE_BATCH_BYTES`, so memory stays bounded). Row by row, ``rr.log``
-measured 80-110 us per row here (archetype construction plus ``set_time``): 5-6 s for the ~60k
-rows of an 8-minute course log on top of reading it; the columnar path writes the whole view in
-about 5 s, most of it reading and decoding the MCAP.
-
-Layering: the top of this module imports only messages and the pure core; the bag reader and the
-grader are imported inside :func:`view_file`, the workflow entry point (as
-:func:`usar_replay.grade.grade_file` does).
+The log is read through an opened :class:`usar_replay.run.Run` (the caller opens it once); the
+bag decoder and the grader are imported inside :func:`view_run`, the workflow entry point.
 """
 
 from __future__ import annotations
 
-import math
+import contextlib
+import errno
+import ipaddress
 import os
-import re
 import shlex
 import shutil
+import signal
 import socket
+import subprocess
 import sys
+import tempfile
 import time
 import uuid
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 from urllib.parse import quote
 
 import numpy as np
-import numpy.typing as npt
 import rerun as rr
 import rerun.blueprint as rrb
 
-from usar_replay import msgs
-from usar_replay.errors import InvalidScenario, UsageError, UsarError
-from usar_replay.scenario import Box, Scenario, building_extent, from_toml
-from usar_replay.tf_tree import Buffer, TransformException
+from usar_replay import contract, msgs, rotations
+from usar_replay import scene as sc
+from usar_replay.errors import UsageError, UsarError
+from usar_replay.outfiles import check_output
+from usar_replay.scenario import Box, Scenario, building_extent
+from usar_replay.scene import ImageBatch, Scene, Strips
 
 if TYPE_CHECKING:
-    from usar_replay.bag import BagReader
     from usar_replay.grade import GradeReport
+    from usar_replay.run import Run
 
 __all__ = [
     "APPLICATION_ID",
     "TIMELINE",
-    "LogToRerun",
     "Output",
     "ViewResult",
+    "ViewerProcess",
     "build_blueprint",
     "choose_output",
     "default_rrd_path",
-    "frame_entity_path",
-    "frame_entity_paths",
     "open_command",
-    "view_file",
+    "send_scene",
+    "view_run",
     "wait_until_interrupted",
 ]
 
 APPLICATION_ID = "usar-replay"
 TIMELINE = "sim_time"
 """The one timeline: sim time in nanoseconds, as a duration (the log's time axis)."""
-
-CAMERA_TOPIC = "/explorer/camera/rgb/image_raw/compressed"
-CAMERA_INFO_TOPIC = "/explorer/camera/rgb/camera_info"
-FIDUCIAL_TOPIC = "/fiducial_transforms"
-TRUE_MARKERS_TOPIC = "/ground_truth/markers"
-STORED_MARKERS_TOPIC = "/explorer/marker_poses"
-ROSOUT_TOPIC = "/rosout"
-MARKER_FRAME = "marker_frame"
-MAP_FRAME = "map"
-
+DEFAULT_BIND = "127.0.0.1"
 IMAGE_BATCH_BYTES = 8 << 20
 """Camera images go out in chunks of about this many bytes while the log streams: memory stays
 bounded, and rerun writes many small chunks much faster than one big one (measured on a course
 log: 4776 frames, 164 MB of PNG, one chunk 4.0 s, 8 MB chunks 0.3 s); the viewer also pages
 small chunks in and out better."""
-PATH_ROW_PERIOD_NS = 1_000_000_000
-"""The growing true path gets a new row once per sim second (a row per pose would be O(n^2))."""
-PATH_MIN_STEP_M = 0.05
-"""Points of the true path closer than this to the previous kept point are dropped."""
-MARKER_FRAME_HISTORY = 2000
-"""At most this many past ``marker_frame`` lookups are kept in the cumulative map layer."""
-
-# The waffle's visual body as the simulator draws it (sim.py: a box of half extents
-# 0.133 x 0.133 x 0.047 m centred 6.4 cm behind base_footprint, 5.7 cm up). Not imported from
-# sim.py: that module imports pybullet, which the viewer does not need.
-ROBOT_BODY_CENTER = (-0.064, 0.0, 0.057)
-ROBOT_BODY_HALF = (0.133, 0.133, 0.047)
-ROBOT_COLORS: dict[str, tuple[int, int, int]] = {
-    "explorer": (255, 140, 0),
-    "follower": (30, 144, 255),
-}
-OTHER_ROBOT_COLOR = (160, 160, 160)
-WALL_COLOR = (219, 217, 204)
-FLOOR_COLOR = (92, 86, 78)
-OBSTACLE_COLOR = (140, 153, 178)
-TARGET_COLOR = (250, 210, 40)
-TRUE_MARKER_COLOR = (40, 200, 80)
-STORED_MARKER_COLOR = (255, 150, 40)
-MARKER_FRAME_COLOR = (230, 40, 40)
-DETECTION_COLOR = (40, 255, 80)
-
-_ROBOT_TOPIC = re.compile(r"^/(?P<robot>[^/]+)/(?P<what>cmd_vel|goal|plan|goal_status)$")
-_TRUTH_TOPIC = re.compile(r"^/ground_truth/(?P<robot>[^/]+)/pose$")
-_MARKER_SIZE = re.compile(r"marker_size=([0-9.eE+-]+)")
-_ROS_LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "CRITICAL"}
-
-FloatArray = npt.NDArray[np.float64]
-
-
-# --- entity paths ---------------------------------------------------------------------------------
-
-
-def _frame_parts(frame: str) -> list[str]:
-    """A tf frame id as entity path parts: split at '/', each part escaped for rerun."""
-    parts = [rr.escape_entity_path_part(p) for p in frame.split("/") if p]
-    return parts or ["_unnamed"]
-
-
-def frame_entity_paths(parents: Mapping[str, str]) -> dict[str, str]:
-    """Every frame's entity path, so that rerun's entity tree has the shape of the tf tree.
-
-    ``parents`` is ``{child: parent}`` (what :meth:`usar_replay.tf_tree.Buffer.frames` returns).
-    A frame's path is its parent's path followed by the frame id; a root frame (``map``) is at
-    the top: ``/map/explorer_tf/odom/explorer_tf/base_footprint/...``.
-
-    Sanitising: a tf frame id may hold '/' (the robot prefix in ``explorer_tf/odom``); it is kept
-    as a path separator, so the prefix becomes an intermediate entity without a transform
-    (identity), which rerun composes correctly and which reads like tf's own namespaces. Every
-    part is escaped with ``rr.escape_entity_path_part`` (spaces, ':', '$' and the like), empty
-    parts (a leading '/') are dropped. A cycle in the tree (a broken log) is cut where it closes.
-    The viewer's own entities under a frame (``robot_body``, ``pinhole``) would only collide with
-    a tf frame of that very name, which no usar log has.
-    """
-    out: dict[str, str] = {}
-
-    def path_of(frame: str, seen: frozenset[str]) -> str:
-        known = out.get(frame)
-        if known is not None:
-            return known
-        parent = parents.get(frame)
-        if parent is None or parent in seen or parent == frame:
-            path = "/" + "/".join(_frame_parts(frame))
-        else:
-            path = path_of(parent, seen | {frame}) + "/" + "/".join(_frame_parts(frame))
-        out[frame] = path
-        return path
-
-    for child, parent in parents.items():
-        path_of(child, frozenset())
-        path_of(parent, frozenset())
-    return out
-
-
-def frame_entity_path(parents: Mapping[str, str], frame: str) -> str:
-    """The entity path of one frame (a frame unknown to the tree is a root of its own)."""
-    return frame_entity_paths({**parents, frame: parents.get(frame, frame)}).get(
-        frame, "/" + "/".join(_frame_parts(frame))
-    )
-
-
-# --- small geometry -------------------------------------------------------------------------------
-
-
-def _yaw_quat(yaw: float) -> tuple[float, float, float, float]:
-    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
-
-
-def _quat_yaw(q: msgs.Quaternion) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def _rotation(q: msgs.Quaternion) -> FloatArray:
-    x, y, z, w = q.x, q.y, q.z, q.w
-    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ],
-        dtype=np.float64,
-    )
-
-
-def _marker_corners(size: float) -> FloatArray:
-    """A marker's corners in its own frame, in ArUco's order (as ``detect`` solves the pose)."""
-    h = size / 2.0
-    return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]], dtype=np.float64)
-
-
-def _project(points: FloatArray, info: msgs.CameraInfo) -> FloatArray | None:
-    """Pixels of optical-frame points through ``K`` and plumb-bob distortion; None if behind."""
-    if np.any(points[:, 2] <= 1e-6):
-        return None
-    k = info.k
-    x = points[:, 0] / points[:, 2]
-    y = points[:, 1] / points[:, 2]
-    d = [*info.d, 0.0, 0.0, 0.0, 0.0, 0.0][:5]
-    if any(d):
-        k1, k2, p1, p2, k3 = d
-        r2 = x * x + y * y
-        radial = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
-        x, y = (
-            x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
-            y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y,
-        )
-    u = k[0] * x + k[1] * y + k[2]
-    v = k[4] * y + k[5]
-    return np.stack([u, v], axis=1)
+VIEWER_START_S = 10.0
+"""How long a starting viewer may take to listen on its ports."""
+VIEWER_SETTLE_S = 1.0
+"""A native viewer that cannot open its window starts its server, then exits (measured: 0.02 s
+later); one that is still running this long after listening is taken as up."""
 
 
 def _duration(times: Sequence[int]) -> rr.TimeColumn:
     return rr.TimeColumn(TIMELINE, duration=np.asarray(times, dtype=np.int64).view("m8[ns]"))
 
 
-def _media_type(image: msgs.CompressedImage) -> str:
-    head = image.data[:4]
-    if head.startswith(b"\x89PNG"):
-        return "image/png"
-    if head.startswith(b"\xff\xd8"):
-        return "image/jpeg"
-    return "image/jpeg" if "jp" in image.format.lower() else "image/png"
+# --- sending a scene -----------------------------------------------------------------------------
 
 
-def _robot_color(robot: str) -> tuple[int, int, int]:
-    return ROBOT_COLORS.get(robot, OTHER_ROBOT_COLOR)
+def send_images(rec: rr.RecordingStream, scene: Scene, batch: ImageBatch) -> None:
+    """One batch of camera images as ``EncodedImage`` rows (the recorded bytes, not decoded)."""
+    if batch.times:
+        rec.send_columns(
+            scene.image_entity,
+            indexes=[_duration(batch.times)],
+            columns=rr.EncodedImage.columns(blob=batch.blobs, media_type=batch.media_types),
+        )
 
 
-# --- collecting columns ---------------------------------------------------------------------------
+def send_scene(rec: rr.RecordingStream, scene: Scene) -> None:
+    """Send every collected column (each entity once), the static world and the blueprint.
 
-
-@dataclass(slots=True)
-class _Poses:
-    times: list[int] = field(default_factory=list)
-    translations: list[tuple[float, float, float]] = field(default_factory=list)
-    quaternions: list[tuple[float, float, float, float]] = field(default_factory=list)
-
-
-@dataclass(slots=True)
-class _Texts:
-    times: list[int] = field(default_factory=list)
-    texts: list[str] = field(default_factory=list)
-    levels: list[str] = field(default_factory=list)
-
-
-@dataclass(slots=True)
-class _Strips:
-    """Rows of zero or more strips (or points) each: ``lengths[i]`` items belong to row ``i``."""
-
-    times: list[int] = field(default_factory=list)
-    items: list[Any] = field(default_factory=list)
-    labels: list[str] = field(default_factory=list)
-    lengths: list[int] = field(default_factory=list)
-
-
-@dataclass(slots=True)
-class _Path:
-    """A robot's true path: kept points, and the rows of the growing strip."""
-
-    kept: list[tuple[float, float, float]] = field(default_factory=list)
-    last_row_ns: int | None = None
-    last: tuple[int, tuple[float, float, float]] | None = None
-    rows: _Strips = field(default_factory=_Strips)
-
-
-@dataclass(slots=True)
-class _Images:
-    times: list[int] = field(default_factory=list)
-    blobs: list[bytes] = field(default_factory=list)
-    media_types: list[str] = field(default_factory=list)
-    pending_bytes: int = 0
-    sent: int = 0
-
-
-class LogToRerun:
-    """A streaming consumer of a log's messages (:meth:`feed`, in log order) that logs to rerun.
-
-    Everything is collected as columns while the log streams by; :meth:`finish` sends each
-    entity's columns once, then the blueprint. Only the camera images are sent early, in batches,
-    to keep memory bounded (so the recording stream must be connected to its sinks first).
+    ``scene`` must be closed (:meth:`Scene.close`); images still pending are sent first.
     """
-
-    def __init__(
-        self,
-        rec: rr.RecordingStream,
-        scenario: Scenario | None,
-        *,
-        marker_size: float = 0.15,
-    ) -> None:
-        self.rec = rec
-        self.scenario = scenario
-        self.marker_size = marker_size
-        self.buffer = Buffer(cache_time=30.0)
-        self.tf_parents: dict[str, str] = {}
-        self.tf_static: dict[str, tuple[tuple[float, float, float], tuple[float, ...]]] = {}
-        self.tf_dynamic: dict[str, _Poses] = {}
-        self.camera_info: msgs.CameraInfo | None = None
-        self.camera_frame = "explorer_tf/camera_rgb_optical_frame"
-        self._pinhole_entity: str | None = None
-        self.images = _Images()
-        self.detections = _Strips()
-        self.scalars: dict[str, tuple[list[int], list[float]]] = {}
-        self.texts: dict[str, _Texts] = {}
-        self.truth: dict[str, _Poses] = {}
-        self.paths: dict[str, _Path] = {}
-        self.goals: dict[str, _Strips] = {}
-        self.plans: dict[str, _Strips] = {}
-        self.true_markers = _Strips()
-        self.true_marker_xyz: dict[int, tuple[float, float, float]] = {}
-        self.stored_markers = _Strips()
-        self.marker_frame_points: list[tuple[float, float, float]] = []
-        self.marker_frame_labels: list[str] = []
-        self.marker_frame_rows = _Strips()
-        self.robots: list[str] = []
-        self.messages = 0
-        self.end_ns = 0
-        if scenario is not None:
-            self.true_marker_xyz = {m.id: (m.x, m.y, m.z) for m in scenario.markers}
-            for r in (scenario.explorer, scenario.follower):
-                self._robot(r.name)
-
-    # -- feeding ----------------------------------------------------------------------------------
-
-    def _robot(self, name: str) -> str:
-        if name not in self.robots:
-            self.robots.append(name)
-        return name
-
-    def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None:
-        """One message of the log, in log order (``msg`` None for types the viewer ignores)."""
-        self.messages += 1
-        self.end_ns = max(self.end_ns, t_ns)
-        if msg is None:
-            return
-        if isinstance(msg, msgs.TFMessage) and topic in ("/tf", "/tf_static"):
-            self._on_tf(msg, t_ns, static=topic == "/tf_static")
-        elif isinstance(msg, msgs.CompressedImage) and topic == CAMERA_TOPIC:
-            self._on_image(msg, t_ns)
-        elif isinstance(msg, msgs.CameraInfo) and topic == CAMERA_INFO_TOPIC:
-            if self.camera_info is None:
-                self.camera_frame = msg.header.frame_id or self.camera_frame
-            self.camera_info = msg
-        elif isinstance(msg, msgs.FiducialTransformArray) and topic == FIDUCIAL_TOPIC:
-            self._on_detections(msg, t_ns)
-        elif isinstance(msg, msgs.FiducialTransformArray) and topic == TRUE_MARKERS_TOPIC:
-            self._on_true_markers(msg, t_ns)
-        elif isinstance(msg, msgs.FiducialTransformArray) and topic == STORED_MARKERS_TOPIC:
-            self._on_stored_markers(msg, t_ns)
-        elif isinstance(msg, msgs.Log) and topic == ROSOUT_TOPIC:
-            level = _ROS_LEVELS.get(msg.level, "INFO")
-            self._text(
-                "/logs/rosout", t_ns, f"[{msg.name}] {msg.msg}" if msg.name else msg.msg, level
-            )
-        elif isinstance(msg, msgs.PoseStamped) and (m := _TRUTH_TOPIC.match(topic)):
-            self._on_truth(self._robot(m["robot"]), msg, t_ns)
-        elif m := _ROBOT_TOPIC.match(topic):
-            self._on_robot_topic(self._robot(m["robot"]), m["what"], msg, t_ns)
-
-    def _on_robot_topic(self, robot: str, what: str, msg: msgs.Message, t_ns: int) -> None:
-        if what == "cmd_vel" and isinstance(msg, msgs.Twist):
-            self._scalar(f"/plots/{robot}/cmd_vel/linear_x", t_ns, msg.linear.x)
-            self._scalar(f"/plots/{robot}/cmd_vel/angular_z", t_ns, msg.angular.z)
-        elif what == "goal" and isinstance(msg, msgs.PoseStamped):
-            p = msg.pose.position
-            yaw = _quat_yaw(msg.pose.orientation)
-            rows = self.goals.setdefault(robot, _Strips())
-            rows.times.append(t_ns)
-            rows.items.append(
-                ((p.x, p.y, p.z + 0.02), (0.3 * math.cos(yaw), 0.3 * math.sin(yaw), 0))
-            )
-            rows.labels.append(f"{robot} goal")
-            rows.lengths.append(1)
-        elif what == "plan" and isinstance(msg, msgs.Path):
-            rows = self.plans.setdefault(robot, _Strips())
-            rows.times.append(t_ns)
-            pts = [(q.pose.position.x, q.pose.position.y, 0.01) for q in msg.poses]
-            rows.items.append(np.asarray(pts, dtype=np.float64).reshape(-1, 3))
-            rows.lengths.append(1)
-        elif what == "goal_status" and isinstance(msg, msgs.DiagnosticStatus):
-            level = {0: "INFO", 1: "WARN"}.get(msg.level, "ERROR")
-            who = msg.hardware_id or robot
-            self._text("/logs/goals", t_ns, f"{who}: goal {msg.name} {msg.message}", level)
-
-    def _on_tf(self, msg: msgs.TFMessage, t_ns: int, *, static: bool) -> None:
-        for tf in msg.transforms:
-            child, parent = tf.child_frame_id, tf.header.frame_id
-            if not child or not parent:
-                continue
-            self.tf_parents[child] = parent
-            tr, q = tf.transform.translation, tf.transform.rotation
-            xyz, quat = (tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w)
-            if static:
-                self.buffer.set_transform_static(tf, "view")
-                self.tf_static[child] = (xyz, quat)
-                continue
-            self.buffer.set_transform(tf, "view")
-            stamp = tf.header.stamp.ns or t_ns
-            col = self.tf_dynamic.setdefault(child, _Poses())
-            col.times.append(stamp)
-            col.translations.append(xyz)
-            col.quaternions.append(quat)
-            if child == MARKER_FRAME:
-                self._on_marker_frame(tf, stamp)
-
-    def _on_marker_frame(self, tf: msgs.TransformStamped, stamp: int) -> None:
-        """Look the broadcast up in ``map`` at its own stamp, as the mission's listener does."""
-        try:
-            in_map = self.buffer.lookup_transform(MAP_FRAME, MARKER_FRAME, tf.header.stamp)
-        except TransformException as err:
-            self._text("/logs/tf", stamp, f"marker_frame not in map: {err}", "WARN")
-            return
-        p = in_map.transform.translation
-        xyz = (p.x, p.y, p.z)
-        label = "marker_frame"
-        if self.true_marker_xyz:
-            mid, dist = min(
-                ((k, math.dist(xyz, v)) for k, v in sorted(self.true_marker_xyz.items())),
-                key=lambda kv: kv[1],
-            )
-            label = f"marker_frame ~{mid}: {dist * 100:.1f} cm off"
-        self.marker_frame_points.append(xyz)
-        self.marker_frame_labels.append(label)
-        pts = self.marker_frame_points[-MARKER_FRAME_HISTORY:]
-        labels = self.marker_frame_labels[-MARKER_FRAME_HISTORY:]
-        rows = self.marker_frame_rows
-        rows.times.append(stamp)
-        rows.items.extend(pts)
-        rows.labels.extend(labels)
-        rows.lengths.append(len(pts))
-
-    def _on_image(self, img: msgs.CompressedImage, t_ns: int) -> None:
-        im = self.images
-        im.times.append(t_ns)
-        im.blobs.append(img.data)
-        im.media_types.append(_media_type(img))
-        im.pending_bytes += len(img.data)
-        if im.pending_bytes >= IMAGE_BATCH_BYTES:
-            self._send_images()
-
-    def _on_detections(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
-        """Outline each detection by projecting its recorded pose through the camera's K.
-
-        Why project rather than re-run ``detect.detect_with_corners``: it needs no image decode
-        (PNG decode plus ArUco measured 6.4 ms a 640x480 frame: 30 s for a course log, six times
-        the whole view), and it draws what the recorded detector *published* (its pose,
-        reprojected), which is what the rest of the mission used, not what a re-detection with
-        today's code would find. With the detector's own marker size and corner order the outline
-        lands on the detected corners (within the published ``image_error``; the tests check it
-        against a re-detection to 1.5 px).
-        """
-        rows = self.detections
-        rows.times.append(t_ns)
-        n = 0
-        if self.camera_info is not None:
-            corners = _marker_corners(self.marker_size)
-            for f in msg.transforms:
-                tr = f.transform.translation
-                pts = corners @ _rotation(f.transform.rotation).T + np.array([tr.x, tr.y, tr.z])
-                px = _project(pts, self.camera_info)
-                if px is None:
-                    continue
-                rows.items.append(np.vstack([px, px[:1]]))
-                rows.labels.append(f"id {f.fiducial_id}")
-                n += 1
-        rows.lengths.append(n)
-
-    def _on_true_markers(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
-        rows = self.true_markers
-        rows.times.append(t_ns)
-        for f in msg.transforms:
-            tr = f.transform.translation
-            self.true_marker_xyz[f.fiducial_id] = (tr.x, tr.y, tr.z)
-            rows.items.append((tr.x, tr.y, tr.z))
-            rows.labels.append(f"true {f.fiducial_id}")
-        rows.lengths.append(len(msg.transforms))
-
-    def _on_stored_markers(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
-        rows = self.stored_markers
-        rows.times.append(t_ns)
-        for f in msg.transforms:
-            tr = f.transform.translation
-            rows.items.append((tr.x, tr.y, tr.z))
-            rows.labels.append(f"stored {f.fiducial_id}")
-        rows.lengths.append(len(msg.transforms))
-
-    def _on_truth(self, robot: str, msg: msgs.PoseStamped, t_ns: int) -> None:
-        p, q = msg.pose.position, msg.pose.orientation
-        poses = self.truth.setdefault(robot, _Poses())
-        poses.times.append(t_ns)
-        poses.translations.append((p.x, p.y, p.z))
-        poses.quaternions.append((q.x, q.y, q.z, q.w))
-        path = self.paths.setdefault(robot, _Path())
-        here = (p.x, p.y, p.z + 0.01)
-        if not path.kept or math.dist(path.kept[-1], here) >= PATH_MIN_STEP_M:
-            path.kept.append(here)
-        path.last = (t_ns, here)
-        if path.last_row_ns is None or t_ns - path.last_row_ns >= PATH_ROW_PERIOD_NS:
-            self._path_row(path, t_ns, here)
-
-    @staticmethod
-    def _path_row(path: _Path, t_ns: int, here: tuple[float, float, float]) -> None:
-        pts = path.kept if path.kept[-1] == here else [*path.kept, here]
-        path.rows.times.append(t_ns)
-        path.rows.items.append(np.asarray(pts, dtype=np.float64))
-        path.rows.lengths.append(1)
-        path.last_row_ns = t_ns
-
-    def _scalar(self, entity: str, t_ns: int, value: float) -> None:
-        times, values = self.scalars.setdefault(entity, ([], []))
-        times.append(t_ns)
-        values.append(value)
-
-    def _text(self, entity: str, t_ns: int, text: str, level: str) -> None:
-        col = self.texts.setdefault(entity, _Texts())
-        col.times.append(t_ns)
-        col.texts.append(text)
-        col.levels.append(level)
-
-    def add_grade(self, report: GradeReport) -> None:
-        """Each rubric line at the sim time of its evidence (the log's end when there is none)."""
-        for c in report.checks:
-            t = c.evidence_ns if c.evidence_ns is not None else max(self.end_ns, report.start_ns)
-            verdict = "PASS" if c.passed else "FAIL"
-            self._text(
-                "/logs/grade",
-                t,
-                f"{verdict} {c.id}: {c.description} - measured {c.measured}, threshold "
-                f"{c.threshold} ({c.points:g}/{c.max_points:g} points)",
-                "INFO" if c.passed else "ERROR",
-            )
-        self._text(
-            "/logs/grade",
-            max(self.end_ns, report.start_ns),
-            f"grade: {report.points:g}/{report.max_points:g} points, "
-            + ("every line passed" if report.passed else "some lines failed"),
-            "INFO" if report.passed else "ERROR",
+    send_images(rec, scene, scene.take_images())
+    rec.log(sc.MAP_ENTITY, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    if scene.scenario is not None:
+        _send_world(rec, scene.scenario)
+    _send_tf(rec, scene)
+    _send_camera(rec, scene)
+    _send_robots(rec, scene)
+    _send_markers(rec, scene)
+    for entity, (times, values) in sorted(scene.scalars.items()):
+        linear = entity.endswith("linear_x")
+        robot = entity.split("/")[2]
+        name = "linear.x (m/s)" if linear else "angular.z (rad/s)"
+        color = sc.robot_color(robot) if linear else sc.ANGULAR_COLOR
+        rec.log(entity, rr.SeriesLines(names=name, colors=color, widths=1.5), static=True)
+        rec.send_columns(
+            entity,
+            indexes=[_duration(times)],
+            columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
         )
-
-    def add_note(self, text: str, level: str = "WARN") -> None:
-        """A line of the viewer's own (e.g. the log is truncated) at the end of the log."""
-        self._text("/logs/view", self.end_ns, text, level)
-
-    # -- sending ----------------------------------------------------------------------------------
-
-    def _send_images(self) -> None:
-        im = self.images
-        if not im.times:
-            return
-        self.rec.send_columns(
-            self.image_entity,
-            indexes=[_duration(im.times)],
-            columns=rr.EncodedImage.columns(blob=im.blobs, media_type=im.media_types),
+    for entity, col in sorted(scene.texts.items()):
+        rec.send_columns(
+            entity,
+            indexes=[_duration(col.times)],
+            columns=rr.TextLog.columns(text=col.texts, level=col.levels),
         )
-        im.sent += len(im.times)
-        im.times, im.blobs, im.media_types, im.pending_bytes = [], [], [], 0
+    scn = scene.scenario
+    extent = building_extent(scn) if scn is not None and scn.walls else None
+    rec.send_blueprint(build_blueprint(scene.pinhole_entity, scene.plotted_robots(), extent))
 
-    @property
-    def frame_paths(self) -> dict[str, str]:
-        """Entity path per tf frame, from the buffer's tree (and any frame it did not keep)."""
-        parents = {**self.tf_parents, **self.buffer.frames()}
-        return frame_entity_paths(parents)
 
-    def frame_path(self, frame: str) -> str:
-        return self.frame_paths.get(frame) or frame_entity_path(self.tf_parents, frame)
+def _solid_boxes(items: Sequence[Box], color: tuple[int, int, int]) -> rr.Boxes3D:
+    return rr.Boxes3D(
+        centers=[(b.x, b.y, b.z) for b in items],
+        sizes=[(b.size_x, b.size_y, b.size_z) for b in items],
+        quaternions=[rotations.xyzw_from_yaw(b.yaw) for b in items],
+        colors=color,
+        fill_mode=rr.components.FillMode.Solid,
+    )
 
-    @property
-    def pinhole_entity(self) -> str:
-        """The camera's entity, fixed at first use (image batches may go out before the end)."""
-        if self._pinhole_entity is None:
-            self._pinhole_entity = self.frame_path(self.camera_frame) + "/pinhole"
-        return self._pinhole_entity
 
-    @property
-    def image_entity(self) -> str:
-        return self.pinhole_entity + "/image"
+def _send_world(rec: rr.RecordingStream, scn: Scenario) -> None:
+    """The building, obstacles, markers, targets and homes, all static."""
+    world = sc.WORLD_ENTITY
+    solid = rr.components.FillMode.Solid
+    if scn.walls:
+        rec.log(f"{world}/walls", _solid_boxes(scn.walls, sc.WALL_COLOR), static=True)
+        xmin, ymin, xmax, ymax = building_extent(scn)
+        floor = rr.Boxes3D(
+            mins=[(xmin, ymin, -0.02)],
+            sizes=[(xmax - xmin, ymax - ymin, 0.02)],
+            colors=sc.FLOOR_COLOR,
+            fill_mode=solid,
+        )
+        rec.log(f"{world}/floor", floor, static=True)
+    if scn.boxes:
+        rec.log(f"{world}/boxes", _solid_boxes(scn.boxes, sc.OBSTACLE_COLOR), static=True)
+    if scn.cylinders:
+        cylinders = rr.Cylinders3D(
+            lengths=[c.height for c in scn.cylinders],
+            radii=[c.radius for c in scn.cylinders],
+            centers=[(c.x, c.y, c.height / 2) for c in scn.cylinders],
+            colors=sc.OBSTACLE_COLOR,
+            fill_mode=solid,
+        )
+        rec.log(f"{world}/cylinders", cylinders, static=True)
+    if scn.spheres:
+        spheres = rr.Ellipsoids3D(
+            half_sizes=[(s.radius,) * 3 for s in scn.spheres],
+            centers=[(s.x, s.y, s.radius) for s in scn.spheres],
+            colors=sc.OBSTACLE_COLOR,
+            fill_mode=solid,
+        )
+        rec.log(f"{world}/spheres", spheres, static=True)
+    if scn.markers:
+        markers = rr.Boxes3D(
+            centers=[(m.x, m.y, m.z) for m in scn.markers],
+            sizes=[(0.008, m.size, m.size) for m in scn.markers],
+            quaternions=[rotations.xyzw_from_yaw(m.yaw) for m in scn.markers],
+            colors=(250, 250, 250),
+            fill_mode=solid,
+            labels=[f"marker {m.id}" for m in scn.markers],
+        )
+        rec.log(f"{world}/markers", markers, static=True)
+    if scn.targets:
+        targets = rr.Points3D(
+            [(x, y, 0.01) for x, y in scn.targets],
+            radii=0.06,
+            colors=sc.TARGET_COLOR,
+            labels=[f"target_{i + 1}" for i in range(len(scn.targets))],
+        )
+        rec.log(sc.TARGETS_ENTITY, targets, static=True)
+    homes = (scn.explorer, scn.follower)
+    points = rr.Points3D(
+        [(r.x, r.y, 0.01) for r in homes],
+        radii=0.04,
+        colors=[sc.robot_color(r.name) for r in homes],
+        labels=[f"{r.name} home" for r in homes],
+    )
+    rec.log(sc.HOMES_ENTITY, points, static=True)
 
-    def finish(self) -> None:
-        """Send every collected column (each entity once), the static world and the blueprint."""
-        rec = self.rec
-        self._send_images()
-        rec.log("/map", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        self._send_world()
-        self._send_tf()
-        self._send_camera()
-        self._send_robots()
-        self._send_markers()
-        for entity, (times, values) in sorted(self.scalars.items()):
-            name = "linear.x (m/s)" if entity.endswith("linear_x") else "angular.z (rad/s)"
-            robot = entity.split("/")[2]
-            color = _robot_color(robot) if entity.endswith("linear_x") else (200, 60, 200)
-            rec.log(entity, rr.SeriesLines(names=name, colors=color, widths=1.5), static=True)
-            rec.send_columns(
-                entity,
-                indexes=[_duration(times)],
-                columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
-            )
-        for entity, col in sorted(self.texts.items()):
-            rec.send_columns(
-                entity,
-                indexes=[_duration(col.times)],
-                columns=rr.TextLog.columns(text=col.texts, level=col.levels),
-            )
-        extent = building_extent(self.scenario) if self.scenario and self.scenario.walls else None
-        plotted = [r for r in self.robots if f"/plots/{r}/cmd_vel/linear_x" in self.scalars]
-        rec.send_blueprint(build_blueprint(self.pinhole_entity, plotted, extent))
 
-    def _send_world(self) -> None:
-        rec, scn = self.rec, self.scenario
-        if scn is None:
-            return
+def _body(robot: str, *, solid: bool) -> rr.Boxes3D:
+    centre, half = sc.robot_body()
+    mode = rr.components.FillMode.Solid if solid else rr.components.FillMode.MajorWireframe
+    return rr.Boxes3D(
+        centers=[centre],
+        half_sizes=[half],
+        colors=sc.robot_color(robot),
+        fill_mode=mode,
+        labels=[robot] if solid else None,
+    )
 
-        def boxes(items: Sequence[Box], color: tuple[int, int, int]) -> rr.Boxes3D:
-            return rr.Boxes3D(
-                centers=[(b.x, b.y, b.z) for b in items],
-                sizes=[(b.size_x, b.size_y, b.size_z) for b in items],
-                quaternions=[_yaw_quat(b.yaw) for b in items],
-                colors=color,
-                fill_mode=rr.components.FillMode.Solid,
-            )
 
-        if scn.walls:
-            rec.log("/map/world/walls", boxes(scn.walls, WALL_COLOR), static=True)
-            xmin, ymin, xmax, ymax = building_extent(scn)
-            rec.log(
-                "/map/world/floor",
-                rr.Boxes3D(
-                    mins=[(xmin, ymin, -0.02)],
-                    sizes=[(xmax - xmin, ymax - ymin, 0.02)],
-                    colors=FLOOR_COLOR,
-                    fill_mode=rr.components.FillMode.Solid,
-                ),
-                static=True,
-            )
-        if scn.boxes:
-            rec.log("/map/world/boxes", boxes(scn.boxes, OBSTACLE_COLOR), static=True)
-        if scn.cylinders:
-            rec.log(
-                "/map/world/cylinders",
-                rr.Cylinders3D(
-                    lengths=[c.height for c in scn.cylinders],
-                    radii=[c.radius for c in scn.cylinders],
-                    centers=[(c.x, c.y, c.height / 2) for c in scn.cylinders],
-                    colors=OBSTACLE_COLOR,
-                    fill_mode=rr.components.FillMode.Solid,
-                ),
-                static=True,
-            )
-        if scn.spheres:
-            rec.log(
-                "/map/world/spheres",
-                rr.Ellipsoids3D(
-                    half_sizes=[(s.radius,) * 3 for s in scn.spheres],
-                    centers=[(s.x, s.y, s.radius) for s in scn.spheres],
-                    colors=OBSTACLE_COLOR,
-                    fill_mode=rr.components.FillMode.Solid,
-                ),
-                static=True,
-            )
-        if scn.markers:
-            rec.log(
-                "/map/world/markers",
-                rr.Boxes3D(
-                    centers=[(m.x, m.y, m.z) for m in scn.markers],
-                    sizes=[(0.008, m.size, m.size) for m in scn.markers],
-                    quaternions=[_yaw_quat(m.yaw) for m in scn.markers],
-                    colors=(250, 250, 250),
-                    fill_mode=rr.components.FillMode.Solid,
-                    labels=[f"marker {m.id}" for m in scn.markers],
-                ),
-                static=True,
-            )
-        if scn.targets:
-            rec.log(
-                "/map/targets",
-                rr.Points3D(
-                    [(x, y, 0.01) for x, y in scn.targets],
-                    radii=0.06,
-                    colors=TARGET_COLOR,
-                    labels=[f"target_{i + 1}" for i in range(len(scn.targets))],
-                ),
-                static=True,
-            )
-        homes = (scn.explorer, scn.follower)
-        rec.log(
-            "/map/homes",
-            rr.Points3D(
-                [(r.x, r.y, 0.01) for r in homes],
-                radii=0.04,
-                colors=[_robot_color(r.name) for r in homes],
-                labels=[f"{r.name} home" for r in homes],
+def _send_tf(rec: rr.RecordingStream, scene: Scene) -> None:
+    paths = scene.frame_paths
+    for frame, path in sorted(paths.items()):
+        length = 0.15 if frame == contract.MARKER_FRAME else 0.1
+        rec.log(path, rr.TransformAxes3D(axis_length=length), static=True)
+    for child, (xyz, quat) in sorted(scene.tf_static.items()):
+        tf = rr.Transform3D(translation=xyz, quaternion=rr.Quaternion(xyzw=quat))
+        rec.log(paths[child], tf, static=True)
+    for child, col in sorted(scene.tf_dynamic.items()):
+        rec.send_columns(
+            paths[child],
+            indexes=[_duration(col.times)],
+            columns=rr.Transform3D.columns(
+                translation=np.asarray(col.translations, dtype=np.float64),
+                quaternion=np.asarray(col.quaternions, dtype=np.float64),
             ),
-            static=True,
+        )
+    for robot, entity in scene.body_entities().items():
+        rec.log(entity, _body(robot, solid=True), static=True)
+
+
+def _send_camera(rec: rr.RecordingStream, scene: Scene) -> None:
+    info = scene.camera_info
+    if info is not None and info.width and info.height:
+        pinhole = rr.Pinhole(
+            image_from_camera=np.asarray(info.k, dtype=np.float64).reshape(3, 3),
+            resolution=[info.width, info.height],
+            camera_xyz=rr.ViewCoordinates.RDF,
+            image_plane_distance=0.4,
+        )
+        rec.log(scene.pinhole_entity, pinhole, static=True)
+    rows = scene.detections
+    if rows.times:
+        n = len(rows.items)
+        rec.send_columns(
+            scene.detections_entity,
+            indexes=[_duration(rows.times)],
+            columns=rr.LineStrips2D.columns(
+                strips=rows.items,
+                labels=rows.labels,
+                colors=[sc.DETECTION_COLOR] * n,
+                radii=[1.5] * n,
+            ).partition(rows.lengths),
         )
 
-    def _send_tf(self) -> None:
-        rec, paths = self.rec, self.frame_paths
-        for frame, path in sorted(paths.items()):
-            length = 0.15 if frame == MARKER_FRAME else 0.1
-            rec.log(path, rr.TransformAxes3D(axis_length=length), static=True)
-        for child, (xyz, quat) in sorted(self.tf_static.items()):
-            rec.log(paths[child], rr.Transform3D(translation=xyz, quaternion=quat), static=True)
-        for child, col in sorted(self.tf_dynamic.items()):
-            rec.send_columns(
-                paths[child],
-                indexes=[_duration(col.times)],
-                columns=rr.Transform3D.columns(
-                    translation=np.asarray(col.translations, dtype=np.float64),
-                    quaternion=np.asarray(col.quaternions, dtype=np.float64),
-                ),
-            )
-        for robot in self.robots:
-            base = paths.get(f"{robot}_tf/base_footprint")
-            if base is not None:
-                rec.log(base + "/robot_body", self._body(robot, solid=True), static=True)
 
-    @staticmethod
-    def _body(robot: str, *, solid: bool) -> rr.Boxes3D:
-        return rr.Boxes3D(
-            centers=[ROBOT_BODY_CENTER],
-            half_sizes=[ROBOT_BODY_HALF],
-            colors=_robot_color(robot),
-            fill_mode=rr.components.FillMode.Solid
-            if solid
-            else rr.components.FillMode.MajorWireframe,
-            labels=None if not solid else [robot],
-        )
+def _send_strips3d(
+    rec: rr.RecordingStream, entity: str, rows: Strips, robot: str, radius: float
+) -> None:
+    n = len(rows.items)
+    rec.send_columns(
+        entity,
+        indexes=[_duration(rows.times)],
+        columns=rr.LineStrips3D.columns(
+            strips=rows.items, colors=[sc.robot_color(robot)] * n, radii=[radius] * n
+        ),
+    )
 
-    def _send_camera(self) -> None:
-        rec, info = self.rec, self.camera_info
-        if info is not None and info.width and info.height:
-            rec.log(
-                self.pinhole_entity,
-                rr.Pinhole(
-                    image_from_camera=np.asarray(info.k, dtype=np.float64).reshape(3, 3),
-                    resolution=[info.width, info.height],
-                    camera_xyz=rr.ViewCoordinates.RDF,
-                    image_plane_distance=0.4,
-                ),
-                static=True,
-            )
-        rows = self.detections
-        if rows.times:
-            rec.send_columns(
-                self.pinhole_entity + "/detections",
-                indexes=[_duration(rows.times)],
-                columns=rr.LineStrips2D.columns(
-                    strips=rows.items,
-                    labels=rows.labels,
-                    colors=[DETECTION_COLOR] * len(rows.items),
-                    radii=[1.5] * len(rows.items),
-                ).partition(rows.lengths),
-            )
 
-    def _send_robots(self) -> None:
-        rec = self.rec
-        for robot, poses in sorted(self.truth.items()):
-            entity = f"/map/ground_truth/{robot}"
-            rec.log(entity + "/body", self._body(robot, solid=False), static=True)
-            rec.send_columns(
-                entity,
-                indexes=[_duration(poses.times)],
-                columns=rr.Transform3D.columns(
-                    translation=np.asarray(poses.translations, dtype=np.float64),
-                    quaternion=np.asarray(poses.quaternions, dtype=np.float64),
-                ),
-            )
-        for robot, path in sorted(self.paths.items()):
-            if path.last is not None and path.last[0] != path.last_row_ns:
-                self._path_row(path, *path.last)
-            rec.send_columns(
-                f"/map/ground_truth/{robot}_path",
-                indexes=[_duration(path.rows.times)],
-                columns=rr.LineStrips3D.columns(
-                    strips=path.rows.items,
-                    colors=[_robot_color(robot)] * len(path.rows.items),
-                    radii=[0.01] * len(path.rows.items),
-                ),
-            )
-        for robot, rows in sorted(self.goals.items()):
-            origins = [o for o, _ in rows.items]
-            vectors = [v for _, v in rows.items]
-            rec.send_columns(
-                f"/map/{robot}/goal",
-                indexes=[_duration(rows.times)],
-                columns=rr.Arrows3D.columns(
-                    origins=origins,
-                    vectors=vectors,
-                    labels=rows.labels,
-                    colors=[_robot_color(robot)] * len(origins),
-                    radii=[0.02] * len(origins),
-                ),
-            )
-        for robot, rows in sorted(self.plans.items()):
-            rec.send_columns(
-                f"/map/{robot}/plan",
-                indexes=[_duration(rows.times)],
-                columns=rr.LineStrips3D.columns(
-                    strips=rows.items,
-                    colors=[_robot_color(robot)] * len(rows.items),
-                    radii=[0.005] * len(rows.items),
-                ),
-            )
-
-    def _send_markers(self) -> None:
-        # Labels of the true and stored markers show on hover only: drawn, they would sit on top
-        # of the marker's own label; the red marker_frame labels (with the error) stay drawn.
-        for entity, rows, color, radius, shown in (
-            ("/map/ground_truth/markers", self.true_markers, TRUE_MARKER_COLOR, 0.03, False),
-            (
-                "/map/explorer/stored_markers",
-                self.stored_markers,
-                STORED_MARKER_COLOR,
-                0.025,
-                False,
+def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
+    for robot, poses in sorted(scene.truth.items()):
+        entity = f"{sc.TRUTH_ENTITY}/{robot}"
+        rec.log(entity + "/body", _body(robot, solid=False), static=True)
+        rec.send_columns(
+            entity,
+            indexes=[_duration(poses.times)],
+            columns=rr.Transform3D.columns(
+                translation=np.asarray(poses.translations, dtype=np.float64),
+                quaternion=np.asarray(poses.quaternions, dtype=np.float64),
             ),
-            ("/map/marker_frame_in_map", self.marker_frame_rows, MARKER_FRAME_COLOR, 0.02, True),
-        ):
-            if not rows.times:
-                continue
-            n = len(rows.items)
-            self.rec.log(entity, rr.Points3D.from_fields(show_labels=shown), static=True)
-            self.rec.send_columns(
-                entity,
-                indexes=[_duration(rows.times)],
-                columns=rr.Points3D.columns(
-                    positions=np.asarray(rows.items, dtype=np.float64).reshape(-1, 3),
-                    labels=rows.labels,
-                    colors=[color] * n,
-                    radii=[radius] * n,
-                ).partition(rows.lengths),
-            )
+        )
+    for robot, path in sorted(scene.paths.items()):
+        _send_strips3d(rec, f"{sc.TRUTH_ENTITY}/{robot}_path", path.rows, robot, 0.01)
+    for robot, rows in sorted(scene.goals.items()):
+        n = len(rows.items)
+        rec.send_columns(
+            f"{sc.MAP_ENTITY}/{robot}/goal",
+            indexes=[_duration(rows.times)],
+            columns=rr.Arrows3D.columns(
+                origins=[o for o, _ in rows.items],
+                vectors=[v for _, v in rows.items],
+                labels=rows.labels,
+                colors=[sc.robot_color(robot)] * n,
+                radii=[0.02] * n,
+            ),
+        )
+    for robot, rows in sorted(scene.plans.items()):
+        _send_strips3d(rec, f"{sc.MAP_ENTITY}/{robot}/plan", rows, robot, 0.005)
 
 
-# --- layout -------------------------------------------------------------------------------------
+def _send_markers(rec: rr.RecordingStream, scene: Scene) -> None:
+    # Labels of the true and stored markers show on hover only: drawn, they would sit on top
+    # of the marker's own label; the red marker_frame labels (with the error) stay drawn.
+    layers = (
+        (sc.TRUE_MARKERS_ENTITY, scene.true_markers, sc.TRUE_MARKER_COLOR, 0.03, False),
+        (sc.STORED_MARKERS_ENTITY, scene.stored_markers, sc.STORED_MARKER_COLOR, 0.025, False),
+        (sc.MARKER_FRAME_ENTITY, scene.marker_frame_rows, sc.MARKER_FRAME_COLOR, 0.02, True),
+    )
+    for entity, rows, color, radius, shown in layers:
+        if not rows.times:
+            continue
+        n = len(rows.items)
+        rec.log(entity, rr.Points3D.from_fields(show_labels=shown), static=True)
+        rec.send_columns(
+            entity,
+            indexes=[_duration(rows.times)],
+            columns=rr.Points3D.columns(
+                positions=np.asarray(rows.items, dtype=np.float64).reshape(-1, 3),
+                labels=rows.labels,
+                colors=[color] * n,
+                radii=[radius] * n,
+            ).partition(rows.lengths),
+        )
+
+
+# --- layout --------------------------------------------------------------------------------------
 
 
 def build_blueprint(
@@ -881,13 +363,13 @@ def build_blueprint(
             eye_up=(0.0, 0.0, 1.0),
         )
     plots: list[rrb.View] = [
-        rrb.TimeSeriesView(origin=f"/plots/{r}", name=f"{r} cmd_vel") for r in robots
-    ] or [rrb.TimeSeriesView(origin="/plots", name="cmd_vel")]
+        rrb.TimeSeriesView(origin=f"{sc.PLOTS_ENTITY}/{r}", name=f"{r} cmd_vel") for r in robots
+    ] or [rrb.TimeSeriesView(origin=sc.PLOTS_ENTITY, name="cmd_vel")]
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(
-                rrb.Spatial3DView(origin="/map", name="building (map)", eye_controls=eye),
-                rrb.TextLogView(origin="/logs", name="log (rosout, goals, grade)"),
+                rrb.Spatial3DView(origin=sc.MAP_ENTITY, name="building (map)", eye_controls=eye),
+                rrb.TextLogView(origin=sc.LOGS_ENTITY, name="log (rosout, goals, grade)"),
                 row_shares=[3, 1],
             ),
             rrb.Vertical(
@@ -904,7 +386,7 @@ def build_blueprint(
     )
 
 
-# --- where the view goes ------------------------------------------------------------------------
+# --- where the view goes -------------------------------------------------------------------------
 
 
 @dataclass(frozen=True, slots=True)
@@ -941,6 +423,12 @@ def choose_output(
     return Output(rrd=default_rrd_path(log_path))
 
 
+def check_rrd(rrd: Path, log: Path, *, overwrite: bool, option: str = "--save") -> None:
+    """An ``.rrd`` output may not be the log, a directory, or (without ``overwrite``) a file
+    that exists (:func:`usar_replay.outfiles.check_output`; raises ``UsageError``, exit 2)."""
+    check_output(rrd, overwrite=overwrite, inputs=[log], option=option)
+
+
 def _rerun_executable() -> str | None:
     """The ``rerun`` CLI of this environment (the one that matches this SDK's file format)."""
     sibling = Path(sys.executable).parent / "rerun"
@@ -950,15 +438,177 @@ def _rerun_executable() -> str | None:
     return str(sibling) if sibling.exists() else found
 
 
+def _rerun_binary() -> str | None:
+    """The viewer binary itself, for starting it as a child process: the ``rerun`` command is a
+    Python wrapper that runs this binary as *its* child, so stopping the wrapper would leave
+    the binary running (and its ports taken)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin is not None:
+        binary = Path(spec.origin).parent / "rerun"
+        if binary.is_file() and os.access(binary, os.X_OK):
+            return str(binary)
+    return _rerun_executable()
+
+
 def open_command(rrd: str | os.PathLike[str]) -> str:
     """The exact shell command that opens ``rrd`` in the viewer (``rerun PATH``)."""
     exe = _rerun_executable() or "rerun"
     return f"{shlex.quote(exe)} {shlex.quote(str(rrd))}"
 
 
+# --- the viewer process --------------------------------------------------------------------------
+
+
+def _port_open(host: str, port: int) -> bool:
+    try:
+        with socket.create_connection((host, port), timeout=0.5):
+            return True
+    except OSError:
+        return False
+
+
+def _local_host(bind: str) -> str:
+    """Where this machine reaches a server bound to ``bind`` (loopback for 'all interfaces')."""
+    try:
+        if ipaddress.ip_address(bind).is_unspecified:
+            return "127.0.0.1"
+    except ValueError:
+        pass
+    return bind
+
+
+def _url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+
+
+@dataclass(slots=True)
+class ViewerProcess:
+    """A ``rerun`` viewer (native, or the web viewer's server) this command started or found.
+
+    Both ports of the web viewer (the page and its gRPC data) are bound to the same ``bind``
+    address by the ``rerun`` command itself, so they are reachable from the same places.
+    """
+
+    grpc_url: str
+    """Where this process sends the recording (``rerun+http://HOST:PORT/proxy``)."""
+    proc: subprocess.Popen[bytes] | None = None
+    """None when a viewer was already listening on the port (it is not ours to stop)."""
+    web_url: str | None = None
+
+    @classmethod
+    def start(cls, *, web: bool, bind: str, grpc_port: int, web_port: int) -> ViewerProcess:
+        """Start the native viewer (``web`` False) or the web viewer, and wait until it
+        listens. Raises :class:`UsageError` when it cannot start, saying why in one line."""
+        exe = _rerun_binary()
+        if exe is None:
+            raise UsageError("the `rerun` command is not installed; use --save OUT.rrd")
+        host = _local_host(bind)
+        grpc_url = f"rerun+http://{_url_host(host)}:{grpc_port}/proxy"
+        if not web and _port_open(host, grpc_port):
+            return cls(grpc_url)  # a viewer is already open there: use it, as rerun does
+        wanted = [(grpc_port, "--grpc-port"), *([(web_port, "--web-port")] if web else [])]
+        for port, option in wanted:
+            if _port_open(host, port):
+                raise UsageError(f"port {port} is in use; pick another with {option} N")
+        args = [exe, "--bind", bind, "--port", str(grpc_port)]
+        if web:
+            args += ["--serve-web", "--web-viewer-port", str(web_port)]
+            args += ["--server-memory-limit", "50%"]
+        else:
+            args += ["--hide-welcome-screen", "--memory-limit", "75%"]
+        errors: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 - kept by the child
+        env = {**os.environ, "RUST_LOG": os.environ.get("RUST_LOG", "warn")}
+        try:
+            proc = subprocess.Popen(
+                args,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=errors,
+                env=env,
+                start_new_session=True,  # the native viewer outlives this command; the web
+                # server is stopped as a group (stop()), whatever children it has
+            )
+        except OSError as err:
+            errors.close()
+            raise UsageError(f"cannot start `{exe}`: {err.strerror or err}") from err
+        ports = [grpc_port, web_port] if web else [grpc_port]
+        problem = _wait_listening(proc, host, ports, settle=not web)
+        if problem is not None:
+            errors.seek(0)
+            why = _last_error(errors.read().decode("utf-8", "replace")) or problem
+            errors.close()
+            raise UsageError(f"the rerun viewer did not start: {why}")
+        errors.close()
+        web_url = None
+        if web:
+            shown = _shown_host(bind)
+            data = f"rerun+http://{_url_host(shown)}:{grpc_port}/proxy"
+            web_url = f"http://{_url_host(shown)}:{web_port}/?url={quote(data, safe=':/')}"
+        return cls(grpc_url, proc, web_url)
+
+    def stop(self) -> None:
+        """Stop a web viewer's server (a native viewer is the user's to close)."""
+        if self.proc is None or self.web_url is None or self.proc.poll() is not None:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.proc.pid, signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+
+
+def _shown_host(bind: str) -> str:
+    """The name a browser uses for a server bound to ``bind``: ``localhost`` for loopback, this
+    machine's name when it listens on every interface (a remote browser needs it)."""
+    ip = ipaddress.ip_address(bind)
+    if ip.is_loopback:
+        return "localhost"
+    return socket.gethostname() if ip.is_unspecified else bind
+
+
+def _wait_listening(
+    proc: subprocess.Popen[bytes], host: str, ports: Sequence[int], *, settle: bool
+) -> str | None:
+    """None once ``proc`` listens on every port (and, with ``settle``, is still running
+    :data:`VIEWER_SETTLE_S` later); else what went wrong. Returns as soon as it exits."""
+    deadline = time.monotonic() + VIEWER_START_S
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            return f"it exited with code {proc.returncode}"
+        if all(_port_open(host, p) for p in ports):
+            if not settle:
+                return None
+            try:
+                proc.wait(timeout=VIEWER_SETTLE_S)
+            except subprocess.TimeoutExpired:
+                return None
+            return f"it exited with code {proc.returncode}"
+        time.sleep(0.05)
+    proc.kill()
+    proc.wait()
+    return f"it did not listen within {VIEWER_START_S:.0f} s"
+
+
+def _last_error(text: str) -> str:
+    """The viewer's own reason, e.g. ``Failed to open connection to X server``."""
+    for line in reversed(text.strip().splitlines()):
+        if "Error" in line or "error" in line:
+            reason = line.split(": ")[-1].strip()
+            return reason[:120]
+    return ""
+
+
+# --- the workflow --------------------------------------------------------------------------------
+
+
 @dataclass(slots=True)
 class ViewResult:
-    """What :func:`view_file` did; ``problem`` is one line when the log was not whole."""
+    """What :func:`view_run` did; ``problem`` is one line when the log was not whole."""
 
     rrd: Path | None
     url: str | None
@@ -970,21 +620,22 @@ class ViewResult:
     grade_problem: str = ""
     viewer_problem: str = ""
     """Set when the native viewer could not be used and the view went to a file instead."""
-    recording: rr.RecordingStream | None = field(default=None, repr=False)
-    """Kept alive while the web viewer serves (dropping it stops the gRPC server)."""
+    viewer: ViewerProcess | None = field(default=None, repr=False)
+    """The web viewer's server, kept while it serves (stopped by :func:`wait_until_interrupted`)."""
 
 
 class _Decoder:
     """Decodes only what the viewer draws; CameraInfo only when it changes (not its stamp).
 
     Odometry is skipped: ``odom -> base_footprint`` on ``/tf`` carries the same pose, and the two
-    odometry topics are a quarter of a course log's messages.
+    odometry topics are a quarter of a course log's messages. A payload that does not decode is
+    counted and skipped (the rest of the log is still shown).
     """
 
-    SKIP = re.compile(r"/odom$")
+    SKIP = frozenset(contract.odom(r) for r in contract.ROBOTS)
 
     def __init__(self) -> None:
-        from usar_replay import bag  # workflow-level import (see the module docstring)
+        from usar_replay import bag  # the reader's codec (see the module docstring)
 
         self._decode = bag.decode
         self._info_tail: bytes | None = None
@@ -992,9 +643,9 @@ class _Decoder:
         self.first_failure = ""
 
     def __call__(self, topic: str, msgtype: str, data: bytes, t_ns: int) -> msgs.Message | None:
-        if self.SKIP.search(topic):
+        if topic in self.SKIP:
             return None
-        if topic == CAMERA_INFO_TOPIC:
+        if topic == contract.CAMERA_INFO:
             tail = data[12:]  # CDR: 4 bytes encapsulation, then the 8-byte stamp
             if tail == self._info_tail:
                 return None
@@ -1010,151 +661,171 @@ class _Decoder:
             return None
 
 
-def _marker_size(run: Mapping[str, str]) -> float:
-    m = _MARKER_SIZE.search(run.get("mission_settings", ""))
-    try:
-        return float(m.group(1)) if m else 0.15
-    except ValueError:
-        return 0.15
-
-
-def _viewer_listening(port: int, timeout_s: float) -> bool:
-    """True once something accepts connections on ``port`` (and still does a moment later: a
-    viewer that cannot open its window starts its server, then exits)."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                pass
-        except OSError:
-            time.sleep(0.1)
-            continue
-        time.sleep(1.0)
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return True
-        except OSError:
-            return False
-    return False
-
-
-def _spawn(rec: rr.RecordingStream, port: int) -> bool:
-    """Start the native viewer (or find one already on ``port``) and connect ``rec`` to it."""
-    exe = _rerun_executable()
-    try:
-        rr.spawn(  # the module-level spawn: RecordingStream.spawn cannot name the executable
-            port=port,
-            connect=False,
-            hide_welcome_screen=True,
-            executable_path=exe if exe and os.sep in exe else None,
-            recording=rec,
+def _log_problem(run: Run, decode: _Decoder) -> str:
+    """One line on what is damaged: the file, its attachments, undecodable messages."""
+    parts = [run.problem(), *run.problems]
+    if decode.failures:
+        parts.append(
+            f"{decode.failures} messages could not be decoded (first: {decode.first_failure})"
         )
-    except Exception:  # noqa: BLE001 - no viewer binary, or it cannot start: fall back to a file
-        return False
-    if not _viewer_listening(port, timeout_s=8.0):
-        return False
-    rec.connect_grpc(f"rerun+http://127.0.0.1:{port}/proxy")
-    return True
+    return "; ".join(p for p in parts if p)
 
 
-def _sinks(
-    rec: rr.RecordingStream, output: Output, part: Path | None, ports: tuple[int, int]
-) -> str | None:
-    """Connect the stream to a file and/or a web viewer; returns the web viewer's URL."""
-    sinks: list[Any] = []
-    if part is not None:
-        sinks.append(rr.FileSink(part))
-    url = None
-    if output.web:
-        grpc_port, web_port = ports
-        server = rr.GrpcServerSink("127.0.0.1", grpc_port, server_memory_limit="50%")
-        sinks.append(server)
-        rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=server.uri)
-        url = f"http://localhost:{web_port}/?url={quote(server.uri, safe=':/')}"
-    rec.set_sinks(*sinks)
-    return url
+def _stream(
+    rec: rr.RecordingStream, run: Run, report: GradeReport | None, grade_problem: str
+) -> tuple[Scene, str]:
+    """Read the run once into a scene (images sent as they come), then send the scene."""
+    with rec:  # leaving the block flushes and finalises file sinks
+        rec.send_recording_name(run.path.stem)
+        scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
+        decode = _Decoder()
+        for m in run.messages(decode=False):
+            scene.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
+            if scene.pending_image_bytes >= IMAGE_BATCH_BYTES:
+                send_images(rec, scene, scene.take_images())
+        scene.close()
+        problem = _log_problem(run, decode)
+        if problem:
+            scene.add_note(f"incomplete log: {problem}")
+        if report is not None:
+            scene.add_grade(report)
+        if grade_problem:
+            scene.add_note(grade_problem, "ERROR")
+        send_scene(rec, scene)
+    return scene, problem
 
 
-def view_file(
-    path: str | os.PathLike[str],
+def _write_failed(rrd: Path, part: Path, err: BaseException) -> UsageError:
+    """rerun's file writer says only that it stopped; a probe write beside the file finds the
+    reason (a full disk, a file size limit) while the partial file still holds its space."""
+    probe = part.with_name(part.name + ".probe")
+    reason = ""
+    try:
+        with open(probe, "wb") as f:
+            f.write(bytes(1 << 20))
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as probe_err:
+        if probe_err.errno == errno.ENOSPC:
+            return UsageError(f"{rrd}: the disk is full; free some space and run again")
+        reason = probe_err.strerror or str(probe_err)
+    finally:
+        with contextlib.suppress(OSError):
+            probe.unlink()
+    return UsageError(
+        f"{rrd}: cannot write the view ({reason or _first_line(err)}); choose another path"
+    )
+
+
+def _start_viewer(
+    log: Path, output: Output, *, overwrite: bool, grpc_port: int, web_port: int, bind: str
+) -> tuple[ViewerProcess | None, Output, str]:
+    """Start the viewer ``output`` asks for. A native viewer that cannot start is replaced by
+    the file next to the log (returned, with why); a web viewer that cannot start is an error."""
+    if not (output.spawn or output.web):
+        return None, output, ""
+    try:
+        viewer = ViewerProcess.start(
+            web=output.web, bind=bind, grpc_port=grpc_port, web_port=web_port
+        )
+    except UsageError as err:
+        if output.web:
+            raise
+        fallback = default_rrd_path(log)
+        try:
+            check_rrd(fallback, log, overwrite=overwrite, option="")
+        except UsageError as no_file:
+            raise UsageError(f"{err}; and {no_file}") from no_file
+        return None, Output(rrd=fallback), str(err)
+    return viewer, output, ""
+
+
+def _temporary(rrd: Path) -> Path:
+    """The temporary file beside ``rrd`` that rerun writes (renamed to ``rrd`` when done)."""
+    part = rrd.with_name(f".{rrd.name}.{os.getpid()}.part")
+    try:
+        rrd.parent.mkdir(parents=True, exist_ok=True)
+        part.touch()
+    except OSError as err:
+        raise UsageError(f"{rrd}: cannot write here ({err.strerror}); choose another path") from err
+    return part
+
+
+def view_run(
+    run: Run,
     output: Output,
     *,
     grade: bool = False,
+    overwrite: bool = False,
     grpc_port: int = 9876,
     web_port: int = 9090,
+    bind: str = DEFAULT_BIND,
 ) -> ViewResult:
-    """Read the log at ``path`` once and send it to ``output``; see the module docstring.
+    """Send the opened ``run`` to ``output``, reading its messages once; see the module docs.
 
-    Raises :class:`usar_replay.errors.NotAnMcapFile` (before anything is written) when the path is
-    not a log. A truncated or interrupted log is shown as far as it goes, and
-    :attr:`ViewResult.problem` says how far.
+    An ``.rrd`` is written to a temporary name beside it and renamed when complete (nothing is
+    left behind on failure; an existing file is replaced only with ``overwrite``). A damaged log
+    is shown as far as it goes, and :attr:`ViewResult.problem` says what is damaged. When the
+    native viewer cannot start, the view goes to the file next to the log instead and
+    :attr:`ViewResult.viewer_problem` says why.
     """
-    from usar_replay import bag  # workflow-level imports (see the module docstring)
-    from usar_replay.info import SCENARIO_ATTACHMENT
-
-    reader = bag.BagReader(path)
     started = time.perf_counter()
-    scenario: Scenario | None = None
-    text = reader.attachments.get(SCENARIO_ATTACHMENT)
-    if text is not None:  # parsed here, not with replay.load_scenario: that imports OpenCV
-        try:
-            scenario = from_toml(text.decode(), source=f"{reader.path}:{SCENARIO_ATTACHMENT}")
-        except InvalidScenario:
-            scenario = None  # the messages can still be shown, without the building
     report: GradeReport | None = None
     grade_problem = ""
     if grade:
-        # grade_file, not a grader riding along on this pass: the rubric lines must be exactly
-        # what `usar grade` reports (it reads only the few topics it needs: about 2 s on a course
-        # log, against about 5 s for the whole view).
-        from usar_replay.grade import grade_file
+        # the grader's own pass, not one riding along on this one: the rubric lines must be
+        # exactly what `usar grade` reports (it decodes only the few topics it needs)
+        from usar_replay.grade import grade_run
 
         try:
-            report = grade_file(path)
+            report = grade_run(run)
         except UsarError as err:
             grade_problem = f"cannot grade: {err}"
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-    viewer_problem = ""
-    if output.spawn and not _spawn(rec, grpc_port):
-        viewer_problem = "the rerun viewer did not start on this display"
-        output = Output(rrd=default_rrd_path(path))
-    part = None
-    if output.rrd is not None:
-        output.rrd.parent.mkdir(parents=True, exist_ok=True)
-        part = output.rrd.with_name(output.rrd.name + ".part")
-        try:
-            part.touch()
-        except OSError as err:
-            raise UsageError(
-                f"{output.rrd}: cannot write here ({err.strerror}); use --save"
-            ) from err
-    url = None if output.spawn else _sinks(rec, output, part, (grpc_port, web_port))
+    viewer, output, viewer_problem = _start_viewer(
+        run.path, output, overwrite=overwrite, grpc_port=grpc_port, web_port=web_port, bind=bind
+    )
+    part: Path | None = None
     try:
-        logger, problem = _log_all(rec, reader, scenario, report, grade_problem)
-    except RuntimeError as err:
-        if not output.spawn:
-            raise
-        # the viewer went away while the log streamed to it: write the file instead
-        result = view_file(path, Output(rrd=default_rrd_path(path)), grade=grade)
-        result.viewer_problem = f"the rerun viewer went away ({_first_line(err)})"
-        return result
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        sinks: list[Any] = []
+        if output.rrd is not None:
+            part = _temporary(output.rrd)
+            sinks.append(rr.FileSink(part))
+        if viewer is not None:
+            sinks.append(rr.GrpcSink(viewer.grpc_url))
+        rec.set_sinks(*sinks)
+        try:
+            scene, problem = _stream(rec, run, report, grade_problem)
+        except RuntimeError as err:  # rerun's sinks: the file writer or the viewer failed
+            if output.rrd is not None and part is not None:
+                raise _write_failed(output.rrd, part, err) from err
+            raise UsageError(
+                f"the rerun viewer went away while the view was sent ({_first_line(err)}); "
+                "open it again, or write a file with --save OUT.rrd"
+            ) from err
+        if part is not None and output.rrd is not None:
+            if output.rrd.exists() and not overwrite:
+                raise UsageError(f"{output.rrd}: appeared while this command ran; left as it is")
+            os.replace(part, output.rrd)
     except BaseException:
-        if part is not None:
-            part.unlink(missing_ok=True)
+        if viewer is not None:
+            viewer.stop()
         raise
-    if part is not None and output.rrd is not None:
-        os.replace(part, output.rrd)
+    finally:
+        if part is not None:
+            with contextlib.suppress(FileNotFoundError):
+                part.unlink()
     return ViewResult(
         rrd=output.rrd,
-        url=url,
+        url=viewer.web_url if viewer is not None else None,
         spawned=output.spawn,
-        frames=logger.images.sent,
-        messages=logger.messages,
+        frames=scene.images_taken,
+        messages=scene.messages,
         seconds=time.perf_counter() - started,
         problem=problem,
         grade_problem=grade_problem,
         viewer_problem=viewer_problem,
-        recording=rec if output.web else None,
+        viewer=viewer if output.web else None,
     )
 
 
@@ -1162,48 +833,13 @@ def _first_line(err: BaseException) -> str:
     return (str(err).strip().splitlines() or [type(err).__name__])[0][:160]
 
 
-def _log_all(
-    rec: rr.RecordingStream,
-    reader: BagReader,
-    scenario: Scenario | None,
-    report: GradeReport | None,
-    grade_problem: str,
-) -> tuple[LogToRerun, str]:
-    """Stream the whole log into ``rec``; returns the logger and the log's problem (or "")."""
-    from usar_replay.bag import RUN_METADATA
-
-    with rec:  # leaving the block flushes and finalises file sinks (gRPC servers stay up)
-        rec.send_recording_name(reader.path.stem)
-        logger = LogToRerun(
-            rec, scenario, marker_size=_marker_size(reader.metadata.get(RUN_METADATA, {}))
-        )
-        decode = _Decoder()
-        for m in reader.messages(decode_messages=False):
-            logger.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
-        problem = ""
-        if reader.damage is not None:
-            problem = reader.damage.describe()
-        elif reader.status != "complete":
-            problem = f"the recording is marked {reader.status}"
-        if decode.failures:
-            problem = (problem + "; " if problem else "") + (
-                f"{decode.failures} messages could not be decoded (first: {decode.first_failure})"
-            )
-        if problem:
-            logger.add_note(f"incomplete log: {problem}")
-        if report is not None:
-            logger.add_grade(report)
-        if grade_problem:
-            logger.add_note(grade_problem, "ERROR")
-        logger.finish()
-    return logger, problem
-
-
 def wait_until_interrupted(result: ViewResult, poll_s: float = 1.0) -> None:
-    """Keep serving the web viewer until Ctrl-C (the KeyboardInterrupt goes on to the caller)."""
+    """Keep the web viewer serving until Ctrl-C (the KeyboardInterrupt goes on to the caller);
+    its server process is stopped either way."""
     try:
-        while True:
+        proc = result.viewer.proc if result.viewer is not None else None
+        while proc is None or proc.poll() is None:
             time.sleep(poll_s)
     finally:
-        if result.recording is not None:
-            result.recording.disconnect()
+        if result.viewer is not None:
+            result.viewer.stop()
