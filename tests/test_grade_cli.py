@@ -133,7 +133,7 @@ def test_ctrl_c_during_a_parallel_batch_is_one_line_and_130(
         assert chunk, "the grader ended before showing progress"
         seen += chunk
     os.killpg(proc.pid, signal.SIGINT)
-    proc.wait(timeout=120)
+    proc.wait(timeout=300)  # workers finish the file in hand; generous for a loaded machine
     rest = b""
     try:
         while chunk := os.read(master, 4096):
