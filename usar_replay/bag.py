@@ -15,6 +15,14 @@ Why this shape:
   file without a summary (truncated: a killed process, a partial copy) is read record by record up
   to the last intact chunk, and :attr:`BagReader.damage` says how far it got. Nothing raises a
   traceback for a damaged file.
+* **Camera frames in chunks of their own** (``BagWriter(image_chunks=True)``): a reader that
+  asks for other topics (``usar grade``) then skips the image chunks by the chunk indexes'
+  message-index offsets and never decompresses them. The two kinds of chunk are finished
+  together, at a log-time boundary, non-image chunk first: each pair covers its own time
+  window, so log-time order across pairs is file order, and within one sim time a log-time
+  ordered read (mcap breaks ties by chunk offset) yields that time's non-image messages, then
+  its image. That is a change of order at equal times for messages written *after* the image at
+  the same time, hence opt-in: the recorder must make the image the last input of its tick.
 * Log time = publish time = sim time in nanoseconds. Log times never go backwards in a usar log
   (the writer refuses), so file order is time order even when the summary is lost.
 """
@@ -30,6 +38,7 @@ from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+from mcap._chunk_builder import ChunkBuilder
 from mcap.reader import SeekingReader
 from mcap.records import Attachment, Channel, Chunk, Metadata, Schema
 from mcap.records import Message as McapMessage
@@ -39,6 +48,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from usar_replay import __version__, msgs
+from usar_replay.contract import IMAGE
 from usar_replay.errors import LogError, NotAnMcapFile
 
 __all__ = [
@@ -160,6 +170,57 @@ def decode(data: bytes, msgtype: str) -> msgs.Message:
 # --- writing ------------------------------------------------------------------------------------
 
 
+_BUILDER = "_Writer__chunk_builder"
+_FINALIZE = "_Writer__finalize_chunk"
+"""mcap 1.x's Writer keeps its open chunk in a private attribute; :class:`_PairedWriter` swaps
+it (tests/test_bag.py checks the layout this gives, so an mcap that changes it fails there)."""
+
+
+class _PairedWriter(Writer):
+    """An mcap ``Writer`` with two open chunks, one for image topics and one for the rest.
+
+    Chunks are finished only by :meth:`finish_pair` (both, non-image first) or at the end, never
+    by the base class (its size limit is set out of reach): the caller decides, at log-time
+    boundaries, so that each pair of chunks covers its own time window.
+    """
+
+    def __init__(self, stream: IO[bytes], compression: CompressionType) -> None:
+        super().__init__(stream, chunk_size=1 << 62, compression=compression)
+        self._builders: dict[bool, ChunkBuilder] = {
+            False: getattr(self, _BUILDER),
+            True: ChunkBuilder(),
+        }
+        self._schema_in: dict[bool, set[int]] = {False: set(), True: set()}
+
+    def use(self, images: bool) -> None:
+        """Route what is added next (schemas, channels, messages) to that kind's chunk."""
+        setattr(self, _BUILDER, self._builders[images])
+
+    def builder_size(self, images: bool) -> int:
+        return int(self._builders[images].count)
+
+    def schema_into(self, images: bool, schema: Schema) -> None:
+        """Make sure the chunk of this kind holds ``schema`` before a channel of it (a stream
+        reader of a file without its summary resolves channels from records seen earlier)."""
+        if schema.id not in self._schema_in[images]:
+            self._builders[images].add_schema(schema)
+            self._schema_in[images].add(schema.id)
+
+    def finish_pair(self) -> None:
+        """Write both open chunks (non-image first) and start new ones."""
+        current = getattr(self, _BUILDER)
+        for images in (False, True):
+            setattr(self, _BUILDER, self._builders[images])
+            getattr(self, _FINALIZE)()
+        self._schema_in = {False: set(), True: set()}
+        setattr(self, _BUILDER, current)
+
+    def finish(self) -> None:
+        self.finish_pair()
+        self.use(False)
+        super().finish()  # type: ignore[no-untyped-call]
+
+
 class BagWriter:
     """Writes a usar log: one MCAP file, ``ros2`` profile, zstd chunks, indexes and summary.
 
@@ -167,6 +228,9 @@ class BagWriter:
     it by ``KeyboardInterrupt`` closes it as ``interrupted`` (still indexed and readable) and lets
     the interrupt go on; any other exception also closes the file, marked ``interrupted`` with the
     error's text, so a crash loses nothing that was already written.
+
+    ``image_chunks=True`` writes the ``image_topics`` in chunks of their own (see the module's
+    notes for the order this gives at equal log times); ``chunk_size`` then bounds each kind.
     """
 
     def __init__(
@@ -175,6 +239,8 @@ class BagWriter:
         *,
         chunk_size: int = 1 << 20,
         compression: str = "zstd",
+        image_chunks: bool = False,
+        image_topics: Iterable[str] = (IMAGE,),
     ) -> None:
         self.path = Path(path)
         self.part_path = self.path.with_name(self.path.name + ".part")
@@ -183,9 +249,16 @@ class BagWriter:
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4}.get(compression)
         if comp is None:
             comp = CompressionType.NONE
-        self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)
+        self._paired: _PairedWriter | None = None
+        if image_chunks:
+            self._paired = _PairedWriter(self._file, comp)
+            self._writer: Writer = self._paired
+        else:
+            self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)
+        self._chunk_size = chunk_size
+        self._image_topics = frozenset(image_topics)
         self._writer.start(profile=PROFILE, library=f"usar-replay/{__version__}")
-        self._schemas: dict[str, int] = {}
+        self._schemas: dict[str, Schema] = {}
         self._channels: dict[str, tuple[int, str]] = {}
         self._sequence: dict[str, int] = {}
         self._last_time = 0
@@ -213,17 +286,27 @@ class BagWriter:
             if known[1] != msgtype:
                 raise ValueError(f"topic {topic} has type {known[1]}, cannot write {msgtype}")
             return known[0]
-        schema_id = self._schemas.get(msgtype)
-        if schema_id is None:
+        schema = self._schemas.get(msgtype)
+        if schema is None:
+            text = schema_text(msgtype).encode()
+            if self._paired is not None:
+                self._paired.use(topic in self._image_topics)
             schema_id = self._writer.register_schema(
-                name=msgtype, encoding=SCHEMA_ENCODING, data=schema_text(msgtype).encode()
+                name=msgtype, encoding=SCHEMA_ENCODING, data=text
             )
-            self._schemas[msgtype] = schema_id
+            schema = Schema(id=schema_id, name=msgtype, encoding=SCHEMA_ENCODING, data=text)
+            self._schemas[msgtype] = schema
+            if self._paired is not None:
+                self._paired.schema_into(topic in self._image_topics, schema)
+        elif self._paired is not None:
+            self._paired.schema_into(topic in self._image_topics, schema)
         qos = _qos_yaml(transient_local=topic in LATCHED_TOPICS)
+        if self._paired is not None:
+            self._paired.use(topic in self._image_topics)
         channel_id = self._writer.register_channel(
             topic=topic,
             message_encoding=MESSAGE_ENCODING,
-            schema_id=schema_id,
+            schema_id=schema.id,
             metadata={"offered_qos_profiles": qos},
         )
         self._channels[topic] = (channel_id, msgtype)
@@ -244,7 +327,14 @@ class BagWriter:
             )
         if log_time_ns <= 0:
             raise ValueError("log times must be positive (some tools mishandle 0)")
+        paired = self._paired
+        if paired is not None and log_time_ns > self._last_time:
+            limit = self._chunk_size
+            if paired.builder_size(False) > limit or paired.builder_size(True) > limit:
+                paired.finish_pair()  # only between two log times: the windows never overlap
         channel_id = self._channel(topic, msgtype)
+        if paired is not None:
+            paired.use(topic in self._image_topics)
         seq = self._sequence[topic]
         self._sequence[topic] = seq + 1
         self._writer.add_message(
