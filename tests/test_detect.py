@@ -183,3 +183,8 @@ def test_the_same_bytes_reuse_the_detections_under_the_new_header(views: list) -
     wide = dataclasses.replace(info, k=(info.k[0] * 2, *info.k[1:]))
     assert detect(later, wide, DetectorParams()).transforms != first.transforms
     assert detect(later, info, DetectorParams(dictionary="DICT_5X5_50")).transforms == ()
+
+
+def test_the_decoder_build_is_named() -> None:
+    named = detect_module.image_codecs()
+    assert named.startswith(f"opencv {cv2.__version__}; JPEG ") and "; PNG " in named

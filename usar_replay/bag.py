@@ -373,7 +373,7 @@ class BagWriter:
                     "end_time_ns": str(self._last_time),
                 },
             )
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]
         finally:
             self._file.close()
         os.replace(self.part_path, self.path)

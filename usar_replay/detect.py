@@ -48,6 +48,7 @@ __all__ = [
     "detect",
     "detect_with_corners",
     "encode_image",
+    "image_codecs",
 ]
 
 log = logging.getLogger("usar_replay.detect")
@@ -169,6 +170,23 @@ class _LastEncoded:
 
 
 _ENCODED = _LastEncoded()
+
+
+@functools.cache
+def image_codecs() -> str:
+    """Which decoder turns recorded bytes into pixels: OpenCV and its JPEG and PNG libraries.
+
+    A JPEG decode is deterministic for one decoder build, so a run records this string (the
+    recorder's ``usar.run`` metadata, key ``image_codecs``) and a replay on another build can
+    say why its pixels might differ. Example: ``opencv 5.0.0; JPEG build-libjpeg-turbo (ver
+    3.1.2-70); PNG /usr/local/lib/libpng.so (ver 1.6.58)``.
+    """
+    found = {}
+    for line in cv2.getBuildInformation().splitlines():
+        name, _, value = line.strip().partition(":")
+        if name in ("JPEG", "PNG") and name not in found:
+            found[name] = " ".join(value.split())
+    return "; ".join([f"opencv {cv2.__version__}"] + [f"{k} {v}" for k, v in sorted(found.items())])
 
 
 def decode_image(data: bytes) -> np.ndarray:

@@ -262,13 +262,15 @@ class Simulator:
         c = self._client
         col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=c)
         vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c)
-        return p.createMultiBody(
-            baseMass=mass,
-            baseCollisionShapeIndex=col,
-            baseVisualShapeIndex=vis,
-            basePosition=pos,
-            baseOrientation=_quat_yaw(yaw),
-            physicsClientId=c,
+        return int(
+            p.createMultiBody(
+                baseMass=mass,
+                baseCollisionShapeIndex=col,
+                baseVisualShapeIndex=vis,
+                basePosition=pos,
+                baseOrientation=_quat_yaw(yaw),
+                physicsClientId=c,
+            )
         )
 
     def _build_world(self) -> None:
