@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cv2
@@ -9,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from usar_replay import detect as detect_module
 from usar_replay import msgs
 from usar_replay.detect import DetectError, DetectorParams, decode_image, detect, encode_image
 from usar_replay.errors import UsageError
@@ -117,3 +119,72 @@ def test_corrupt_frame_is_a_detect_error(views: list) -> None:
 def test_unknown_dictionary_is_a_usage_error() -> None:
     with pytest.raises(UsageError, match="DICT_9X9_1"):
         DetectorParams(dictionary="DICT_9X9_1")
+
+
+# -- the codec and the caches for unchanged frames ------------------------------------------------
+
+
+def _forget() -> None:
+    """Empty the encoder's and detector's one-frame memories (as in a fresh process)."""
+    detect_module._ENCODED.last = None
+    detect_module._DETECTED.last = None
+
+
+@pytest.mark.parametrize("fmt", ["png", "jpeg"])
+def test_equal_pixels_give_the_bytes_a_fresh_encode_gives(views: list, fmt: str) -> None:
+    pixels = decode_image(views[0][0].data)
+    first = encode_image(pixels, fmt)
+    again = encode_image(pixels.copy(), fmt)  # equal pixels, another array: from the memory
+    _forget()
+    assert again == first == encode_image(pixels.copy(), fmt)
+    other = pixels.copy()
+    other[0, 0, 0] ^= 1  # one changed bit is a new frame
+    assert encode_image(other, fmt) != first or fmt == "jpeg"
+    assert encode_image(pixels, "jpeg", 50) != encode_image(pixels, "jpeg", 95)
+
+
+def test_jpeg_round_trip_is_deterministic_and_close(views: list) -> None:
+    pixels = decode_image(views[1][0].data)
+    data = encode_image(pixels, "jpeg")
+    assert data[:2] == b"\xff\xd8"  # a JPEG (CompressedImage.format "jpeg")
+    decoded = decode_image(data)
+    assert np.array_equal(decoded, decode_image(bytes(data)))  # one decoder: one set of pixels
+    assert decoded.shape == pixels.shape
+    assert np.mean(np.abs(decoded.astype(int) - pixels.astype(int))) < 3.0
+
+
+def test_jpeg_detections_stay_within_a_millimetre_of_png(views: list) -> None:
+    for image, info, _eye, rot, _ in views:
+        png = detect(image, info, DetectorParams()).transforms
+        jpeg_image = msgs.CompressedImage(
+            header=image.header, format="jpeg", data=encode_image(decode_image(image.data), "jpeg")
+        )
+        jpg = detect(jpeg_image, info, DetectorParams()).transforms
+        assert [f.fiducial_id for f in jpg] == [f.fiducial_id for f in png]
+        a, b = png[0].transform.translation, jpg[0].transform.translation
+        moved = rot @ np.array([a.x - b.x, a.y - b.y, a.z - b.z])
+        assert np.linalg.norm(moved) < 0.001
+
+
+def test_the_same_bytes_reuse_the_detections_under_the_new_header(views: list) -> None:
+    image, info, *_ = views[2]
+    first = detect(image, info, DetectorParams(), image_seq=1)
+    later = msgs.CompressedImage(
+        header=msgs.Header(stamp=msgs.Time.from_ns(99), frame_id=image.header.frame_id),
+        format=image.format,
+        data=bytes(image.data),
+    )
+    reused = detect(later, info, DetectorParams(), image_seq=2)
+    _forget()
+    fresh = detect(later, info, DetectorParams(), image_seq=2)
+    assert reused == fresh and reused.header == later.header and reused.image_seq == 2
+    assert reused.transforms == first.transforms
+    # another camera matrix or other parameters are another question
+    wide = dataclasses.replace(info, k=(info.k[0] * 2, *info.k[1:]))
+    assert detect(later, wide, DetectorParams()).transforms != first.transforms
+    assert detect(later, info, DetectorParams(dictionary="DICT_5X5_50")).transforms == ()
+
+
+def test_the_decoder_build_is_named() -> None:
+    named = detect_module.image_codecs()
+    assert named.startswith(f"opencv {cv2.__version__}; JPEG ") and "; PNG " in named

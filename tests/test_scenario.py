@@ -83,7 +83,7 @@ def _broken(edit: str, new: str) -> str:
         ("id = 1\n", "id = 50\n", "markers[1].id: 50 is outside DICT_4X4_50"),
         ('"DICT_4X4_50"', '"DICT_4X4_5O"', "unknown ArUco dictionary"),
         ("width = 640", "width = 0", "camera.width: must be >= 16"),
-        ('encoding = "png"', 'encoding = "gif"', "camera.encoding"),
+        ('encoding = "jpeg"', 'encoding = "gif"', "camera.encoding"),
         ("time_limit_s = 600.0", "time_limit_s = -1.0", "time_limit_s: must be a positive"),
         (
             "target_1 = [",

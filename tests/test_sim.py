@@ -193,3 +193,55 @@ def test_explorer_drives_to_every_course_target_in_the_simulator() -> None:
 def _yaw_of(pose: msgs.Pose) -> float:
     q = pose.orientation
     return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+# -- frames reused when nothing moved ---------------------------------------------------------
+
+
+def _room_sim() -> Simulator:
+    from conftest import one_room
+
+    return Simulator(one_room(), renderer="tiny")
+
+
+def test_a_parked_camera_reuses_its_frame_exactly() -> None:
+    """Nothing moved: no render, and the pixels are those a fresh simulator renders."""
+    with _room_sim() as a:
+        a.teleport("explorer", -1.2, 0.0, 0.1)
+        first = a.render_camera()
+        again = a.render_camera()
+        assert a.frames_rendered == 1 and again is first and not again.flags.writeable
+        assert a.frame_seq == 2
+        with _room_sim() as fresh:
+            fresh.teleport("explorer", -1.2, 0.0, 0.1)
+            assert np.array_equal(fresh.render_camera(), again)
+
+
+def test_a_robot_moving_out_of_view_does_not_render_and_changes_no_pixel() -> None:
+    with _room_sim() as a:
+        a.teleport("explorer", -1.2, 0.0, 0.0)  # facing +x: the west half of the room is behind
+        a.render_camera()
+        behind = [(-1.9, -1.3), (-1.9, 1.3), (-1.85, 0.0)]
+        for x, y in behind:
+            a.teleport("follower", x, y, 0.7)
+            img = a.render_camera()
+            assert a.frames_rendered == 1
+            with _room_sim() as fresh:  # the same world, rendered from scratch
+                fresh.teleport("explorer", -1.2, 0.0, 0.0)
+                fresh.teleport("follower", x, y, 0.7)
+                assert np.array_equal(fresh.render_camera(), img)
+
+
+def test_a_robot_moving_in_view_or_the_camera_moving_renders_again() -> None:
+    with _room_sim() as a:
+        a.teleport("explorer", -1.2, 0.0, 0.0)
+        base = a.render_camera().copy()
+        a.teleport("follower", 0.8, 0.2, 0.0)  # in front of the camera
+        seen = a.render_camera()
+        assert a.frames_rendered == 2 and not np.array_equal(seen, base)
+        a.teleport("follower", 0.8, 0.25, 0.0)  # moved while in view
+        a.render_camera()
+        assert a.frames_rendered == 3
+        a.teleport("explorer", -1.2, 0.0, 1e-12)  # the smallest turn is a new view
+        a.render_camera()
+        assert a.frames_rendered == 4

@@ -152,8 +152,8 @@ def test_every_camera_frame_is_an_image_row_with_the_recorded_bytes(viewed: View
     first = next(_messages(viewed.reader, CAMERA_TOPIC))
     assert isinstance(first, msgs.CompressedImage)
     blob = bytes(image.values("EncodedImage:blob")[0][0])
-    assert blob == first.data  # logged as recorded: PNG bytes, not decoded pixels
-    assert image.values("EncodedImage:media_type")[0] == ["image/png"]
+    assert blob == first.data  # logged as recorded: JPEG bytes (the default), not decoded pixels
+    assert image.values("EncodedImage:media_type")[0] == ["image/jpeg"]
 
 
 @pytest.mark.parametrize("robot", ["explorer", "follower"])
@@ -357,7 +357,7 @@ def test_the_mcap_opens_in_rerun_own_mcap_loader(
     reader = BagReader(log)
     image = entities[CAMERA_TOPIC]
     assert image.rows("EncodedImage:blob") == reader.topics[CAMERA_TOPIC].count
-    assert bytes(image.values("EncodedImage:blob")[0][0])[:4] == b"\x89PNG"
+    assert bytes(image.values("EncodedImage:blob")[0][0])[:2] == b"\xff\xd8"  # format "jpeg"
     children = {c for row in entities["/tf"].values("Transform3D:child_frame") for c in row}
     assert {"explorer_tf/base_footprint", "marker_frame"} <= children
     parents = {p for row in entities["/tf_static"].values("Transform3D:parent_frame") for p in row}

@@ -30,6 +30,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import threading
 
 import cv2
 import numpy as np
@@ -47,6 +48,7 @@ __all__ = [
     "detect",
     "detect_with_corners",
     "encode_image",
+    "image_codecs",
 ]
 
 log = logging.getLogger("usar_replay.detect")
@@ -57,6 +59,8 @@ DICTIONARIES = tuple(
 )
 PNG_COMPRESSION = 6
 """Fixed PNG level: the same frame always encodes to the same bytes."""
+JPEG_QUALITY = 80
+"""Fixed JPEG quality (libjpeg-turbo inside OpenCV: its version fixes the decoded pixels)."""
 
 
 class DetectError(UsarError):
@@ -82,17 +86,76 @@ def _detector(params: DetectorParams) -> cv2.aruco.ArucoDetector:
     return cv2.aruco.ArucoDetector(dictionary, p)
 
 
-def encode_image(image_bgr: np.ndarray, fmt: str = "png", jpeg_quality: int = 90) -> bytes:
-    """Compress a BGR frame as it is recorded (PNG lossless by default; JPEG optional)."""
-    if fmt == "png":
-        ok, buf = cv2.imencode(".png", image_bgr, [cv2.IMWRITE_PNG_COMPRESSION, PNG_COMPRESSION])
-    elif fmt == "jpeg":
-        ok, buf = cv2.imencode(".jpg", image_bgr, [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality])
-    else:
+def encode_image(
+    image_bgr: np.ndarray,
+    fmt: str = "png",
+    jpeg_quality: int = JPEG_QUALITY,
+    *,
+    png_level: int = PNG_COMPRESSION,
+) -> bytes:
+    """Compress a BGR frame as it is recorded (``png``: lossless; ``jpeg``: lossy, smaller).
+
+    JPEG is written with optimised Huffman tables: a second pass over the frame, and about a
+    third fewer bytes on these small, flat-shaded frames (bench/bench_codec.py); still one
+    deterministic output for given pixels, quality and libjpeg build.
+
+    The same pixels with the same settings always give the same bytes, so the previous call's
+    result is kept and handed back when the next frame's pixels are equal (a parked camera): an
+    equality test of the raw pixels costs about 1% of an encode, and the bytes are exactly what
+    a fresh encode gives.
+    """
+    if fmt not in ("png", "jpeg"):
         raise ValueError(f"unknown image format {fmt!r} (png or jpeg)")
+    key = (fmt, png_level if fmt == "png" else jpeg_quality)
+    with _ENCODED.lock:
+        last = _ENCODED.last
+        if (
+            last is not None
+            and last[0] == key
+            and last[1].shape == image_bgr.shape
+            and last[1].dtype == image_bgr.dtype
+            and np.array_equal(last[1], image_bgr)
+        ):
+            return last[2]
+    if fmt == "png":
+        ok, buf = cv2.imencode(".png", image_bgr, [cv2.IMWRITE_PNG_COMPRESSION, png_level])
+    else:
+        flags = [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality, cv2.IMWRITE_JPEG_OPTIMIZE, 1]
+        ok, buf = cv2.imencode(".jpg", image_bgr, flags)
     if not ok:
         raise ValueError("OpenCV could not encode the frame")
-    return buf.tobytes()
+    data = buf.tobytes()
+    with _ENCODED.lock:
+        _ENCODED.last = (key, image_bgr.copy(), data)
+    return data
+
+
+class _LastEncoded:
+    """The previous frame :func:`encode_image` compressed: (settings, pixels, bytes)."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.last: tuple[tuple[str, int], np.ndarray, bytes] | None = None
+
+
+_ENCODED = _LastEncoded()
+
+
+@functools.cache
+def image_codecs() -> str:
+    """Which decoder turns recorded bytes into pixels: OpenCV and its JPEG and PNG libraries.
+
+    A JPEG decode is deterministic for one decoder build, so a run records this string (the
+    recorder's ``usar.run`` metadata, key ``image_codecs``) and a replay on another build can
+    say why its pixels might differ. Example: ``opencv 5.0.0; JPEG build-libjpeg-turbo (ver
+    3.1.2-70); PNG /usr/local/lib/libpng.so (ver 1.6.58)``.
+    """
+    found = {}
+    for line in cv2.getBuildInformation().splitlines():
+        name, _, value = line.strip().partition(":")
+        if name in ("JPEG", "PNG") and name not in found:
+            found[name] = " ".join(value.split())
+    return "; ".join([f"opencv {cv2.__version__}"] + [f"{k} {v}" for k, v in sorted(found.items())])
 
 
 def decode_image(data: bytes) -> np.ndarray:
@@ -179,8 +242,50 @@ def detect_with_corners(
     params: DetectorParams,
     image_seq: int = 0,
 ) -> tuple[msgs.FiducialTransformArray, dict[int, np.ndarray]]:
-    """:func:`detect`, plus each published detection's four image corners (for drawing)."""
-    img = decode_image(image.data)
+    """:func:`detect`, plus each published detection's four image corners (for drawing).
+
+    The detections are a pure function of (frame bytes, camera matrix and distortion,
+    parameters); the header and ``image_seq`` are the frame's. So the previous call's detections
+    are kept and, when the next call has the same bytes, camera and parameters (a parked camera,
+    whose encoder hands back the very same bytes), reused under the new header and sequence
+    number without decoding the frame: exactly what detecting again would give.
+    """
+    key = (bytes(image.data), info.k, info.d, params)
+    with _DETECTED.lock:
+        last = _DETECTED.last
+        hit = last is not None and last[0] == key
+        found = last[1] if last is not None and hit else None
+    if found is None:
+        found = _detections(image.data, info, params, image_seq)
+        with _DETECTED.lock:
+            _DETECTED.last = (key, found)
+    out = msgs.FiducialTransformArray(
+        header=image.header,
+        image_seq=image_seq,
+        transforms=tuple(v[0] for _, v in found),
+    )
+    return out, {mid: v[1].copy() for mid, v in found}
+
+
+_Found = tuple[tuple[int, tuple[msgs.FiducialTransform, np.ndarray]], ...]
+
+
+class _LastDetected:
+    """The previous frame :func:`detect` looked at: ((bytes, K, D, params), detections)."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.last: tuple[tuple[object, ...], _Found] | None = None
+
+
+_DETECTED = _LastDetected()
+
+
+def _detections(
+    data: bytes, info: msgs.CameraInfo, params: DetectorParams, image_seq: int
+) -> _Found:
+    """Each valid detection in the frame, sorted by ID: (ID, (transform, corners))."""
+    img = decode_image(data)
     corners, ids, _ = _detector(params).detectMarkers(img)
     k = np.array(info.k, dtype=np.float64).reshape(3, 3)
     dist = np.array(info.d if info.d else (0.0,) * 5, dtype=np.float64)
@@ -218,12 +323,7 @@ def detect_with_corners(
                 ),
                 pts,
             )
-    out = msgs.FiducialTransformArray(
-        header=image.header,
-        image_seq=image_seq,
-        transforms=tuple(v[0] for _, v in sorted(found.items())),
-    )
-    return out, {mid: v[1] for mid, v in sorted(found.items())}
+    return tuple(sorted(found.items()))
 
 
 def detect(

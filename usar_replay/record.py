@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from usar_replay import __version__, bag, cdr, contract, msgs
-from usar_replay.detect import encode_image
+from usar_replay.detect import encode_image, image_codecs
 from usar_replay.nav import OccupancyGrid
 from usar_replay.navigation import grid_to_msg
 from usar_replay.run import MissionInfo
@@ -136,6 +136,7 @@ def _run_metadata(renderer: str) -> dict[str, str]:
         "opencv": cv2.__version__,
         "pybullet_api": str(pybullet.getAPIVersion()),
         "renderer": renderer,
+        "image_codecs": image_codecs(),
         "log_format": "2",
     }
 

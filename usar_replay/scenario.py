@@ -106,7 +106,7 @@ class CameraSettings:
     height: int = 480
     rate_hz: float = 10.0
     hfov: float = 1.3439
-    encoding: str = "png"
+    encoding: str = "jpeg"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -103,6 +103,14 @@ OBSTACLE_RGBA = (0.55, 0.60, 0.70, 1.0)
 FLOOR_RGBA = (0.45, 0.42, 0.38, 1.0)
 ROBOT_RGBA = (0.20, 0.22, 0.25, 1.0)
 LIGHT_DIRECTION = (0.4, 0.3, 1.0)
+ROBOT_VISUAL_HALF = (0.133, 0.133, 0.047)
+"""Half extents of a robot's visual box, in base_footprint (x forward)."""
+ROBOT_VISUAL_OFFSET = (-0.064, 0.0, 0.057)
+"""Centre of a robot's visual box, in base_footprint."""
+NEAR_PLANE = 0.02
+"""m, the camera's near clipping distance."""
+CULL_MARGIN_PX = 8.0
+"""Pixels of slack around the image when deciding that a robot cannot be in view."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -188,6 +196,9 @@ class Simulator:
         self.camera_period_ns = round(1e9 / cam.rate_hz)
         self.next_frame_ns = start_time_ns
         self.frame_seq = 0
+        self.frames_rendered = 0
+        """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
+        self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
         self.renderer_name = "tiny"
         self._renderer_flag = p.ER_TINY_RENDERER
         if renderer in ("auto", "egl"):
@@ -203,7 +214,7 @@ class Simulator:
         self._projection = p.computeProjectionMatrixFOV(
             fov=fov_v,
             aspect=cam.width / cam.height,
-            nearVal=0.02,
+            nearVal=NEAR_PLANE,
             farVal=30.0,
             physicsClientId=self._client,
         )
@@ -251,13 +262,15 @@ class Simulator:
         c = self._client
         col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=c)
         vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c)
-        return p.createMultiBody(
-            baseMass=mass,
-            baseCollisionShapeIndex=col,
-            baseVisualShapeIndex=vis,
-            basePosition=pos,
-            baseOrientation=_quat_yaw(yaw),
-            physicsClientId=c,
+        return int(
+            p.createMultiBody(
+                baseMass=mass,
+                baseCollisionShapeIndex=col,
+                baseVisualShapeIndex=vis,
+                basePosition=pos,
+                baseOrientation=_quat_yaw(yaw),
+                physicsClientId=c,
+            )
         )
 
     def _build_world(self) -> None:
@@ -369,8 +382,8 @@ class Simulator:
         )
         vis = p.createVisualShape(
             p.GEOM_BOX,
-            halfExtents=(0.133, 0.133, 0.047),
-            visualFramePosition=(-0.064, 0.0, 0.057),
+            halfExtents=ROBOT_VISUAL_HALF,
+            visualFramePosition=ROBOT_VISUAL_OFFSET,
             rgbaColor=ROBOT_RGBA,
             physicsClientId=c,
         )
@@ -550,7 +563,70 @@ class Simulator:
         return eye, rot
 
     def render_camera(self) -> np.ndarray:
-        """Render the explorer's camera now (H, W, 3) uint8 **BGR**, and schedule the next frame."""
+        """Render the explorer's camera now (H, W, 3) uint8 **BGR**, and schedule the next frame.
+
+        The image depends only on the camera's pose and on what is in view: the world is static
+        but for the two robots, every lighting argument is passed on each call, and there are no
+        shadows. So when the explorer has not moved (its pose bit-identical) and the other robot
+        has either not moved or stayed wholly outside the view, the previous image *is* the
+        image a fresh render gives, and it is returned again (read-only) instead of rendering:
+        the parked explorer of the follower phase costs nothing. :attr:`frames_rendered` counts
+        the renders that happened.
+        """
+        key = self._view_key()
+        if self._last_frame is not None and self._last_frame[0] == key:
+            img = self._last_frame[1]
+        else:
+            img = self._render()
+            img.setflags(write=False)
+            self._last_frame = (key, img)
+            self.frames_rendered += 1
+        self.frame_seq += 1
+        while self.next_frame_ns <= self.now_ns:
+            self.next_frame_ns += self.camera_period_ns
+        return img
+
+    def _view_key(self) -> tuple[object, ...]:
+        """What the explorer's image depends on: its pose and every robot that may be in view."""
+        me = self.robots["explorer"]
+        key: list[object] = [(me.x, me.y, me.yaw)]
+        for name, r in self.robots.items():
+            if name != "explorer":
+                key.append((name, (r.x, r.y, r.yaw) if self._maybe_in_view(r) else None))
+        return tuple(key)
+
+    def _maybe_in_view(self, r: _RobotState) -> bool:
+        """False only when the robot's visual box lies wholly outside the camera's frustum.
+
+        Conservative (the usual frustum test: all eight corners outside one plane through the
+        optical centre, or all nearer than the near plane), so a robot it calls out of
+        view contributes no pixel: OpenGL and TinyRenderer both clip to the frustum.
+        """
+        cam = self.scenario.camera
+        fx, fy, cx, cy = self._intrinsics
+        eye, rot = self.camera_pose()
+        c, s = math.cos(r.yaw), math.sin(r.yaw)
+        hx, hy, hz = ROBOT_VISUAL_HALF
+        ox, oy, oz = ROBOT_VISUAL_OFFSET
+        corners = []
+        for dx in (-hx, hx):
+            for dy in (-hy, hy):
+                for dz in (-hz, hz):
+                    bx, by = ox + dx, oy + dy
+                    corners.append((r.x + c * bx - s * by, r.y + s * bx + c * by, oz + dz))
+        pts = (np.array(corners) - eye) @ rot  # rows: corners in the optical frame
+        x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+        m = CULL_MARGIN_PX
+        outside = (
+            z < NEAR_PLANE,
+            x * fx + (cx + m) * z < 0.0,  # left of the image
+            x * fx - (cam.width - cx + m) * z > 0.0,  # right of it
+            y * fy + (cy + m) * z < 0.0,  # above it
+            y * fy - (cam.height - cy + m) * z > 0.0,  # below it
+        )
+        return not any(bool(np.all(o)) for o in outside)
+
+    def _render(self) -> np.ndarray:
         cam = self.scenario.camera
         eye, rot = self.camera_pose()
         target = eye + rot[:, 2]
@@ -577,9 +653,6 @@ class Simulator:
                 physicsClientId=self._client,
             )
         img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
-        self.frame_seq += 1
-        while self.next_frame_ns <= self.now_ns:
-            self.next_frame_ns += self.camera_period_ns
         return np.ascontiguousarray(img[:, :, 2::-1])
 
     def marker_poses(self) -> dict[int, msgs.Pose]:

@@ -1,0 +1,141 @@
+"""`usar record`'s speed and size, with where the time goes (printed, never asserted).
+
+    python bench/bench_record.py [--course-seconds 120] [--only room|course] [--encoding E]
+                                 [--keep DIR]
+
+Records the one-room world of the tests (the whole mission: explorer, then follower) and the
+first ``--course-seconds`` of sim time of the course world, into a temporary directory, and
+prints per world: the real-time factor (sim time / wall time, and sim time / CPU time of this
+process: the second is the fairer figure on a shared machine), MB per sim-minute, frames
+rendered against frames recorded, and the CPU time split by stage as a share of the run:
+
+* ``render``: pybullet renders (frames reused because nothing moved cost nothing here);
+* ``encode``: compressing frames (a frame equal to the previous one costs one comparison);
+* ``detect``: the ArUco detector, of which ``decode`` is the image decoding (a frame whose
+  bytes equal the previous frame's reuses its detections and is not decoded);
+* ``log``: serialising and writing messages; ``physics``: the sim's steps;
+* ``rest``: the mission's thinking, tf, and the loop itself.
+
+The split is measured by wrapping those functions with CPU-time counters; the wrappers cost
+microseconds per call. Ratios are to sim time, as the issue asks; nothing here is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from usar_replay import bag, detect, record, sim
+from usar_replay.record import RecordSettings
+from usar_replay.scenario import Scenario, course_world
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import one_room
+
+STAGES = ("render", "encode", "detect", "decode", "log", "physics")
+_spent: defaultdict[str, float] = defaultdict(float)
+_calls: defaultdict[str, int] = defaultdict(int)
+
+
+def _timed(stage: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.process_time()
+        _calls[stage] += 1
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _spent[stage] += time.process_time() - t0
+
+    return wrapper
+
+
+def _instrument() -> None:
+    """Wrap each stage's function where the current code has it (names may move; skip if so)."""
+    points: list[tuple[Any, str, str]] = [
+        (sim.Simulator, "_render", "render"),
+        (record, "encode_image", "encode"),
+        (detect, "_detections", "detect"),
+        (detect, "decode_image", "decode"),
+        (bag.BagWriter, "write", "log"),
+        (sim.Simulator, "step", "physics"),
+    ]
+    if not hasattr(sim.Simulator, "_render"):  # before frames were reused
+        points[0] = (sim.Simulator, "render_camera", "render")
+    if not hasattr(detect, "_detections"):
+        points[2] = (detect, "detect_with_corners", "detect")
+    for owner, name, stage in points:
+        if hasattr(owner, name):
+            setattr(owner, name, _timed(stage, getattr(owner, name)))
+
+
+def bench(label: str, scenario: Scenario, max_sim_time: float | None, out: Path) -> None:
+    _spent.clear()
+    _calls.clear()
+    settings = RecordSettings(max_sim_time_s=max_sim_time)
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    result = record.record(scenario, out, settings)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    minutes = result.sim_duration_s / 60
+    rendered = _calls["render"]
+    print(
+        f"{label}: {result.sim_duration_s:.1f} s sim, {scenario.camera.encoding}, "
+        f"mission {'done' if result.mission_done else 'not done'}, "
+        f"markers {len(result.markers_found)}/{len(scenario.markers)}"
+        + (
+            f", worst error {max(result.marker_errors_m.values()) * 100:.2f} cm"
+            if result.marker_errors_m
+            else ""
+        )
+    )
+    print(
+        f"  real-time factor {result.sim_duration_s / wall:5.2f} (wall {wall:.1f} s), "
+        f"{result.sim_duration_s / cpu:5.2f} per CPU second (CPU {cpu:.1f} s)"
+    )
+    print(
+        f"  log {result.size_bytes / 1e6:.2f} MB = {result.size_bytes / 1e6 / minutes:.2f} MB"
+        f" per sim-minute; {result.frames} frames" + f", {rendered} rendered"
+    )
+    shown = {s: _spent.get(s, 0.0) for s in STAGES}
+    rest = cpu - sum(v for s, v in shown.items() if s != "decode")
+    split = "  ".join(f"{s} {100 * v / cpu:4.1f}%" for s, v in shown.items())
+    print(f"  CPU split: {split}  rest {100 * rest / cpu:4.1f}%")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--course-seconds", type=float, default=120.0)
+    ap.add_argument("--only", choices=("room", "course"))
+    ap.add_argument("--encoding", choices=("png", "jpeg"), help="default: the scenario's")
+    ap.add_argument("--keep", type=Path, help="write the logs into this directory and keep them")
+    args = ap.parse_args()
+    _instrument()
+
+    def world(scn: Scenario) -> Scenario:
+        if args.encoding is None:
+            return scn
+        return dataclasses.replace(
+            scn, camera=dataclasses.replace(scn.camera, encoding=args.encoding)
+        )
+
+    with tempfile.TemporaryDirectory(prefix="usar-bench-") as scratch:
+        tmp = args.keep or Path(scratch)
+        if args.only in (None, "room"):
+            bench("one-room (whole mission)", world(one_room()), None, Path(tmp) / "room.mcap")
+        if args.only in (None, "course"):
+            bench(
+                f"course (first {args.course_seconds:g} s)",
+                world(course_world()),
+                args.course_seconds,
+                Path(tmp) / "course.mcap",
+            )
+
+
+if __name__ == "__main__":
+    main()
