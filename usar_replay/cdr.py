@@ -36,45 +36,70 @@ def schema_text(msgtype: str) -> str:
     return text
 
 
-def _to_ros(value: msgs.Message, store: Typestore) -> Any:
-    cls = type(value)
-    kwargs: dict[str, Any] = {}
-    for name, kind, _ in msgs.field_kinds(cls):
-        v = getattr(value, name)
+# Converters between our values and rosbags' objects, generated once per class as plain Python
+# (one keyword call per message, no per-field dispatch): decoding a log is mostly this work.
+
+_Conv = Any
+
+
+@functools.cache
+def _to_ros_fn(cls: Any) -> _Conv:
+    store = typestore()
+    env: dict[str, Any] = {"T": store.types[cls.__msgtype__], "np": np, "u8": np.uint8}
+    args = []
+    for i, (name, kind, elem) in enumerate(msgs.field_kinds(cls)):
+        v = f"v.{name}"
         if kind == "msg":
-            kwargs[name] = _to_ros(v, store)
+            env[f"c{i}"] = _to_ros_fn(elem)
+            args.append(f"{name}=c{i}({v})")
         elif kind == "msgs":
-            kwargs[name] = [_to_ros(x, store) for x in v]
+            env[f"c{i}"] = _to_ros_fn(elem)
+            args.append(f"{name}=[c{i}(x) for x in {v}]")
         elif kind == "bytes":
-            kwargs[name] = np.frombuffer(v, dtype=np.uint8)
+            args.append(f"{name}=np.frombuffer({v}, dtype=u8)")
         elif kind == "floats":
-            kwargs[name] = np.asarray(v, dtype=np.float64)
+            args.append(f"{name}=np.asarray({v}, dtype=np.float64)")
         else:
-            kwargs[name] = v
-    return store.types[cls.__msgtype__](**kwargs)
+            args.append(f"{name}={v}")
+    code = f"def conv(v):\n    return T({', '.join(args)})\n"
+    exec(code, env)
+    return env["conv"]
+
+
+@functools.cache
+def _from_ros_fn(cls: Any) -> _Conv:
+    env: dict[str, Any] = {"C": cls, "tuple": tuple, "float": float, "int": int}
+    args = []
+    for i, (name, kind, elem) in enumerate(msgs.field_kinds(cls)):
+        v = f"o.{name}"
+        if kind == "msg":
+            env[f"c{i}"] = _from_ros_fn(elem)
+            args.append(f"{name}=c{i}({v})")
+        elif kind == "msgs":
+            env[f"c{i}"] = _from_ros_fn(elem)
+            args.append(f"{name}=tuple([c{i}(x) for x in {v}])")
+        elif kind == "bytes":
+            args.append(f"{name}=bytes({v})")
+        elif kind == "floats":
+            args.append(f"{name}=tuple([float(x) for x in {v}])")
+        else:
+            args.append(
+                f"{name}={dict(float='float', int='int', bool='bool', str='str')[kind]}({v})"
+            )
+    code = f"def conv(o):\n    return C({', '.join(args)})\n"
+    exec(code, env)
+    return env["conv"]
+
+
+def _to_ros(value: msgs.Message, store: Typestore) -> Any:
+    cls: Any = type(value)
+    return _to_ros_fn(cls)(value)
 
 
 def _from_ros(obj: Any, cls: type[msgs.Message]) -> msgs.Message:
-    kwargs: dict[str, Any] = {}
-    for name, kind, elem in msgs.field_kinds(cls):
-        v = getattr(obj, name)
-        if kind == "msg":
-            kwargs[name] = _from_ros(v, elem)
-        elif kind == "msgs":
-            kwargs[name] = tuple(_from_ros(x, elem) for x in v)
-        elif kind == "bytes":
-            kwargs[name] = bytes(v)
-        elif kind == "floats":
-            kwargs[name] = tuple(float(x) for x in v)
-        elif kind == "float":
-            kwargs[name] = float(v)
-        elif kind == "int":
-            kwargs[name] = int(v)
-        elif kind == "bool":
-            kwargs[name] = bool(v)
-        else:
-            kwargs[name] = str(v)
-    return cls(**kwargs)
+    key: Any = cls
+    result: msgs.Message = _from_ros_fn(key)(obj)
+    return result
 
 
 def encode(msg: msgs.Message) -> bytes:
