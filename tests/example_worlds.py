@@ -8,6 +8,12 @@ import math
 from conftest import one_room
 
 from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
+from usar_replay.settings import DetectorParams, RunSettings
+
+MARKER_SIZE = 0.3
+"""The corridor's markers: twice the course's, so that 320x240 frames read them 3 m away."""
+CORRIDOR_SETTINGS = RunSettings(detector=DetectorParams(marker_size=MARKER_SIZE))
+"""The detector must know the markers' size (it gives their distance)."""
 
 
 def quick_room() -> Scenario:
@@ -22,7 +28,7 @@ def quick_room() -> Scenario:
 
 
 def corridor() -> Scenario:
-    """A 4 m x 1.6 m corridor with two markers (0.3 m, so they are readable from afar).
+    """A 4 m x 1.6 m corridor with two markers; record it with :data:`CORRIDOR_SETTINGS`.
 
     Marker 1 is on the north wall by target_1, behind the explorer as it arrives there; marker 0
     is on the east wall by target_2, in view from target_1 2.9 m away (beyond the 2.5 m range
@@ -43,8 +49,8 @@ def corridor() -> Scenario:
             wall("east", 2.075, 0.0, math.pi / 2, 1.9),
         ),
         markers=(
-            Marker(id=0, x=1.99, y=0.0, z=0.3, yaw=math.pi, size=0.3),
-            Marker(id=1, x=-1.3, y=0.79, z=0.3, yaw=-math.pi / 2, size=0.3),
+            Marker(id=0, x=1.99, y=0.0, z=0.3, yaw=math.pi, size=MARKER_SIZE),
+            Marker(id=1, x=-1.3, y=0.79, z=0.3, yaw=-math.pi / 2, size=MARKER_SIZE),
         ),
         targets=((-0.9, 0.0), (1.3, 0.0)),
         explorer=RobotStart(name="explorer", x=-1.65, y=0.15),

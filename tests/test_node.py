@@ -177,7 +177,7 @@ def test_broadcasting_the_simulators_tf_links_is_refused() -> None:
 
 # --- a mission that fails, end to end (`usar record`) -------------------------------------------
 
-CRASHING = '''
+CRASHING = """
 from usar_replay.api import Node
 
 
@@ -193,9 +193,9 @@ class Broken(Node):
 
 def main():
     Broken()
-'''
+"""
 
-SLEEPING = '''
+SLEEPING = """
 import time
 from usar_replay.api import Node
 
@@ -203,9 +203,9 @@ from usar_replay.api import Node
 def main():
     node = Node("sleeper")
     node.create_timer(0.2, lambda: time.sleep(5))
-'''
+"""
 
-GREEDY = '''
+GREEDY = """
 from usar_replay.api import Node
 
 hoard = []
@@ -214,7 +214,7 @@ hoard = []
 def main():
     node = Node("greedy")
     node.create_timer(0.2, lambda: hoard.append(bytearray(1 << 30)))
-'''
+"""
 
 
 def _record(tmp_path: Path, source: str, *options: str) -> tuple[int, Path]:
@@ -250,7 +250,9 @@ def test_a_crash_ends_the_run_with_the_users_traceback_and_exit_4(
     assert run.file_state == "complete" and run.outcome == "crashed"
     reason = run.outcome_reason
     assert str(tmp_path / "mission.py") in reason and "line 12, in on_timer" in reason
-    assert 'return targets["target_1"]' in reason and reason.rstrip().endswith("KeyError: 'target_1'")
+    assert 'return targets["target_1"]' in reason and reason.rstrip().endswith(
+        "KeyError: 'target_1'"
+    )
     assert "executor.py" not in reason  # usar's plumbing is left out: the traceback is theirs
     assert run.duration_s < 1.0  # the first timer, 0.5 s in
     shown = capsys.readouterr().out
