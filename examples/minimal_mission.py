@@ -3,33 +3,15 @@
 import math
 
 from usar_replay.api import (
-    Buffer,
-    DiagnosticStatus,
-    FiducialTransform,
-    FiducialTransformArray,
-    Header,
-    NavigateClient,
-    Node,
-    Point,
-    Pose,
-    PoseStamped,
-    Time,
-    TransformBroadcaster,
-    TransformException,
-    TransformListener,
-    TransformStamped,
-    Twist,
-    Vector3,
-    quat_from_yaw,
-    shutdown,
+    Buffer, DiagnosticStatus, FiducialTransform, FiducialTransformArray, Header, NavigateClient, Node, Point, Pose, PoseStamped, Time,
+    TransformBroadcaster, TransformException, TransformListener, TransformStamped, Twist, Vector3,
+    quat_from_yaw, shutdown,
 )
 
 
 def goal(x: float, y: float, yaw: float = 0.0) -> PoseStamped:
     position, orientation = Point(x=x, y=y), quat_from_yaw(yaw)
-    return PoseStamped(
-        header=Header(frame_id="map"), pose=Pose(position=position, orientation=orientation)
-    )
+    return PoseStamped(header=Header(frame_id="map"), pose=Pose(position=position, orientation=orientation))
 
 
 class Explorer(Node):
@@ -61,9 +43,7 @@ class Explorer(Node):
         for f in msg.transforms:
             t = f.transform.translation
             if self.spinning and f.fiducial_id not in self.found and math.hypot(t.x, t.z) < 2.5:
-                child = TransformStamped(
-                    header=msg.header, child_frame_id="marker_frame", transform=f.transform
-                )
+                child = TransformStamped(header=msg.header, child_frame_id="marker_frame", transform=f.transform)
                 self.tf.sendTransform(child)  # the listener gets it after this callback
                 self.seen = (f.fiducial_id, msg.header.stamp)
 
@@ -73,24 +53,15 @@ class Explorer(Node):
         if self.seen is not None:
             marker_id, stamp = self.seen
             try:
-                p = self.buffer.lookup_transform(
-                    "map", "marker_frame", Time.from_msg(stamp)
-                ).transform
+                p = self.buffer.lookup_transform("map", "marker_frame", Time.from_msg(stamp)).transform
             except TransformException as err:
                 return self.get_logger().warning(f"lookup failed: {err}")
             self.found[marker_id] = p
             self.spinning, self.seen = False, None
             self.cmd.publish(Twist())
             stamp_now = self.get_clock().now().to_msg()
-            self.out.publish(
-                FiducialTransformArray(
-                    header=Header(stamp=stamp_now, frame_id="map"),
-                    transforms=tuple(
-                        FiducialTransform(fiducial_id=i, transform=t)
-                        for i, t in sorted(self.found.items())
-                    ),
-                )
-            )
+            self.out.publish(FiducialTransformArray(header=Header(stamp=stamp_now, frame_id="map"), transforms=tuple(
+                FiducialTransform(fiducial_id=i, transform=t) for i, t in sorted(self.found.items()))))
             return self.next_target()
         if self.spinning:
             self.cmd.publish(Twist(angular=Vector3(z=0.1)))
@@ -99,9 +70,7 @@ class Explorer(Node):
 class Follower(Node):
     def __init__(self) -> None:
         super().__init__("follower")
-        self.targets = [
-            p.value for p in self.get_parameters_by_prefix("aruco_lookup_locations").values()
-        ]
+        self.targets = [p.value for p in self.get_parameters_by_prefix("aruco_lookup_locations").values()]
         self.nav = NavigateClient(self, "follower")
         self.markers, self.queue = {}, None
         self.create_subscription(FiducialTransformArray, "/explorer/marker_poses", self.on_markers)

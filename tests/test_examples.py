@@ -25,7 +25,7 @@ from example_worlds import CORRIDOR_SETTINGS, corridor, quick_room
 
 from usar_replay import contract, msgs
 from usar_replay.cli import main
-from usar_replay.grade import GRADE_TOPICS, GradeReport, Grader, grade_file
+from usar_replay.grade import GRADE_TOPICS, Grader, GradeReport, grade_file
 from usar_replay.record import RecordResult, record
 from usar_replay.replay import ReplayReport, replay
 from usar_replay.run import open_run
@@ -153,7 +153,7 @@ def test_the_spin_and_the_navigator_both_command_the_explorer(
     room_log: tuple[Path, RecordResult],
 ) -> None:
     """The bug is in the outputs: ticks where /explorer/cmd_vel gets two different commands."""
-    _, report, kept = _replay(room_log[0], "cmd_vel_conflict.py", [contract.cmd_vel("explorer")])
+    _, _, kept = _replay(room_log[0], "cmd_vel_conflict.py", [contract.cmd_vel("explorer")])
     by_tick: dict[int, list[msgs.Message | None]] = {}
     for _, m, t in kept:
         by_tick.setdefault(t, []).append(m)

@@ -22,7 +22,6 @@ from usar_replay.api import (
     String,
     TFMessage,
     TransformStamped,
-    Twist,
 )
 from usar_replay.cli import main
 from usar_replay.executor import Executor, PublishPolicy
