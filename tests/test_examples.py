@@ -87,9 +87,10 @@ def test_the_starter_runs_and_fails_the_rubric_cleanly(tmp_path: Path) -> None:
     assert result.outcome == "max_sim_time", result.outcome_reason  # no crash: it just waits
     report = grade_file(tmp_path / "starter.mcap")
     assert report.log_complete
-    _expect(report, [c.id for c in report.checks if c.id != "marker_0.detected"])
-    # the detector node is the course's, so the marker in view is detected; nothing else happens
-    assert report.check("marker_0.detected").passed
+    # the detector node is the course's, so the marker in view is detected; with no broadcast
+    # at all, only_on_detection holds (the marker_k.broadcast lines fail it); nothing else
+    passing = ("marker_0.detected", "marker_frame.only_on_detection")
+    _expect(report, [c.id for c in report.checks if c.id not in passing])
 
 
 # --- detection / broadcast / storing bugs: replay on the one-room log --------------------------
@@ -144,7 +145,7 @@ def test_stamped_now_and_looked_up_at_latest(room_log: tuple[Path, RecordResult]
     assert broadcasts
     for tf in broadcasts:
         # each is a detection of an *earlier* image, stamped with a time no image has
-        assert tf.header.stamp.ns not in detections
+        assert not detections.get(tf.header.stamp.ns)
         earlier = [s for s, fs in detections.items() if s < tf.header.stamp.ns and fs]
         assert any(f.transform == tf.transform for f in detections[max(earlier)])
 
@@ -158,7 +159,7 @@ def test_the_spin_and_the_navigator_both_command_the_explorer(
     for _, m, t in kept:
         by_tick.setdefault(t, []).append(m)
     conflicts = [t for t, ms in by_tick.items() if len(ms) > 1 and len(set(map(repr, ms))) > 1]
-    assert len(conflicts) >= 5
+    assert conflicts  # near target_1, until the navigator's goal ends
     spin = msgs.Twist(angular=msgs.Vector3(z=0.1))
     assert all(spin in by_tick[t] for t in conflicts)
 
@@ -184,7 +185,16 @@ def test_listening_before_anything_was_broadcast_crashes(
     out = tmp_path / "run.mcap"
     mission = FAULTY / "listen_before_broadcast.py"
     code = main(
-        ["record", "--scenario", str(world), "--mission", str(mission), "--out", str(out), "-q"]
+        [
+            "record",
+            "--scenario",
+            str(world),
+            "--mission",
+            str(mission),
+            "--out",
+            str(out),
+            "--quiet",
+        ]
     )
     assert code == 4
     run = open_run(out)
@@ -195,7 +205,9 @@ def test_listening_before_anything_was_broadcast_crashes(
     assert '"marker_frame" passed to lookupTransform argument source_frame does not exist' in reason
     assert "The mission crashed:" in capsys.readouterr().out
     report = grade_file(out)
-    _expect(report, [c.id for c in report.checks])  # it crashed at the first loop: nothing done
+    # it crashed in the first loop, 0.1 s in: only the first frame's detection was published
+    passing = ("marker_0.detected", "marker_frame.only_on_detection")
+    _expect(report, [c.id for c in report.checks if c.id not in passing])
 
 
 def test_looking_up_at_a_stamp_the_buffer_cannot_reach_crashes(tmp_path: Path) -> None:
@@ -278,4 +290,5 @@ def test_a_mission_reading_the_clock_or_random_is_not_deterministic(
     shown = capsys.readouterr().out
     assert "Replay does NOT reproduce the recording." in shown
     assert "not deterministic" in shown
-    assert "First divergence: /noisy message #0" in shown and "data: recorded '" in shown
+    assert "First divergence: /noisy message #0 at sim time 1.200 s" in shown
+    assert "data: recorded" in shown
