@@ -1,0 +1,281 @@
+"""The node API itself: the executor's callback order, parameters, what a mission may publish,
+and how a mission that crashes, hangs or blows its memory ends a run.
+
+Executor-level tests need no simulator: an :class:`Executor` is made current, nodes are created
+in it, and ticks are handed to it by hand, as the mission process does.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+from conftest import one_room
+
+from usar_replay import contract
+from usar_replay.api import (
+    Node,
+    Odometry,
+    ParameterNotDeclared,
+    PoseStamped,
+    String,
+    TFMessage,
+    TransformStamped,
+)
+from usar_replay.cli import main
+from usar_replay.executor import Executor, PublishPolicy
+from usar_replay.run import open_run
+from usar_replay.scenario import save
+
+S = 1_000_000_000
+T0 = 100 * S
+
+
+def _s(text: str) -> String:
+    return String(data=text)
+
+
+def test_timers_fire_before_the_ticks_inputs_earliest_due_first() -> None:
+    """In one tick: due timers first (earliest due, then creation order), then the inputs."""
+    order: list[str] = []
+    ex = Executor()
+    with ex.activate():
+        node = Node("n")
+        node.create_subscription(String, "/in", lambda m: order.append(f"sub:{m.data}"))
+        node.create_timer(0.2, lambda: order.append("slow"))
+        node.create_timer(0.1, lambda: order.append("fast"))
+        node.create_timer(0.2, lambda: order.append("slow2"))
+    ex.tick(T0, [("/in", _s("a"))])  # the clock starts: timers are due one period later
+    assert order == ["sub:a"]
+    order.clear()
+    ex.tick(T0 + S // 10, [("/in", _s("b"))])
+    assert order == ["fast", "sub:b"]
+    order.clear()
+    # 0.25 s later: fast was due at 0.2 (and not twice), slow and slow2 at 0.2 too; at equal due
+    # times the timer created first fires first
+    ex.tick(T0 + S // 4, [("/in", _s("c"))])
+    assert order == ["slow", "fast", "slow2", "sub:c"]
+
+
+def test_subscriptions_run_in_creation_order_across_nodes() -> None:
+    order: list[str] = []
+    ex = Executor()
+    with ex.activate():
+        first, second = Node("first"), Node("second")
+        second.create_subscription(String, "/x", lambda m: order.append("second.a"))
+        first.create_subscription(String, "/x", lambda m: order.append("first.a"))
+        second.create_subscription(String, "/x", lambda m: order.append("second.b"))
+        first.create_subscription(String, "/y", lambda m: order.append("first.y"))
+    ex.tick(T0, [("/y", _s("")), ("/x", _s(""))])
+    # inputs in the tick's order; each topic's subscribers in the order they were created
+    assert order == ["first.y", "second.a", "first.a", "second.b"]
+
+
+def test_local_delivery_is_fifo_and_before_the_next_input() -> None:
+    """What a callback publishes to a topic of this mission reaches its subscribers right after
+    that callback, first published first, before the tick's next input message."""
+    order: list[str] = []
+    ex = Executor()
+    with ex.activate():
+        node = Node("n")
+        pub_a = node.create_publisher(String, "/a")
+        pub_b = node.create_publisher(String, "/b")
+        pub_c = node.create_publisher(String, "/c")
+
+        def on_in(m: String) -> None:
+            order.append(f"in:{m.data}")
+            if m.data == "1":
+                pub_a.publish(_s("a"))
+                pub_b.publish(_s("b"))
+
+        def on_a(m: String) -> None:
+            order.append("a")
+            pub_c.publish(_s("c"))  # queued after b, which was published first
+
+        node.create_subscription(String, "/in", on_in)
+        node.create_subscription(String, "/a", on_a)
+        node.create_subscription(String, "/b", lambda m: order.append("b"))
+        node.create_subscription(String, "/c", lambda m: order.append("c"))
+    out = ex.tick(T0, [("/in", _s("1")), ("/in", _s("2"))])
+    assert order == ["in:1", "a", "b", "c", "in:2"]
+    # everything published is the tick's output, in publish order
+    assert [(t, m.data) for t, m in out if isinstance(m, String)] == [
+        ("/a", "a"),
+        ("/b", "b"),
+        ("/c", "c"),
+    ]
+
+
+def test_parameters_dotted_and_slashed_names() -> None:
+    ex = Executor(
+        {
+            "aruco_lookup_locations.target_2": [3.0, 4.0],
+            "aruco_lookup_locations.target_1": [1.0, 2.0],
+            "explorer.home": [-4.0, 2.5, 0.0],
+        }
+    )
+    with ex.activate():
+        node = Node("n", parameter_overrides={"explorer.home": [0.0, 0.0, 0.0]})
+    # ROS 1 names (the course's rosparam paths) read as ROS 2's dotted ones
+    assert node.get_parameter("aruco_lookup_locations/target_1").value == [1.0, 2.0]
+    assert node.get_parameter("/aruco_lookup_locations/target_2").value == [3.0, 4.0]
+    by_prefix = node.get_parameters_by_prefix("aruco_lookup_locations")
+    assert list(by_prefix) == ["target_1", "target_2"]  # sorted by name
+    assert by_prefix["target_2"].double_array_value == [3.0, 4.0]
+    assert node.get_parameter("explorer.home").value == [0.0, 0.0, 0.0]  # node override wins
+    # a declared default gives way to the run's value; an unknown name is refused
+    assert node.declare_parameter("aruco_lookup_locations.target_1", [9.0, 9.0]).value == [1, 2]
+    assert node.declare_parameter("mission.spin_speed", 0.1).double_value == 0.1
+    assert node.has_parameter("mission.spin_speed")
+    with pytest.raises(ParameterNotDeclared, match="no_such"):
+        node.get_parameter("no_such/parameter")
+
+
+@pytest.mark.parametrize(
+    ("topic", "msg_type"),
+    [
+        (contract.truth_pose("explorer"), PoseStamped),
+        (contract.TRUTH_MARKERS, TFMessage),
+        (contract.odom("explorer"), Odometry),
+        (contract.IMAGE, String),
+    ],
+)
+def test_publishing_ground_truth_or_the_simulators_topics_is_refused(
+    topic: str, msg_type: type
+) -> None:
+    ex = Executor(policy=PublishPolicy(sim_frames=contract.sim_frames()))
+    with ex.activate():
+        node = Node("n")
+        with pytest.raises(PermissionError, match=topic):
+            node.create_publisher(msg_type, topic)
+
+
+def test_reading_ground_truth_is_refused() -> None:
+    ex = Executor()
+    with ex.activate():
+        node = Node("n")
+        with pytest.raises(PermissionError, match="ground truth"):
+            node.create_subscription(PoseStamped, contract.truth_pose("follower"), print)
+
+
+def test_broadcasting_the_simulators_tf_links_is_refused() -> None:
+    """/tf is open to missions, but not the links the simulator owns (base, odom, camera)."""
+    ex = Executor(policy=PublishPolicy(sim_frames=contract.sim_frames()))
+    with ex.activate():
+        node = Node("n")
+        tf = node.create_publisher(TFMessage, contract.TF)
+        mine = TransformStamped(child_frame_id=contract.MARKER_FRAME)
+        tf.publish(TFMessage(transforms=(mine,)))  # allowed
+        theirs = TransformStamped(child_frame_id=contract.base_frame("explorer"))
+        with pytest.raises(PermissionError, match="simulator publishes the tf link"):
+            tf.publish(TFMessage(transforms=(mine, theirs)))
+        with pytest.raises(PermissionError, match="simulator"):
+            ex.publish(contract.TF_STATIC, TFMessage(transforms=(theirs,)))
+
+
+# --- a mission that fails, end to end (`usar record`) -------------------------------------------
+
+CRASHING = """
+from usar_replay.api import Node
+
+
+class Broken(Node):
+    def __init__(self):
+        super().__init__("broken")
+        self.create_timer(0.5, self.on_timer)
+
+    def on_timer(self):
+        targets = {}
+        return targets["target_1"]  # the user's own bug
+
+
+def main():
+    Broken()
+"""
+
+SLEEPING = """
+import time
+from usar_replay.api import Node
+
+
+def main():
+    node = Node("sleeper")
+    node.create_timer(0.2, lambda: time.sleep(5))
+"""
+
+GREEDY = """
+from usar_replay.api import Node
+
+hoard = []
+
+
+def main():
+    node = Node("greedy")
+    node.create_timer(0.2, lambda: hoard.append(bytearray(1 << 30)))
+"""
+
+
+def _record(tmp_path: Path, source: str, *options: str) -> tuple[int, Path]:
+    mission = tmp_path / "mission.py"
+    mission.write_text(textwrap.dedent(source))
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "run.mcap"
+    code = main(
+        [
+            "record",
+            "--scenario",
+            str(world),
+            "--mission",
+            str(mission),
+            "--max-sim-time",
+            "5",
+            "--out",
+            str(out),
+            "--quiet",
+            *options,
+        ]
+    )
+    return code, out
+
+
+def test_a_crash_ends_the_run_with_the_users_traceback_and_exit_4(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, out = _record(tmp_path, CRASHING)
+    assert code == 4
+    run = open_run(out)
+    assert run.file_state == "complete" and run.outcome == "crashed"
+    reason = run.outcome_reason
+    assert str(tmp_path / "mission.py") in reason and "line 12, in on_timer" in reason
+    assert 'return targets["target_1"]' in reason and reason.rstrip().endswith(
+        "KeyError: 'target_1'"
+    )
+    assert "executor.py" not in reason  # usar's plumbing is left out: the traceback is theirs
+    assert run.duration_s < 1.0  # the first timer, 0.5 s in
+    shown = capsys.readouterr().out
+    assert "The mission crashed:" in shown and "KeyError: 'target_1'" in shown
+
+
+def test_a_callback_past_the_tick_timeout_is_hung(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, out = _record(tmp_path, SLEEPING, "--tick-timeout", "1")
+    assert code == 4
+    run = open_run(out)
+    assert run.file_state == "complete" and run.outcome == "hung"
+    assert "--tick-timeout" in run.outcome_reason
+    assert "The mission hung:" in capsys.readouterr().out
+
+
+def test_a_memory_blow_up_is_out_of_memory(tmp_path: Path) -> None:
+    code, out = _record(tmp_path, GREEDY, "--mission-memory", "300")
+    assert code == 4
+    run = open_run(out)
+    assert run.file_state == "complete"
+    assert run.outcome == "out_of_memory" or (
+        run.outcome == "crashed" and "MemoryError" in run.outcome_reason
+    )
+    if run.outcome == "out_of_memory" and "Traceback" in run.outcome_reason:
+        assert "MemoryError" in run.outcome_reason
