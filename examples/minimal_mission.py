@@ -88,10 +88,10 @@ class Follower(Node):
         if not self.queue:
             home = self.get_parameter("follower.home").value
             return self.nav.send_goal(goal(*home), lambda _r: shutdown(), name="home")
-        m = self.markers[self.queue.pop(0)]  # stop 0.35 m from it, toward its nearest target
+        m = self.markers[self.queue.pop(0)]  # stop 0.3 m from it, toward its nearest target
         tx, ty = min(self.targets, key=lambda t: math.hypot(t[0] - m.x, t[1] - m.y))
         d = math.hypot(tx - m.x, ty - m.y)
-        x, y = m.x + 0.35 * (tx - m.x) / d, m.y + 0.35 * (ty - m.y) / d
+        x, y = m.x + 0.3 * (tx - m.x) / d, m.y + 0.3 * (ty - m.y) / d
         self.nav.send_goal(goal(x, y, math.atan2(m.y - y, m.x - x)), self.visit)
 
 

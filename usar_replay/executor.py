@@ -59,7 +59,9 @@ class PublishPolicy:
         sim_topics: Sequence[str] = contract.SIM_TOPICS,
         sim_frames: Sequence[str] = (),
     ) -> None:
-        self.sim_topics = frozenset(sim_topics) - {contract.TF}
+        # /tf and /tf_static are shared (a mission broadcasts its own frames); the simulator's
+        # links on them are protected by sim_frames
+        self.sim_topics = frozenset(sim_topics) - {contract.TF, contract.TF_STATIC}
         self.sim_frames = frozenset(sim_frames)
 
     def topic_problem(self, topic: str) -> str:

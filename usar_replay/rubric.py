@@ -77,13 +77,21 @@ __all__ = [
     "judge",
     "marker_broadcast",
     "marker_detected",
+    "one_cmd_vel_publisher",
     "only_on_detection",
     "time_limit",
 ]
 
 EXPLORER_TRUTH = contract.truth_pose("explorer")
 FOLLOWER_TRUTH = contract.truth_pose("follower")
-GRADE_TOPICS = (contract.TF_STATIC, contract.TF, contract.FIDUCIALS, EXPLORER_TRUTH, FOLLOWER_TRUTH)
+GRADE_TOPICS = (
+    contract.TF_STATIC,
+    contract.TF,
+    contract.FIDUCIALS,
+    EXPLORER_TRUTH,
+    FOLLOWER_TRUTH,
+    *(contract.cmd_vel(r) for r in contract.ROBOTS),
+)
 """The topics the rubric reads; everything else in a log is skipped without decoding."""
 REQUIRED_TOPICS = (EXPLORER_TRUTH, FOLLOWER_TRUTH, contract.TF, contract.FIDUCIALS)
 """Without these a log cannot be graded at all (``/tf_static`` may be absent: a world whose
@@ -269,6 +277,9 @@ class Grader:
         """Broadcasts without a detection *or* with another parent (each counted once)."""
         self.start_ns: int | None = None
         self.end_ns = 0
+        self._cmd_tick: dict[str, tuple[int, set[tuple[float, ...]]]] = {}
+        self.cmd_conflicts: dict[str, int] = {r: 0 for r in contract.ROBOTS}
+        self.cmd_conflict_ns: dict[str, int | None] = {r: None for r in contract.ROBOTS}
 
     def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None:
         """One message of the log (``msg`` None for types the grader does not read)."""
@@ -293,6 +304,28 @@ class Grader:
             self._on_fiducials(msg, t_ns)
         elif topic == contract.TF_STATIC and isinstance(msg, msgs.TFMessage):
             self.listener.on_tf_static(msg)
+        elif isinstance(msg, msgs.Twist):
+            robot = contract.robot_of_topic(topic)
+            if robot is not None and topic == contract.cmd_vel(robot):
+                self._on_cmd_vel(robot, msg, t_ns)
+
+    def _on_cmd_vel(self, robot: str, msg: msgs.Twist, t_ns: int) -> None:
+        """Two different moving commands for one robot in one tick: two publishers fight (a
+        spin timer and the navigator, say); the robot obeys whichever came last. A stop after
+        a command is a node ending its goal, not a fight."""
+        lin, ang = msg.linear, msg.angular
+        cmd = (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+        if not any(cmd):
+            return
+        t, seen = self._cmd_tick.get(robot, (-1, set()))
+        if t != t_ns:
+            self._cmd_tick[robot] = (t_ns, {cmd})
+            return
+        if cmd not in seen and len(seen) == 1:
+            self.cmd_conflicts[robot] += 1
+            if self.cmd_conflict_ns[robot] is None:
+                self.cmd_conflict_ns[robot] = t_ns
+        seen.add(cmd)
 
     def feed_all(self, items: Iterable[tuple[str, msgs.Message | None, int]]) -> None:
         for topic, msg, t in items:
@@ -703,6 +736,30 @@ def time_limit(g: Grader, follower_home_ns: int | None) -> Check:
     )
 
 
+def one_cmd_vel_publisher(g: Grader, robot: str) -> Check:
+    """``<robot>.cmd_vel_one_publisher``: never two different moving commands in one tick (no
+    points of its own: the course's rubric loses them elsewhere on a robot that does not spin)."""
+    n = g.cmd_conflicts[robot]
+    first = g.cmd_conflict_ns[robot]
+    return Check(
+        id=f"{robot}.cmd_vel_one_publisher",
+        description=f"{robot}'s cmd_vel has one publisher at a time",
+        passed=n == 0,
+        points=0.0,
+        max_points=0.0,
+        measured="no conflicting commands"
+        if n == 0
+        else f"{_n(n, 'tick')} with two different commands, first at {_s(first or 0)}",
+        threshold="one moving command per tick",
+        evidence_ns=first,
+        value=float(n),
+        unit="ticks",
+        limit=0.0,
+        op="<=",
+        evidence="" if first is None else "first tick with two commands",
+    )
+
+
 def judge(g: Grader) -> tuple[Check, ...]:
     """Every rubric line, in rubric order, from what ``g`` observed."""
     targets = explorer_targets(g)
@@ -723,5 +780,6 @@ def judge(g: Grader) -> tuple[Check, ...]:
         *markers,
         home,
         time_limit(g, home.evidence_ns),
+        *(one_cmd_vel_publisher(g, r) for r in contract.ROBOTS),
     ]
     return tuple(lines)

@@ -363,7 +363,14 @@ class MissionProcess:
 
     def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
         """Hand one tick to the mission without waiting (replay keeps several in flight)."""
-        self._conn.send_bytes(_pack(_TICK, t_ns, inputs))
+        try:
+            self._conn.send_bytes(_pack(_TICK, t_ns, inputs))
+        except (BrokenPipeError, ConnectionResetError):
+            # the process is gone (a crash while ticks were in flight): its report, if it sent
+            # one, is waiting to be read; else say how it died
+            if self._conn.poll(0):
+                self._wait(0, "handling a tick")
+            raise self._died("handling a tick") from None
         self._in_flight += 1
 
     def receive(self) -> list[tuple[str, str, bytes, msgs.Message]]:
