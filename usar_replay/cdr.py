@@ -49,6 +49,8 @@ def _to_ros(value: msgs.Message, store: Typestore) -> Any:
             kwargs[name] = np.frombuffer(v, dtype=np.uint8)
         elif kind == "floats":
             kwargs[name] = np.asarray(v, dtype=np.float64)
+        elif kind == "ints":
+            kwargs[name] = np.asarray(v, dtype=np.int64)
         else:
             kwargs[name] = v
     return store.types[cls.__msgtype__](**kwargs)
@@ -66,6 +68,8 @@ def _from_ros(obj: Any, cls: type[msgs.Message]) -> msgs.Message:
             kwargs[name] = bytes(v)
         elif kind == "floats":
             kwargs[name] = tuple(float(x) for x in v)
+        elif kind == "ints":
+            kwargs[name] = tuple(int(x) for x in v)
         elif kind == "float":
             kwargs[name] = float(v)
         elif kind == "int":
