@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from usar_replay import __version__, bag, cdr, contract, msgs
+from usar_replay.assignment import of as assignment_of
 from usar_replay.detect import encode_image
 from usar_replay.nav import OccupancyGrid
 from usar_replay.navigation import grid_to_msg
@@ -36,7 +37,7 @@ from usar_replay.run import MissionInfo
 from usar_replay.scenario import Scenario, to_toml
 from usar_replay.settings import RunSettings
 from usar_replay.settings import to_toml as settings_to_toml
-from usar_replay.sim import Simulator
+from usar_replay.sim import SimRobot, Simulator
 from usar_replay.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
 
 __all__ = [
@@ -111,18 +112,9 @@ def default_output(scenario: Scenario, directory: str | os.PathLike[str] = "reco
 
 def mission_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
     """The parameters a mission's nodes read, as the course's launch and parameter files give
-    them: ``aruco_lookup_locations.target_k`` ([x, y]), ``<robot>.home`` ([x, y, yaw]) and the
-    run's ``mission.*`` and ``detector.*`` settings. Never a marker position."""
-    params: dict[str, Any] = {}
-    for i, (x, y) in enumerate(scenario.targets):
-        params[f"aruco_lookup_locations.target_{i + 1}"] = [float(x), float(y)]
-    for start in (scenario.explorer, scenario.follower):
-        params[f"{start.name}.home"] = [start.x, start.y, start.yaw]
-    for group in ("mission", "detector"):
-        for f in dataclasses.fields(getattr(settings, group)):
-            params[f"{group}.{f.name}"] = getattr(getattr(settings, group), f.name)
-    params["use_sim_time"] = True
-    return params
+    them (the scenario's assignment says which: :mod:`usar_replay.assignment`). Never a marker
+    position."""
+    return assignment_of(scenario).parameters(scenario, settings)
 
 
 def _run_metadata(renderer: str) -> dict[str, str]:
@@ -176,7 +168,8 @@ def record(
     """
     settings = settings or RunSettings()
     rs = settings.record
-    target = resolve_target(mission)
+    asg = assignment_of(scenario)
+    target = resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
     limit_outcome = "max_sim_time" if rs.max_sim_time_s else "time_limit"
@@ -192,6 +185,13 @@ def record(
             physics_hz=rs.physics_hz,
             start_time_ns=contract.START_TIME_NS,
             renderer=rs.renderer,
+            robots=tuple(
+                SimRobot(f, *start)
+                for f, start in zip(asg.robots, asg.starts(scenario), strict=True)
+            ),
+            camera_robot=asg.camera_robot,
+            base_tf=asg.sim_base_tf,
+            static_frames=asg.static_links(scenario),
         ) as sim,
         bag.BagWriter(out) as writer,
     ):
@@ -223,28 +223,30 @@ def record(
             with MissionProcess(
                 target,
                 params,
-                sim_topics=contract.SIM_TOPICS,
-                sim_frames=contract.sim_frames(),
+                sim_topics=asg.sim_topics,
+                sim_frames=asg.sim_frames,
                 limits=limits,
             ) as proc:
                 while sim.now_ns <= end_ns:
                     t = sim.now_ns
-                    batch, first = [*first, (contract.TF, sim.tf())], []
+                    batch, first = first, []
+                    if asg.sim_base_tf:
+                        batch.append((contract.TF, sim.tf()))
                     if sim.camera_due():
                         cam = sim.camera_info()
                         data = encode_image(sim.render_camera(), scenario.camera.encoding)
                         image = msgs.CompressedImage(
                             header=cam.header, format=scenario.camera.encoding, data=data
                         )
-                        batch += [(contract.CAMERA_INFO, cam), (contract.IMAGE, image)]
+                        batch += [(asg.camera_info_topic, cam), (asg.image_topic, image)]
                         frames += 1
-                    batch += [(contract.odom(r), sim.odometry(r)) for r in contract.ROBOTS]
+                    batch += [(contract.odom(r), sim.odometry(r)) for r in asg.robot_names]
                     wire = []
                     for topic, msg in batch:
                         raw = cdr.encode(msg)
                         writer.write_raw(topic, msg.__msgtype__, raw, t, publisher="sim")
                         wire.append((topic, msg.__msgtype__, raw))
-                    for r in contract.ROBOTS:
+                    for r in asg.robot_names:
                         truth = msgs.PoseStamped(
                             header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP),
                             pose=sim.true_pose(r),
