@@ -71,13 +71,17 @@ def _parse_camera(text: str) -> tuple[int, int, float]:
 
 
 def _load_scenario(args: argparse.Namespace) -> Scenario:
+    from usar_replay import assignment
     from usar_replay import scenario as scn
 
-    base = scn.load(args.scenario) if args.scenario else scn.course_world()
+    kind = getattr(args, "assignment", None)
+    base = scn.load(args.scenario) if args.scenario else assignment.by_name(kind or "usar").world()
+    if kind and base.assignment != kind:
+        raise UsageError(
+            f"{args.scenario} is a {base.assignment!r} world, not {kind!r}; drop --assignment"
+        )
     if args.seed is not None:
-        from usar_replay.variants import make_variant
-
-        base = make_variant(base, args.seed)
+        base = assignment.of(base).variant(base, args.seed)
     if args.camera:
         w, h, rate = _parse_camera(args.camera)
         base = dataclasses.replace(
@@ -104,6 +108,19 @@ def _cmd_scenario(args: argparse.Namespace) -> int:
     else:
         print(text, end="")
     if not args.check:
+        return EXIT_OK
+    if scenario.assignment == "ros2-final":
+        from usar_replay.ros2_world import check_ros2
+
+        problem = check_ros2(scenario)
+        if problem is not None:
+            print(f"usar: {scenario.name}: fails the world rules: {problem}", file=sys.stderr)
+            return EXIT_FAIL
+        print(
+            f"usar: {scenario.name}: the marker is in view from aruco_target, every destination "
+            "is reachable",
+            file=sys.stderr,
+        )
         return EXIT_OK
     from usar_replay.variants import MAX_DRIVE_FRACTION, check_variant, drive_time_s
 
@@ -453,6 +470,11 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("record", help="run the mission in pybullet and record it to MCAP")
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
     p.add_argument("--out", metavar="PATH", help="output .mcap (default: recordings/NAME.mcap)")
     p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
     p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
@@ -499,6 +521,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML to read (default: the course)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
     p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
     p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
     p.add_argument("--out", metavar="FILE", help="write the TOML here instead of stdout")
