@@ -334,7 +334,7 @@ def _cmd_grade(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader
+    from usar_replay.grade import Grader, rubric_for
     from usar_replay.replay import check_not_damaged, replay
     from usar_replay.reports import to_table
     from usar_replay.run import open_run
@@ -344,15 +344,16 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     settings = _run_settings(args, run.settings) if changed else None
     thresholds = _thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: Grader | None = None
+    rubric = rubric_for(run.require_scenario())
     if args.grade:
-        grader = Grader(run.require_scenario(), thresholds)
+        grader = rubric.Grader(run.require_scenario(), thresholds)
     report = replay(
         run,
         settings,
         mission=args.mission,
         grade_sink=None if grader is None else grader.feed,
-        grade_topics=GRADE_TOPICS,
-        required_topics=REQUIRED_TOPICS if grader is not None else (),
+        grade_topics=rubric.GRADE_TOPICS,
+        required_topics=rubric.REQUIRED_TOPICS if grader is not None else (),
         limits=_limits(args),
     )
     check_not_damaged(report)

@@ -56,11 +56,14 @@ TOML file's ``[thresholds]`` table, same names (:func:`load_thresholds`).
 from __future__ import annotations
 
 import bisect
+import importlib
 import math
+import sys
 import tomllib
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
+from types import ModuleType
 
 from usar_replay import bag, msgs
 from usar_replay.errors import (
@@ -83,6 +86,7 @@ __all__ = [
     "grade_file",
     "load_scenario",
     "load_thresholds",
+    "rubric_for",
 ]
 
 MARKER_FRAME = "marker_frame"
@@ -622,6 +626,16 @@ def load_scenario(reader: bag.BagReader) -> Scenario:
         raise LogError(str(err)) from err
 
 
+def rubric_for(scenario: Scenario) -> ModuleType:
+    """The module holding the rubric of the scenario's assignment: it has ``Grader(scenario,
+    thresholds)`` (``feed``, ``report``), ``GRADE_TOPICS`` and ``REQUIRED_TOPICS``. US&R's is
+    this module. Named by the assignment, imported here (a rubric module imports this one)."""
+    from usar_replay.assignment import of
+
+    name = of(scenario).rubric_module
+    return sys.modules[__name__] if name == __name__ else importlib.import_module(name)
+
+
 def grade_file(path: str | Path, thresholds: Thresholds | None = None) -> GradeReport:
     """Grade one recording as recorded (no replay). A damaged log is graded as far as it goes.
 
@@ -630,16 +644,18 @@ def grade_file(path: str | Path, thresholds: Thresholds | None = None) -> GradeR
     the rubric needs (a damaged one is graded anyway: the missing part may be past the damage).
     """
     reader = bag.BagReader(path)
-    grader = Grader(load_scenario(reader), thresholds)
+    scenario = load_scenario(reader)
+    rubric = rubric_for(scenario)
+    grader = rubric.Grader(scenario, thresholds)
     grader.start_ns = reader.start_ns  # the run's clock starts with the log, whatever topic
     if reader.damage is None:
-        missing = [t for t in REQUIRED_TOPICS if t not in reader.topics]
+        missing = [t for t in rubric.REQUIRED_TOPICS if t not in reader.topics]
         if missing:
             raise MissingTopic(
                 f"{path}: topic {missing[0]} is missing; it cannot be graded"
                 + (f" (also missing: {', '.join(missing[1:])})" if missing[1:] else "")
             )
-    for m in reader.messages(GRADE_TOPICS):
+    for m in reader.messages(rubric.GRADE_TOPICS):
         grader.feed(m.topic, m.msg, m.log_time_ns)
     problem = ""
     if reader.damage is not None:
