@@ -3,7 +3,7 @@
 The course's ROS 2 edition (a Turtlebot3 ``robot1`` in Gazebo) gives the mission these
 parameters (``final_params.yaml``)::
 
-    aruco_target: {x: 3.5, y: 2.0}            # the first goal; a marker is in view from there
+    aruco_target: {x: 3.6, y: 1.2}            # the first goal; a marker is in view from there
     final_destination:
       frame_id: origin1                       # a static frame of the world
       aruco_0: {x: 1.0, y: 1.0}               # the destination for marker ID 0, in frame_id
@@ -180,8 +180,8 @@ def _wall(name: str, x: float, y: float, yaw: float, length: float) -> Box:
 
 
 def ros2_final_world() -> Scenario:
-    """The built-in world: a 7 m x 6 m room, robot1 at the origin, the marker (ID 1) on the north
-    wall 1 m in front of ``aruco_target``, destinations in ``origin1`` (the course's values)."""
+    """The built-in world: a 7 m x 6 m room, robot1 at the origin, the marker (ID 1) on a crate
+    1.1 m west of ``aruco_target``, destinations in ``origin1`` (the course's values)."""
     pi = math.pi
     walls = (
         _wall("west", -1.5, 0.0, pi / 2, 6.0),
@@ -189,10 +189,12 @@ def ros2_final_world() -> Scenario:
         _wall("south", 2.0, -3.0, 0.0, 7.15),
         _wall("north", 2.0, 3.0, 0.0, 7.15),
     )
-    boxes = (Box(name="crate", x=1.8, y=1.6, z=0.3, size_x=0.6, size_y=0.6, size_z=0.6),)
-    marker = Marker(id=1, x=3.5, y=3.0 - WALL_THICKNESS / 2 - 0.005, yaw=-pi / 2)
+    # the marker is on the crate's east face, behind a robot arriving from the west: it must
+    # turn to see it, as the project's robot did
+    boxes = (Box(name="crate", x=2.2, y=1.2, z=0.3, size_x=0.6, size_y=0.6, size_z=0.6),)
+    marker = Marker(id=1, x=2.2 + 0.3 + 0.005, y=1.2, yaw=0.0)
     origins = {
-        "origin1": (1.5, 0.5, 0.0),
+        "origin1": (1.5, -0.5, 0.0),
         "origin2": (3.5, -1.5, pi / 2),
         "origin3": (0.5, -1.0, pi),
         "origin4": (3.0, 0.5, -pi / 2),
@@ -202,7 +204,7 @@ def ros2_final_world() -> Scenario:
         walls=walls,
         boxes=boxes,
         markers=(marker,),
-        targets=((3.5, 2.0),),
+        targets=((3.6, 1.2),),
         time_limit_s=90.0,
         assignment=ASSIGNMENT,
         task=_task_pairs(
