@@ -55,6 +55,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from usar_replay import msgs
+from usar_replay.assignment import USAR
+from usar_replay.assignment import of as assignment_of
 from usar_replay.errors import InvalidScenario, UsageError, UsarError
 from usar_replay.scenario import Box, Scenario, building_extent, from_toml
 from usar_replay.tf_tree import Buffer, TransformException
@@ -320,7 +322,10 @@ class LogToRerun:
         self.tf_static: dict[str, tuple[tuple[float, float, float], tuple[float, ...]]] = {}
         self.tf_dynamic: dict[str, _Poses] = {}
         self.camera_info: msgs.CameraInfo | None = None
-        self.camera_frame = "explorer_tf/camera_rgb_optical_frame"
+        # names come from the scenario's assignment (US&R's explorer, or ROS 2's robot1)
+        asg = USAR if scenario is None else assignment_of(scenario)
+        self.camera_topic, self.camera_info_topic = asg.image_topic, asg.camera_info_topic
+        self.camera_frame = asg.frames_of(asg.camera_robot).optical
         self._pinhole_entity: str | None = None
         self.images = _Images()
         self.detections = _Strips()
@@ -341,8 +346,8 @@ class LogToRerun:
         self.end_ns = 0
         if scenario is not None:
             self.true_marker_xyz = {m.id: (m.x, m.y, m.z) for m in scenario.markers}
-            for r in (scenario.explorer, scenario.follower):
-                self._robot(r.name)
+            for name in asg.robot_names:
+                self._robot(name)
 
     # -- feeding ----------------------------------------------------------------------------------
 
@@ -359,9 +364,9 @@ class LogToRerun:
             return
         if isinstance(msg, msgs.TFMessage) and topic in ("/tf", "/tf_static"):
             self._on_tf(msg, t_ns, static=topic == "/tf_static")
-        elif isinstance(msg, msgs.CompressedImage) and topic == CAMERA_TOPIC:
+        elif isinstance(msg, msgs.CompressedImage) and topic == self.camera_topic:
             self._on_image(msg, t_ns)
-        elif isinstance(msg, msgs.CameraInfo) and topic == CAMERA_INFO_TOPIC:
+        elif isinstance(msg, msgs.CameraInfo) and topic == self.camera_info_topic:
             if self.camera_info is None:
                 self.camera_frame = msg.header.frame_id or self.camera_frame
             self.camera_info = msg
@@ -705,14 +710,15 @@ class LogToRerun:
                 ),
                 static=True,
             )
-        homes = (scn.explorer, scn.follower)
+        asg = assignment_of(scn)
+        homes = list(zip(asg.robot_names, asg.starts(scn), strict=True))
         rec.log(
             "/map/homes",
             rr.Points3D(
-                [(r.x, r.y, 0.01) for r in homes],
+                [(x, y, 0.01) for _, (x, y, _) in homes],
                 radii=0.04,
-                colors=[_robot_color(r.name) for r in homes],
-                labels=[f"{r.name} home" for r in homes],
+                colors=[_robot_color(name) for name, _ in homes],
+                labels=[f"{name} home" for name, _ in homes],
             ),
             static=True,
         )
