@@ -2,8 +2,10 @@
 built-in mission end to end (record, 60/60, bit-identical replay, view), and the faulty
 examples, each losing exactly its rubric lines.
 
-The recordings use a 320x240 camera (the marker is 1.1 m away: 25 px wide) to keep the fast
-suite's cost down: about 40 s of sim time each, the faulty run without a broadcaster 15 s.
+The recordings use a 320x240 camera (the marker is 1.1 m away: 25 px wide) to keep the cost
+down: about 40 s of sim time each (1-2 min of wall time on 2 busy cores). The fast suite records
+the built-in mission and the faulty run without a broadcaster (15 s); the two faulty runs that
+drive to a wrong destination, and seeded variants, are marked slow.
 """
 
 from __future__ import annotations
@@ -95,7 +97,13 @@ def test_parameters_are_the_courses_and_never_the_marker() -> None:
     assert params["aruco_target.x"] == 3.6 and params["aruco_target.y"] == 1.2
     assert params["final_destination.frame_id"] == "origin1"
     assert params["final_destination.aruco_3.y"] == 1.0
-    assert not any("marker" in k or "origin1." in k or "robot1" in k for k in params)
+    own = {k for k in params if not k.startswith(("mission.", "detector.", "use_sim_time"))}
+    assert own == {
+        "aruco_target.x",
+        "aruco_target.y",
+        "final_destination.frame_id",
+        *(f"final_destination.aruco_{k}.{c}" for k in range(4) for c in "xy"),
+    }  # never the marker's ID or pose, nor the origins' poses (those come from tf)
 
 
 def test_the_mission_may_broadcast_base_footprint_but_not_the_simulators_links() -> None:
@@ -240,9 +248,10 @@ def test_no_odom_broadcaster_never_localises(tmp_path: Path) -> None:
     report = _record_example(tmp_path, "no_odom_broadcaster", max_sim_time_s=15.0)
     assert set(report.failed_ids()) == ALL_LINES
     assert report.check("tf.odom_to_base").measured == "never broadcast"
-    assert report.check("aruco_target.reached").measured.startswith("closest 3.8")
+    assert report.check("aruco_target.reached").measured.startswith("closest 3.79")
 
 
+@pytest.mark.slow
 def test_destination_read_in_map_instead_of_origin(tmp_path: Path) -> None:
     report = _record_example(tmp_path, "wrong_frame")
     assert set(report.failed_ids()) == {
