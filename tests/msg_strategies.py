@@ -58,7 +58,7 @@ def message(cls: type[msgs.Message]) -> st.SearchStrategy[msgs.Message]:
             kwargs[name] = st.lists(st.deferred(lambda e=elem: message(e)), max_size=3).map(tuple)
         elif kind == "bytes":
             kwargs[name] = st.binary(max_size=64)
-        elif kind == "floats":
+        elif kind in ("floats", "ints"):
             (_, (basetype, _)), length = detail
             size = (
                 {"min_size": length, "max_size": length}

@@ -11,6 +11,7 @@ from __future__ import annotations
 from usar_replay import contract
 from usar_replay.executor import shutdown
 from usar_replay.msgs import (
+    ArucoMarkers,
     CameraInfo,
     CompressedImage,
     DiagnosticStatus,
@@ -49,6 +50,7 @@ from usar_replay.tf2 import (
 )
 
 __all__ = [
+    "ArucoMarkers",
     "Buffer",
     "CameraInfo",
     "CompressedImage",

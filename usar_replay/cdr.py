@@ -59,6 +59,8 @@ def _to_ros_fn(cls: Any) -> _Conv:
             args.append(f"{name}=np.frombuffer({v}, dtype=u8)")
         elif kind == "floats":
             args.append(f"{name}=np.asarray({v}, dtype=np.float64)")
+        elif kind == "ints":
+            args.append(f"{name}=np.asarray({v}, dtype=np.int64)")
         else:
             args.append(f"{name}={v}")
     code = f"def conv(v):\n    return T({', '.join(args)})\n"
@@ -82,6 +84,8 @@ def _from_ros_fn(cls: Any) -> _Conv:
             args.append(f"{name}=bytes({v})")
         elif kind == "floats":
             args.append(f"{name}=tuple([float(x) for x in {v}])")
+        elif kind == "ints":
+            args.append(f"{name}=tuple([int(x) for x in {v}])")
         else:
             args.append(
                 f"{name}={dict(float='float', int='int', bool='bool', str='str')[kind]}({v})"

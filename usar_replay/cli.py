@@ -89,13 +89,17 @@ def _parse_camera(text: str) -> tuple[int, int, float]:
 
 
 def _load_scenario(args: argparse.Namespace) -> Scenario:
+    from usar_replay import assignment
     from usar_replay import scenario as scn
 
-    base = scn.load(args.scenario) if args.scenario else scn.course_world()
+    kind = getattr(args, "assignment", None)
+    base = scn.load(args.scenario) if args.scenario else assignment.by_name(kind or "usar").world()
+    if kind and base.assignment != kind:
+        raise UsageError(
+            f"{args.scenario} is a {base.assignment!r} world, not {kind!r}; drop --assignment"
+        )
     if args.seed is not None:
-        from usar_replay.variants import make_variant
-
-        base = make_variant(base, args.seed)
+        base = assignment.of(base).variant(base, args.seed)
     if args.camera:
         w, h, rate = _parse_camera(args.camera)
         base = dataclasses.replace(
@@ -121,6 +125,18 @@ def _cmd_scenario(args: argparse.Namespace) -> int:
     elif not args.check:
         print(text, end="")
     if not args.check:
+        return EXIT_OK
+    if scenario.assignment == "ros2-final":
+        from usar_replay.ros2_world import check_ros2
+
+        problem = check_ros2(scenario)
+        if problem is not None:
+            print(f"FAIL {scenario.name}: {problem}")
+            return EXIT_FAIL
+        print(
+            f"ok   {scenario.name}: the marker is in view from aruco_target, every destination "
+            "is reachable"
+        )
         return EXIT_OK
     from usar_replay.scenario_check import check
 
@@ -485,7 +501,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader
+    from usar_replay.grade import Grader, rubric_for
     from usar_replay.replay import check_not_damaged, replay
     from usar_replay.reports import to_table
     from usar_replay.run import open_run
@@ -496,15 +512,16 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     settings = _run_settings(args, run.settings) if changed else None
     thresholds = _thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: Grader | None = None
+    rubric = rubric_for(run.require_scenario())
     if args.grade:
-        grader = Grader(run.require_scenario(), thresholds)
+        grader = rubric.Grader(run.require_scenario(), thresholds)
     report = replay(
         run,
         settings,
         mission=args.mission,
         grade_sink=None if grader is None else grader.feed,
-        grade_topics=GRADE_TOPICS,
-        required_topics=REQUIRED_TOPICS if grader is not None else (),
+        grade_topics=rubric.GRADE_TOPICS,
+        required_topics=rubric.REQUIRED_TOPICS if grader is not None else (),
         limits=_limits(args),
     )
     check_not_damaged(report)
@@ -710,6 +727,11 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("record", help="run the mission in pybullet and record it to MCAP")
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
     p.add_argument("--out", metavar="PATH", help="output .mcap (default: recordings/NAME.mcap)")
     p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
     p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
@@ -780,6 +802,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML to read (default: the course)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
     p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
     p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
     p.add_argument("--out", metavar="FILE", help="write the TOML here instead of stdout")

@@ -35,7 +35,19 @@ __all__ = [
     "MARKER_POSES",
     "MISSION_ATTACHMENT",
     "OPTICAL_FRAME",
+    "ARUCO_MARKERS",
+    "FINAL_DESTINATION_FRAME",
+    "ORIGIN_FRAMES",
     "ROBOTS",
+    "ROS2_BASE_FRAME",
+    "ROS2_CAMERA_FRAME",
+    "ROS2_CAMERA_INFO",
+    "ROS2_FRAMES",
+    "ROS2_IMAGE",
+    "ROS2_ODOM_FRAME",
+    "ROS2_OPTICAL_FRAME",
+    "ROS2_ROBOT",
+    "RobotFrames",
     "ROSOUT",
     "RUN_METADATA",
     "RobotBody",
@@ -74,6 +86,8 @@ OPTICAL_FRAME = "explorer_tf/camera_rgb_optical_frame"
 
 ROBOTS = ("explorer", "follower")
 """The robots of the US&R mission, in the order the simulator publishes them."""
+ROS2_ROBOT = "robot1"
+"""The one robot of the ROS 2 final project (assignment ``ros2-final``)."""
 
 
 def odom_frame(robot: str) -> str:
@@ -133,7 +147,9 @@ def truth_pose(robot: str) -> str:
 
 
 _ROBOT_TOPICS: dict[str, str] = {
-    fn(r): r for r in ROBOTS for fn in (cmd_vel, odom, goal, plan, goal_status, truth_pose)
+    fn(r): r
+    for r in (*ROBOTS, ROS2_ROBOT)
+    for fn in (cmd_vel, odom, goal, plan, goal_status, truth_pose)
 }
 
 
@@ -174,6 +190,54 @@ def sim_frames(robots: tuple[str, ...] = ROBOTS) -> tuple[str, ...]:
             f"{r}_tf/camera_rgb_optical_frame",
         )
     )
+
+
+# --- the ROS 2 final project (assignment ``ros2-final``) ------------------------------------------
+#
+# One robot, ``robot1``, with the course's ROS 2 frame names (``robot1/odom``, no ``_tf``). Its
+# tf tree is broken on purpose: the simulator does NOT publish ``robot1/odom ->
+# robot1/base_footprint`` (the students' first task is the node that broadcasts it from
+# ``/robot1/odom``). ``origin1..origin4`` are static children of ``map``.
+
+ROS2_ODOM_FRAME = "robot1/odom"
+ROS2_BASE_FRAME = "robot1/base_footprint"
+ROS2_CAMERA_FRAME = "robot1/camera_rgb_frame"
+ROS2_OPTICAL_FRAME = "robot1/camera_rgb_optical_frame"
+ROS2_IMAGE = "/robot1/camera/rgb/image_raw/compressed"
+ROS2_CAMERA_INFO = "/robot1/camera/rgb/camera_info"
+ARUCO_MARKERS = "/aruco_markers"
+"""ros2_aruco's output: one ``ros2_aruco_interfaces/msg/ArucoMarkers`` per camera frame."""
+FINAL_DESTINATION_FRAME = "final_destination"
+"""The frame the mission broadcasts for the destination the marker chose (the project's name)."""
+ORIGIN_FRAMES = ("origin1", "origin2", "origin3", "origin4")
+"""Static children of ``map`` that ``final_destination.frame_id`` names."""
+
+
+@dataclass(frozen=True, slots=True)
+class RobotFrames:
+    """One robot's names: what the simulator publishes and what a mission may not broadcast."""
+
+    robot: str
+    odom: str
+    base: str
+    camera: str
+    optical: str
+
+    @classmethod
+    def usar(cls, robot: str) -> RobotFrames:
+        """The US&R naming: ``explorer_tf/odom`` ..."""
+        return cls(
+            robot,
+            odom_frame(robot),
+            base_frame(robot),
+            f"{robot}_tf/camera_rgb_frame",
+            f"{robot}_tf/camera_rgb_optical_frame",
+        )
+
+
+ROS2_FRAMES = RobotFrames(
+    ROS2_ROBOT, ROS2_ODOM_FRAME, ROS2_BASE_FRAME, ROS2_CAMERA_FRAME, ROS2_OPTICAL_FRAME
+)
 
 
 # --- the log file ---------------------------------------------------------------------------------

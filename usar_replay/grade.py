@@ -8,10 +8,12 @@ decoding, which is what makes ``usar grade`` fast) and says whether the log was 
 
 from __future__ import annotations
 
+import importlib
 import os
 import time
 from dataclasses import replace
 from pathlib import Path
+from types import ModuleType
 
 from usar_replay.errors import MissingTopic
 from usar_replay.rubric import (
@@ -24,6 +26,7 @@ from usar_replay.rubric import (
     GradeReport,
 )
 from usar_replay.run import Run, open_run
+from usar_replay.scenario import Scenario
 from usar_replay.settings import Thresholds, load
 
 __all__ = [
@@ -38,6 +41,7 @@ __all__ = [
     "grade_file",
     "grade_run",
     "load_thresholds",
+    "rubric_for",
 ]
 
 
@@ -47,24 +51,38 @@ def load_thresholds(path: str | os.PathLike[str]) -> Thresholds:
     return load(Thresholds, Path(path), table="thresholds")
 
 
+def rubric_for(scenario: Scenario) -> ModuleType:
+    """The module holding the rubric of the scenario's assignment: it has ``Grader(scenario,
+    thresholds)`` (``feed``, ``report``), ``GRADE_TOPICS`` and ``REQUIRED_TOPICS``. US&R's is
+    :mod:`usar_replay.rubric`. Named by the assignment, imported here (a rubric module imports
+    the shared ``Check``/``GradeReport`` shapes, so the assignment cannot import it)."""
+    from usar_replay.assignment import of
+
+    return importlib.import_module(of(scenario).rubric_module)
+
+
 def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
     """Grade an opened recording as recorded (no replay). A damaged log is graded as far as it
     goes and says so; a complete log that lacks a topic the rubric needs raises
     :class:`MissingTopic`."""
     began = time.perf_counter()  # only for JUnit's `time`: never part of the verdict
-    grader = Grader(run.require_scenario(), thresholds)
+    scenario = run.require_scenario()
+    rubric = rubric_for(scenario)
+    grader = rubric.Grader(scenario, thresholds)
     grader.start_ns = run.start_ns  # the run's clock starts with the log, whatever topic
     if run.damage is None:
-        missing = [t for t in REQUIRED_TOPICS if t not in run.topics]
+        missing = [t for t in rubric.REQUIRED_TOPICS if t not in run.topics]
         if missing:
             raise MissingTopic(
                 f"{run.path}: topic {missing[0]} is missing; it cannot be graded"
                 + (f" (also missing: {', '.join(missing[1:])})" if missing[1:] else "")
             )
-    for m in run.messages(GRADE_TOPICS):
+    for m in run.messages(rubric.GRADE_TOPICS):
         grader.feed(m.topic, m.msg, m.log_time_ns)
     problem = run.problem()
-    report = grader.report(str(run.path), log_complete=not problem, log_problem=problem)
+    report: GradeReport = grader.report(
+        str(run.path), log_complete=not problem, log_problem=problem
+    )
     return replace(report, seconds=time.perf_counter() - began)
 
 

@@ -50,6 +50,7 @@ __all__ = [
     "Log",
     "FiducialTransform",
     "FiducialTransformArray",
+    "ArucoMarkers",
     "KeyValue",
     "DiagnosticStatus",
     "MapMetaData",
@@ -382,6 +383,21 @@ class FiducialTransformArray(Message):
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
+class ArucoMarkers(Message):
+    """ros2_aruco_interfaces/msg/ArucoMarkers, the type of ``/aruco_markers`` (ros2_aruco's
+    ``aruco_node``): the IDs seen in one camera frame and, in the same order, each marker's
+    pose in the camera's optical frame (``header.frame_id``)."""
+
+    __msgtype__: ClassVar[str] = "ros2_aruco_interfaces/msg/ArucoMarkers"
+    __msgdef__: ClassVar[str] = (
+        "std_msgs/Header header\nint64[] marker_ids\ngeometry_msgs/Pose[] poses\n"
+    )
+    header: Header = field(default_factory=Header)
+    marker_ids: tuple[int, ...] = ()
+    poses: tuple[Pose, ...] = ()
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
 class KeyValue(Message):
     """diagnostic_msgs/msg/KeyValue."""
 
@@ -472,6 +488,7 @@ MESSAGE_TYPES: tuple[type[Message], ...] = (
     Log,
     FiducialTransform,
     FiducialTransformArray,
+    ArucoMarkers,
     KeyValue,
     DiagnosticStatus,
     MapMetaData,
@@ -489,7 +506,7 @@ def message_class(msgtype: str) -> type[Message]:
 
 # --- field kinds, used by the converters in bag.py and by tests that generate messages ----------
 
-FieldKind = typing.Literal["msg", "msgs", "bytes", "floats", "float", "int", "bool", "str"]
+FieldKind = typing.Literal["msg", "msgs", "bytes", "floats", "ints", "float", "int", "bool", "str"]
 
 
 def field_kinds(cls: type[Message]) -> tuple[tuple[str, FieldKind, Any], ...]:
@@ -508,6 +525,8 @@ def _field_kinds(cls: Any) -> tuple[tuple[str, FieldKind, Any], ...]:
             elem = typing.get_args(hint)[0]
             if isinstance(elem, type) and issubclass(elem, Message):
                 out.append((f.name, "msgs", elem))
+            elif elem is int:
+                out.append((f.name, "ints", None))
             else:
                 out.append((f.name, "floats", None))
         elif isinstance(hint, type) and issubclass(hint, Message):

@@ -98,9 +98,14 @@ class NavigateClient:
         limits: Limits | None = None,
         xy_tolerance: float = 0.05,
         yaw_tolerance: float = 0.17,
+        base_frame: str | None = None,
     ) -> None:
+        """``base_frame``: the robot's base frame in tf (default ``<robot>_tf/base_footprint``,
+        the US&R naming; the ROS 2 project's is ``robot1/base_footprint``). The client finds
+        the robot by looking that frame up in ``map``: without a connected tf tree it cannot."""
         self.node = node
         self.robot = robot
+        self.base_frame = base_frame or contract.base_frame(robot)
         self.limits = limits or Limits()
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
@@ -166,16 +171,14 @@ class NavigateClient:
         xy_tolerance: float | None = None,
         yaw_tolerance: float | None = None,
     ) -> None:
-        """Drive to ``goal`` (in ``map``); ``done_callback(NavResult)`` when it ends.
+        """Drive to ``goal`` (in ``map``, or a frame tf links to ``map``, such as the robot's
+        odom frame: it is transformed into ``map`` with the latest transform);
+        ``done_callback(NavResult)`` when it ends.
 
         ``ignore_yaw``: any final heading will do. A new goal replaces an active one (its
         callback is not called, as move_base preempts).
         """
-        if goal.header.frame_id.lstrip("/") != contract.MAP:
-            raise ValueError(
-                f"navigation goals are in {contract.MAP!r}, got frame {goal.header.frame_id!r}: "
-                "transform the pose into map first (tf2 Buffer.transform / lookup_transform)"
-            )
+        goal = self._in_map(goal)
         self._goal_seq += 1
         self._goal_name = name or f"goal_{self._goal_seq}"
         self._done = done_callback
@@ -222,6 +225,29 @@ class NavigateClient:
         if self._nav.status is NavStatus.FAILED:
             self._finish(NavStatus.FAILED, self._nav.reason)
 
+    def _in_map(self, goal: msgs.PoseStamped) -> msgs.PoseStamped:
+        frame = goal.header.frame_id.lstrip("/")
+        if frame == contract.MAP:
+            return goal
+        try:
+            tf = self.buffer.lookup_transform(contract.MAP, frame, Time())
+        except TransformException as err:
+            raise ValueError(
+                f"navigation goals are in {contract.MAP!r} or a frame tf links to it; "
+                f"{frame!r} cannot be looked up in map now: {err}"
+            ) from err
+        tr, q = tf.transform.translation, tf.transform.rotation
+        yaw = yaw_from_quat(q)
+        p = goal.pose.position
+        c, s = math.cos(yaw), math.sin(yaw)
+        return msgs.PoseStamped(
+            header=msgs.Header(stamp=goal.header.stamp, frame_id=contract.MAP),
+            pose=msgs.Pose(
+                position=msgs.Point(x=tr.x + c * p.x - s * p.y, y=tr.y + s * p.x + c * p.y),
+                orientation=quat_from_yaw(yaw + yaw_from_quat(goal.pose.orientation)),
+            ),
+        )
+
     def cancel_goal(self) -> None:
         """Stop driving now; the done callback is not called."""
         if self._nav is not None and self.active:
@@ -232,9 +258,7 @@ class NavigateClient:
 
     def _lookup_pose(self, stamp: msgs.Time) -> tuple[float, float, float] | None:
         try:
-            tf = self.buffer.lookup_transform(
-                contract.MAP, contract.base_frame(self.robot), Time.from_msg(stamp)
-            )
+            tf = self.buffer.lookup_transform(contract.MAP, self.base_frame, Time.from_msg(stamp))
         except TransformException:
             return None
         tr = tf.transform.translation

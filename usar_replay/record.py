@@ -29,6 +29,8 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from usar_replay import __version__, bag, cdr, contract, msgs
+from usar_replay.assignment import Assignment
+from usar_replay.assignment import of as assignment_of
 from usar_replay.detect import encode_image, image_codecs
 from usar_replay.nav import OccupancyGrid
 from usar_replay.navigation import grid_to_msg
@@ -36,7 +38,7 @@ from usar_replay.run import MissionInfo
 from usar_replay.scenario import Scenario, to_toml
 from usar_replay.settings import RunSettings
 from usar_replay.settings import to_toml as settings_to_toml
-from usar_replay.sim import Simulator
+from usar_replay.sim import SimRobot, Simulator
 from usar_replay.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
 
 __all__ = [
@@ -111,18 +113,10 @@ def default_output(scenario: Scenario, directory: str | os.PathLike[str] = "reco
 
 def mission_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
     """The parameters a mission's nodes read, as the course's launch and parameter files give
-    them: ``aruco_lookup_locations.target_k`` ([x, y]), ``<robot>.home`` ([x, y, yaw]) and the
-    run's ``mission.*`` and ``detector.*`` settings. Never a marker position."""
-    params: dict[str, Any] = {}
-    for i, (x, y) in enumerate(scenario.targets):
-        params[f"aruco_lookup_locations.target_{i + 1}"] = [float(x), float(y)]
-    for start in (scenario.explorer, scenario.follower):
-        params[f"{start.name}.home"] = [start.x, start.y, start.yaw]
-    for group in ("mission", "detector"):
-        for f in dataclasses.fields(getattr(settings, group)):
-            params[f"{group}.{f.name}"] = getattr(getattr(settings, group), f.name)
-    params["use_sim_time"] = True
-    return params
+    them (the scenario's assignment says which: :mod:`usar_replay.assignment`; for US&R
+    ``aruco_lookup_locations.target_k``, ``<robot>.home``, ``mission.*``, ``detector.*``).
+    Never a marker position."""
+    return assignment_of(scenario).parameters(scenario, settings)
 
 
 def _run_metadata(renderer: str) -> dict[str, str]:
@@ -170,25 +164,31 @@ class _Observed:
 
 
 def _observe(
-    sim: Simulator, scenario: Scenario, first: list[tuple[str, msgs.Message]]
+    sim: Simulator,
+    scenario: Scenario,
+    asg: Assignment,
+    first: list[tuple[str, msgs.Message]],
 ) -> _Observed:
     """What the simulator publishes now: ``first`` (``/tf_static``, ``/map`` at the start),
-    ``/tf``, a camera frame when one is due, odometry; and the ground truth of the moment."""
+    ``/tf`` (where the assignment's simulator publishes the robots' odom links), a camera frame
+    when one is due, odometry; and the ground truth of the moment."""
     t = sim.now_ns
-    batch = [*first, (contract.TF, sim.tf())]
+    batch = list(first)
+    if asg.sim_base_tf:
+        batch.append((contract.TF, sim.tf()))
     frame = 0
     if sim.camera_due():
         cam = sim.camera_info()
         data = encode_image(sim.render_camera(), scenario.camera.encoding)
         image = msgs.CompressedImage(header=cam.header, format=scenario.camera.encoding, data=data)
-        batch += [(contract.CAMERA_INFO, cam), (contract.IMAGE, image)]
+        batch += [(asg.camera_info_topic, cam), (asg.image_topic, image)]
         frame = 1
-    batch += [(contract.odom(r), sim.odometry(r)) for r in contract.ROBOTS]
+    batch += [(contract.odom(r), sim.odometry(r)) for r in asg.robot_names]
     wire = [(topic, msg.__msgtype__, cdr.encode(msg)) for topic, msg in batch]
     stamp = msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP)
     truth: list[tuple[str, msgs.Message]] = [
         (contract.truth_pose(r), msgs.PoseStamped(header=stamp, pose=sim.true_pose(r)))
-        for r in contract.ROBOTS
+        for r in asg.robot_names
     ]
     return _Observed(t, wire, truth, frame)
 
@@ -217,7 +217,8 @@ def record(
     """
     settings = settings or RunSettings()
     rs = settings.record
-    target = resolve_target(mission)
+    asg = assignment_of(scenario)
+    target = resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
     limit_outcome = "max_sim_time" if rs.max_sim_time_s else "time_limit"
@@ -233,6 +234,13 @@ def record(
             physics_hz=rs.physics_hz,
             start_time_ns=contract.START_TIME_NS,
             renderer=rs.renderer,
+            robots=tuple(
+                SimRobot(f, *start)
+                for f, start in zip(asg.robots, asg.starts(scenario), strict=True)
+            ),
+            camera_robot=asg.camera_robot,
+            base_tf=asg.sim_base_tf,
+            static_frames=asg.static_links(scenario),
         ) as sim,
         bag.BagWriter(out) as writer,
     ):
@@ -265,12 +273,12 @@ def record(
             with MissionProcess(
                 target,
                 params,
-                sim_topics=contract.SIM_TOPICS,
-                sim_frames=contract.sim_frames(),
+                sim_topics=asg.sim_topics,
+                sim_frames=asg.sim_frames,
                 limits=limits,
             ) as proc:
                 latency = rs.actuation_latency_ticks
-                tick: _Observed | None = _observe(sim, scenario, first)
+                tick: _Observed | None = _observe(sim, scenario, asg, first)
                 commands: list[tuple[str, msgs.Twist]] = []
                 while tick is not None:
                     for topic, msgtype, raw in tick.wire:
@@ -286,7 +294,7 @@ def record(
                         # previous tick's commands and renders the next frame (two cores busy);
                         # each cmd_vel acts one tick later, always: recorded, deterministic
                         _step(sim, commands, steps_per_tick)
-                        nxt = _observe(sim, scenario, []) if sim.now_ns <= end_ns else None
+                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
                     commands = []
                     for topic, msgtype, raw, value in proc.receive():
                         writer.write_raw(topic, msgtype, raw, tick.t, publisher="mission")
@@ -322,7 +330,7 @@ def record(
                         break
                     if not latency:
                         _step(sim, commands, steps_per_tick)
-                        nxt = _observe(sim, scenario, []) if sim.now_ns <= end_ns else None
+                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
                     tick = nxt
         except MissionEnded as ended:
             outcome, reason = ended.verdict, ended.detail

@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay import bag, cdr, contract, msgs
+from usar_replay.assignment import of as assignment_of
 from usar_replay.errors import LogError, UsageError
 from usar_replay.run import Run, open_run
 from usar_replay.settings import RunSettings
@@ -437,7 +438,8 @@ def replay(
     """
     run = source if isinstance(source, Run) else open_run(source)
     scenario = run.require_scenario()
-    run.require_topics([*contract.SIM_TOPICS, *required_topics])
+    asg = assignment_of(scenario)
+    run.require_topics([*asg.sim_topics, *required_topics])
     recorded_target = run.mission.target or "builtin"
     spec = mission or recorded_target
     try:
@@ -494,8 +496,8 @@ def replay(
     with MissionProcess(
         target,
         mission_parameters(scenario, use),
-        sim_topics=contract.SIM_TOPICS,
-        sim_frames=contract.sim_frames(),
+        sim_topics=asg.sim_topics,
+        sim_frames=asg.sim_frames,
         limits=limits,
     ) as proc:
         try:

@@ -128,6 +128,12 @@ class Scenario:
     camera: CameraSettings = field(default_factory=CameraSettings)
     time_limit_s: float = 600.0
     seed: int | None = None
+    assignment: str = "usar"
+    """Which assignment this world is for: ``usar`` (the two-robot US&R mission) or
+    ``ros2-final`` (the ROS 2 final project; :mod:`usar_replay.assignment`)."""
+    task: tuple[tuple[str, float | str], ...] = ()
+    """The assignment's own world data as flat ``dotted.key -> value`` pairs in key order (the
+    file's ``[task]`` table; ``usar`` has none). :mod:`usar_replay.ros2_world` reads it."""
 
     def marker_by_id(self, marker_id: int) -> Marker:
         """The marker with this ID (KeyError if none)."""
@@ -460,6 +466,8 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         "cylinders",
         "spheres",
         "markers",
+        "assignment",
+        "task",
     ]
     _check_keys(src, "", data, top, ["name", "walls", "markers", "aruco_lookup_locations"])
     version = data.get("format_version", FORMAT_VERSION)
@@ -551,9 +559,42 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         camera=camera,
         time_limit_s=_num(src, "time_limit_s", data.get("time_limit_s", 600.0), positive=True),
         seed=None if data.get("seed") is None else _int(src, "seed", data["seed"]),
+        assignment=_str(src, "assignment", data.get("assignment", "usar")),
+        task=_parse_task(src, data.get("task", {})),
     )
     validate(scn, src)
     return scn
+
+
+ASSIGNMENTS = ("usar", "ros2-final")
+"""The assignments a scenario may name (``assignment = "..."``)."""
+
+
+def _parse_task(src: str, table: Any, prefix: str = "task") -> tuple[tuple[str, float | str], ...]:
+    """The ``[task]`` table flattened to sorted ``dotted.key -> number | string`` pairs."""
+    if not isinstance(table, dict):
+        raise _err(src, prefix, "must be a table")
+    out: list[tuple[str, float | str]] = []
+    for key, value in table.items():
+        path = f"{prefix}.{key}"
+        if isinstance(value, dict):
+            out += [(f"{key}.{k}", v) for k, v in _parse_task(src, value, path)]
+        elif isinstance(value, str):
+            out.append((key, value))
+        else:
+            out.append((key, _num(src, path, value)))
+    return tuple(sorted(out))
+
+
+def _unflatten(pairs: tuple[tuple[str, float | str], ...]) -> dict[str, Any]:
+    root: dict[str, Any] = {}
+    for key, value in pairs:
+        *parents, leaf = key.split(".")
+        node = root
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return root
 
 
 def _parse_cylinder(src: str, path: str, t: dict[str, Any]) -> Cylinder:
@@ -661,6 +702,10 @@ def validate(scn: Scenario, source: str = "scenario") -> None:
         raise _err(source, "walls", "at least one wall is needed")
     if not scn.targets:
         raise _err(source, "aruco_lookup_locations", "at least one target is needed")
+    if scn.assignment not in ASSIGNMENTS:
+        close = difflib.get_close_matches(scn.assignment, ASSIGNMENTS, n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(ASSIGNMENTS)})"
+        raise _err(source, "assignment", f"unknown assignment {scn.assignment!r}{hint}")
     check_ranges(scn, source)
     seen: dict[int, int] = {}
     for i, m in enumerate(scn.markers):
@@ -673,7 +718,8 @@ def validate(scn: Scenario, source: str = "scenario") -> None:
         seen[m.id] = i
     x0, y0, x1, y1 = building_extent(scn)
     points = [(f"aruco_lookup_locations.target_{i + 1}", t) for i, t in enumerate(scn.targets)]
-    points += [(f"robots.{r.name}", (r.x, r.y)) for r in (scn.explorer, scn.follower)]
+    if scn.assignment == "usar":  # other assignments place their robots in [task]
+        points += [(f"robots.{r.name}", (r.x, r.y)) for r in (scn.explorer, scn.follower)]
     for path, (x, y) in points:
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             raise _err(
@@ -705,6 +751,8 @@ def to_toml(scn: Scenario) -> str:
     }
     if scn.seed is not None:
         data["seed"] = scn.seed
+    if scn.assignment != "usar":
+        data["assignment"] = scn.assignment
     cam = scn.camera
     data["camera"] = {
         "width": cam.width,
@@ -713,9 +761,12 @@ def to_toml(scn: Scenario) -> str:
         "hfov": cam.hfov,
         "encoding": cam.encoding,
     }
-    data["robots"] = {
-        r.name: {"x": r.x, "y": r.y, "yaw": r.yaw} for r in (scn.explorer, scn.follower)
-    }
+    if scn.assignment == "usar":
+        data["robots"] = {
+            r.name: {"x": r.x, "y": r.y, "yaw": r.yaw} for r in (scn.explorer, scn.follower)
+        }
+    if scn.task:
+        data["task"] = _unflatten(scn.task)
     data["aruco_lookup_locations"] = {
         f"target_{i + 1}": [t[0], t[1]] for i, t in enumerate(scn.targets)
     }

@@ -36,6 +36,8 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from usar_replay import contract, msgs, rotations
+from usar_replay.assignment import USAR
+from usar_replay.assignment import of as assignment_of
 from usar_replay.scenario import Scenario
 from usar_replay.tf_tree import Buffer, TransformException
 
@@ -313,7 +315,11 @@ class Scene:
         self.tf_static: dict[str, tuple[XYZ, tuple[float, float, float, float]]] = {}
         self.tf_dynamic: dict[str, Poses] = {}
         self.camera_info: msgs.CameraInfo | None = None
-        self.camera_frame = contract.OPTICAL_FRAME
+        # names come from the scenario's assignment (US&R's explorer, or ROS 2's robot1)
+        asg = USAR if scenario is None else assignment_of(scenario)
+        self.camera_topic, self.camera_info_topic = asg.image_topic, asg.camera_info_topic
+        self.camera_frame = asg.frames_of(asg.camera_robot).optical
+        self._robot_names = asg.robot_names
         self._pinhole_entity: str | None = None
         self._images = ImageBatch()
         self.pending_image_bytes = 0
@@ -336,8 +342,8 @@ class Scene:
         self.end_ns = 0
         if scenario is not None:
             self.true_marker_xyz = {m.id: (m.x, m.y, m.z) for m in scenario.markers}
-            for r in (scenario.explorer, scenario.follower):
-                self._robot(r.name)
+            for name in self._robot_names:
+                self._robot(name)
 
     def _robot(self, name: str) -> str:
         if name not in self.robots:
@@ -354,9 +360,9 @@ class Scene:
             return
         if isinstance(msg, msgs.TFMessage) and topic in (contract.TF, contract.TF_STATIC):
             self._on_tf(msg, t_ns, static=topic == contract.TF_STATIC)
-        elif isinstance(msg, msgs.CompressedImage) and topic == contract.IMAGE:
+        elif isinstance(msg, msgs.CompressedImage) and topic == self.camera_topic:
             self._on_image(msg, t_ns)
-        elif isinstance(msg, msgs.CameraInfo) and topic == contract.CAMERA_INFO:
+        elif isinstance(msg, msgs.CameraInfo) and topic == self.camera_info_topic:
             if self.camera_info is None:
                 self.camera_frame = msg.header.frame_id or self.camera_frame
             self.camera_info = msg

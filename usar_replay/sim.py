@@ -81,7 +81,7 @@ def _libc_fflush() -> None:
 with _quiet_stdout():
     import pybullet as p
 
-from usar_replay import msgs  # noqa: E402 - after the quiet pybullet import above
+from usar_replay import contract, msgs  # noqa: E402 - after the quiet pybullet import above
 from usar_replay.scenario import Scenario  # noqa: E402
 
 __all__ = [
@@ -89,6 +89,7 @@ __all__ = [
     "FOOTPRINT",
     "LIMITS",
     "RobotLimits",
+    "SimRobot",
     "Simulator",
     "camera_intrinsics",
 ]
@@ -153,9 +154,24 @@ def _tf(
     )
 
 
+@dataclass(frozen=True, slots=True)
+class SimRobot:
+    """A robot to simulate: its names (frames) and its start pose in ``map``.
+
+    Why: the US&R world has two robots named ``<robot>_tf/...``; the ROS 2 final project has
+    one, ``robot1``, named ``robot1/...``. The simulator takes the names from here and spells none.
+    """
+
+    frames: contract.RobotFrames
+    x: float
+    y: float
+    yaw: float = 0.0
+
+
 @dataclass(slots=True)
 class _RobotState:
     name: str
+    frames: contract.RobotFrames
     body: int
     start: tuple[float, float, float]
     x: float
@@ -179,7 +195,15 @@ class Simulator:
         start_time_ns: int = 1_000_000_000,
         renderer: str = "auto",
         limits: RobotLimits = LIMITS,
+        robots: tuple[SimRobot, ...] | None = None,
+        camera_robot: str = "explorer",
+        base_tf: bool = True,
+        static_frames: tuple[tuple[str, str, float, float, float], ...] = (),
     ) -> None:
+        """``robots``: default the scenario's explorer and follower (US&R names). The camera
+        is on ``camera_robot``. ``base_tf=False``: no ``odom -> base_footprint`` on ``/tf``
+        (the ROS 2 final project's broken tree). ``static_frames``: extra ``(parent, child, x,
+        y, yaw)`` links for ``/tf_static`` (the project's ``map -> originN``)."""
         if start_time_ns <= 0:
             raise ValueError("start_time_ns must be positive")
         if renderer not in ("auto", "tiny", "egl"):
@@ -204,10 +228,15 @@ class Simulator:
         if renderer in ("auto", "egl"):
             self._try_egl(required=renderer == "egl")
         self._build_world()
-        self.robots = {
-            r.name: self._add_robot(r.name, r.x, r.y, r.yaw)
-            for r in (scenario.explorer, scenario.follower)
-        }
+        if robots is None:
+            robots = tuple(
+                SimRobot(contract.RobotFrames.usar(r.name), r.x, r.y, r.yaw)
+                for r in (scenario.explorer, scenario.follower)
+            )
+        self.robots = {r.frames.robot: self._add_robot(r.frames, r.x, r.y, r.yaw) for r in robots}
+        self.camera_robot = camera_robot
+        self.base_tf = base_tf
+        self.static_frames = static_frames
         fx, fy, cx, cy = camera_intrinsics(cam.width, cam.height, cam.hfov)
         self._intrinsics = (fx, fy, cx, cy)
         fov_v = 2.0 * math.degrees(math.atan((cam.height / 2.0) / fy))
@@ -371,7 +400,9 @@ class Simulator:
             body, -1, textureUniqueId=tex, rgbaColor=(1, 1, 1, 1), physicsClientId=c
         )
 
-    def _add_robot(self, name: str, x: float, y: float, yaw: float) -> _RobotState:
+    def _add_robot(
+        self, frames: contract.RobotFrames, x: float, y: float, yaw: float
+    ) -> _RobotState:
         c = self._client
         xs = [q[0] for q in FOOTPRINT]
         ys = [q[1] for q in FOOTPRINT]
@@ -395,7 +426,9 @@ class Simulator:
             baseOrientation=_quat_yaw(yaw),
             physicsClientId=c,
         )
-        return _RobotState(name=name, body=body, start=(x, y, yaw), x=x, y=y, yaw=yaw)
+        return _RobotState(
+            name=frames.robot, frames=frames, body=body, start=(x, y, yaw), x=x, y=y, yaw=yaw
+        )
 
     # -- driving -----------------------------------------------------------------------------
 
@@ -469,12 +502,12 @@ class Simulator:
         return (c * dx - s * dy, s * dx + c * dy, yaw)
 
     def odometry(self, robot: str) -> msgs.Odometry:
-        """Odometry in ``<robot>_tf/odom`` (exact: the kinematic model has no slip)."""
+        """Odometry in the robot's odom frame (exact: the kinematic model has no slip)."""
         r = self.robots[robot]
         x, y, yaw = self._odom_pose(r)
         return msgs.Odometry(
-            header=msgs.Header(stamp=msgs.Time.from_ns(self.now_ns), frame_id=f"{robot}_tf/odom"),
-            child_frame_id=f"{robot}_tf/base_footprint",
+            header=msgs.Header(stamp=msgs.Time.from_ns(self.now_ns), frame_id=r.frames.odom),
+            child_frame_id=r.frames.base,
             pose=msgs.PoseWithCovariance(
                 pose=msgs.Pose(position=msgs.Point(x=x, y=y), orientation=_msg_quat(_quat_yaw(yaw)))
             ),
@@ -484,46 +517,34 @@ class Simulator:
         )
 
     def tf_static(self) -> msgs.TFMessage:
-        """``map -> <robot>_tf/odom`` and the camera mounts, for ``/tf_static``."""
+        """``map -> <odom>``, the camera mounts and the extra static frames, for ``/tf_static``."""
         t = self.now_ns
         out = []
-        for name, r in self.robots.items():
+        for r in self.robots.values():
             sx, sy, syaw = r.start
-            out.append(_tf("map", f"{name}_tf/odom", t, (sx, sy, 0.0), _quat_yaw(syaw)))
+            f = r.frames
+            out.append(_tf(contract.MAP, f.odom, t, (sx, sy, 0.0), _quat_yaw(syaw)))
+            out.append(_tf(f.base, f.camera, t, CAMERA_MOUNT, (0.0, 0.0, 0.0, 1.0)))
             out.append(
                 _tf(
-                    f"{name}_tf/base_footprint",
-                    f"{name}_tf/camera_rgb_frame",
-                    t,
-                    CAMERA_MOUNT,
-                    (0.0, 0.0, 0.0, 1.0),
-                )
-            )
-            out.append(
-                _tf(
-                    f"{name}_tf/camera_rgb_frame",
-                    f"{name}_tf/camera_rgb_optical_frame",
+                    f.camera,
+                    f.optical,
                     t,
                     (0.0, 0.0, 0.0),
                     p.getQuaternionFromEuler(OPTICAL_RPY),
                 )
             )
+        for parent, child, x, y, yaw in self.static_frames:
+            out.append(_tf(parent, child, t, (x, y, 0.0), _quat_yaw(yaw)))
         return msgs.TFMessage(transforms=tuple(out))
 
     def tf(self) -> msgs.TFMessage:
-        """``<robot>_tf/odom -> <robot>_tf/base_footprint`` for both robots, at now."""
+        """``<odom> -> <base_footprint>`` for every robot, at now (none when ``base_tf`` is
+        off: that link is then the mission's to broadcast)."""
         out = []
-        for name, r in self.robots.items():
+        for r in self.robots.values() if self.base_tf else ():
             x, y, yaw = self._odom_pose(r)
-            out.append(
-                _tf(
-                    f"{name}_tf/odom",
-                    f"{name}_tf/base_footprint",
-                    self.now_ns,
-                    (x, y, 0.0),
-                    _quat_yaw(yaw),
-                )
-            )
+            out.append(_tf(r.frames.odom, r.frames.base, self.now_ns, (x, y, 0.0), _quat_yaw(yaw)))
         return msgs.TFMessage(transforms=tuple(out))
 
     # -- camera ------------------------------------------------------------------------------
@@ -539,7 +560,7 @@ class Simulator:
         return msgs.CameraInfo(
             header=msgs.Header(
                 stamp=msgs.Time.from_ns(self.now_ns),
-                frame_id="explorer_tf/camera_rgb_optical_frame",
+                frame_id=self.robots[self.camera_robot].frames.optical,
             ),
             height=cam.height,
             width=cam.width,
@@ -551,8 +572,8 @@ class Simulator:
         )
 
     def camera_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """(optical centre, 3x3 rotation of the optical frame) in map, for the explorer."""
-        r = self.robots["explorer"]
+        """(optical centre, 3x3 rotation of the optical frame) in map, for the camera robot."""
+        r = self.robots[self.camera_robot]
         c, s = math.cos(r.yaw), math.sin(r.yaw)
         mx, my, mz = CAMERA_MOUNT
         eye = np.array([r.x + c * mx - s * my, r.y + s * mx + c * my, mz])

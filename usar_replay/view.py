@@ -48,6 +48,7 @@ import rerun.blueprint as rrb
 
 from usar_replay import contract, msgs, rotations
 from usar_replay import scene as sc
+from usar_replay.assignment import of as assignment_of
 from usar_replay.errors import UsageError, UsarError
 from usar_replay.outfiles import check_output
 from usar_replay.scenario import Box, Scenario, building_extent
@@ -201,12 +202,13 @@ def _send_world(rec: rr.RecordingStream, scn: Scenario) -> None:
             labels=[f"target_{i + 1}" for i in range(len(scn.targets))],
         )
         rec.log(sc.TARGETS_ENTITY, targets, static=True)
-    homes = (scn.explorer, scn.follower)
+    asg = assignment_of(scn)
+    homes = list(zip(asg.robot_names, asg.starts(scn), strict=True))
     points = rr.Points3D(
-        [(r.x, r.y, 0.01) for r in homes],
+        [(x, y, 0.01) for _, (x, y, _) in homes],
         radii=0.04,
-        colors=[sc.robot_color(r.name) for r in homes],
-        labels=[f"{r.name} home" for r in homes],
+        colors=[sc.robot_color(name) for name, _ in homes],
+        labels=[f"{name} home" for name, _ in homes],
     )
     rec.log(sc.HOMES_ENTITY, points, static=True)
 
@@ -624,6 +626,9 @@ class ViewResult:
     """The web viewer's server, kept while it serves (stopped by :func:`wait_until_interrupted`)."""
 
 
+CAMERA_INFO_TOPICS = frozenset({contract.CAMERA_INFO, contract.ROS2_CAMERA_INFO})
+
+
 class _Decoder:
     """Decodes only what the viewer draws; CameraInfo only when it changes (not its stamp).
 
@@ -632,7 +637,7 @@ class _Decoder:
     counted and skipped (the rest of the log is still shown).
     """
 
-    SKIP = frozenset(contract.odom(r) for r in contract.ROBOTS)
+    SKIP = frozenset(contract.odom(r) for r in (*contract.ROBOTS, contract.ROS2_ROBOT))
 
     def __init__(self) -> None:
         from usar_replay import bag  # the reader's codec (see the module docstring)
@@ -645,7 +650,7 @@ class _Decoder:
     def __call__(self, topic: str, msgtype: str, data: bytes, t_ns: int) -> msgs.Message | None:
         if topic in self.SKIP:
             return None
-        if topic == contract.CAMERA_INFO:
+        if topic in CAMERA_INFO_TOPICS:
             tail = data[12:]  # CDR: 4 bytes encapsulation, then the 8-byte stamp
             if tail == self._info_tail:
                 return None

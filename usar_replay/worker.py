@@ -56,6 +56,7 @@ BUILTIN = "builtin"
 _BUILTIN_MODULES = {
     "builtin": "usar_replay.missions.usar:main",
     "usar": "usar_replay.missions.usar:main",
+    "ros2-final": "usar_replay.missions.ros2_final:main",
 }
 
 _TICK, _OUT, _CRASH, _READY, _STOP = b"T", b"O", b"C", b"R", b"S"
