@@ -609,10 +609,10 @@ class Simulator:
 
     def _view_key(self) -> tuple[object, ...]:
         """What the explorer's image depends on: its pose and every robot that may be in view."""
-        me = self.robots["explorer"]
+        me = self.robots[self.camera_robot]
         key: list[object] = [(me.x, me.y, me.yaw)]
         for name, r in self.robots.items():
-            if name != "explorer":
+            if name != self.camera_robot:
                 key.append((name, (r.x, r.y, r.yaw) if self._maybe_in_view(r) else None))
         return tuple(key)
 
