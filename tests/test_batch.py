@@ -438,3 +438,11 @@ for attempt in (lambda: open({str(other / "theirs.txt")!r}).read(),
     assert lines[0] == "mine"
     assert (work / "scratch.txt").read_text() == "ok"
     assert len(lines) == 6 and all(line.startswith("refused: usar sandbox") for line in lines[1:])
+
+
+def test_output_inside_the_submissions_is_refused(tmp_path: Path) -> None:
+    from usar_replay.batch_main import plan_class
+
+    (tmp_path / "a.py").write_text("def main(): pass\n")
+    with pytest.raises(UsageError, match="must not contain each other"):
+        plan_class(tmp_path, tmp_path / "graded", settings_toml="")

@@ -36,6 +36,7 @@ from usar_replay.classreport import (
     to_table,
 )
 from usar_replay.engines import Engine
+from usar_replay.errors import UsageError
 from usar_replay.outfiles import write_text
 
 __all__ = ["BatchSummary", "grade_class", "plan_class"]
@@ -93,6 +94,12 @@ def plan_class(
     limits: Limits | None = None,
 ) -> Plan:
     """The plan of a batch: teams, worlds, and which runs still need doing."""
+    out, subs_root = Path(out_dir).resolve(), Path(submissions_dir).resolve()
+    if out == subs_root or out.is_relative_to(subs_root) or subs_root.is_relative_to(out):
+        raise UsageError(
+            f"-o {out_dir}: the output folder and {submissions_dir} must not contain each other; "
+            "choose an output folder elsewhere"
+        )
     subs = discover(submissions_dir)
     worlds = make_worlds(seeds, scenarios)
     return make_plan(
