@@ -309,7 +309,9 @@ def test_wall_limit_is_a_verdict(tmp_path: Path) -> None:
     assert code == 0, text
     g = grade_of(tmp_path / "out", "slow")
     assert g["outcome"] == "wall_limit"
-    assert g["points"] == 0
+    assert "wall time" in str(g["outcome_reason"])
+    assert float(g["points"]) < 60  # type: ignore[arg-type]
+    assert g["log_complete"] is False  # the cut log is graded as far as it goes
 
 
 @pytest.mark.slow
