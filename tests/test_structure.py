@@ -41,6 +41,7 @@ CORE_MODULES = (
     "tf2",
     "navigation",
     "worker",
+    "sandbox",
 )
 HEAVY = ("pybullet", "mcap", "rerun")
 

@@ -41,6 +41,7 @@ from typing import Any
 from usar_replay import __version__, cdr, msgs
 from usar_replay.errors import UsageError, UsarError
 from usar_replay.executor import Executor, PublishPolicy
+from usar_replay.sandbox import SandboxPolicy
 
 __all__ = [
     "BUILTIN",
@@ -124,6 +125,11 @@ class MissionLimits:
     """Wall seconds for importing the mission and running its ``main()``."""
     memory_mb: int = 4096
     """Address-space limit of the mission process (RLIMIT_AS), in MiB; 0 for none."""
+    cpu_s: int = 0
+    """CPU-time limit of the mission process (RLIMIT_CPU), in seconds; 0 for none. Past it the
+    process is killed and the run is ``hung`` (a batch sets it: see usar_replay.batch)."""
+    sandbox: SandboxPolicy | None = None
+    """Files, processes and network the mission may not touch (usar_replay.sandbox)."""
 
 
 class MissionEnded(UsarError):
@@ -210,14 +216,27 @@ def _limit_memory(mb: int) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
 
+def _limit_cpu(seconds: int) -> None:
+    """RLIMIT_CPU: past the soft limit the kernel sends SIGXCPU (the parent's verdict: hung)."""
+    if seconds <= 0:
+        return
+    with contextlib.suppress(ImportError, ValueError, OSError):
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 5))
+
+
 def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, Any]) -> None:
     """The mission process: load the target, run ``main()``, then serve ticks until told to
     stop. Every failure is reported as text, never raised into the parent."""
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     _limit_memory(int(setup["memory_mb"]))
+    _limit_cpu(int(setup.get("cpu_s", 0)))
     target: MissionTarget = setup["target"]
     policy = PublishPolicy(sim_topics=setup["sim_topics"], sim_frames=setup["sim_frames"])
     executor = Executor(setup["parameters"], policy)
+    if setup.get("sandbox") is not None:
+        setup["sandbox"].install()  # after usar's own imports, before the user's code
     try:
         with executor.activate():
             module = _load(target)
@@ -288,6 +307,8 @@ class MissionProcess:
             "sim_topics": tuple(sim_topics),
             "sim_frames": tuple(sim_frames),
             "memory_mb": self.limits.memory_mb,
+            "cpu_s": self.limits.cpu_s,
+            "sandbox": self.limits.sandbox,
             "usar_version": __version__,
         }
         parent_sock, child_sock = socket.socketpair()
@@ -332,6 +353,10 @@ class MissionProcess:
             name = (
                 signal.Signals(-code).name if -code in signal.Signals._value2member_map_ else code
             )
+            if -code == signal.SIGXCPU:
+                return MissionEnded(
+                    "hung", f"the mission process used up its CPU-time limit while {doing}"
+                )
             if -code == signal.SIGKILL:
                 return MissionEnded(
                     "out_of_memory",
