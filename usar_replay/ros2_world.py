@@ -36,7 +36,7 @@ from usar_replay import contract
 from usar_replay.errors import InvalidScenario
 from usar_replay.nav import Navigator, NavStatus, OccupancyGrid
 from usar_replay.rotations import wrap_angle
-from usar_replay.scenario import WALL_HEIGHT, WALL_THICKNESS, Box, Marker, Scenario
+from usar_replay.scenario import Box, Marker, Scenario, wall
 
 __all__ = [
     "ASSIGNMENT",
@@ -166,28 +166,15 @@ def _task_pairs(
     return tuple(sorted(pairs))
 
 
-def _wall(name: str, x: float, y: float, yaw: float, length: float) -> Box:
-    return Box(
-        name=name,
-        x=x,
-        y=y,
-        z=WALL_HEIGHT / 2,
-        size_x=length,
-        size_y=WALL_THICKNESS,
-        size_z=WALL_HEIGHT,
-        yaw=yaw,
-    )
-
-
 def ros2_final_world() -> Scenario:
     """The built-in world: a 7 m x 6 m room, robot1 at the origin, the marker (ID 1) on a crate
     1.1 m west of ``aruco_target``, destinations in ``origin1`` (the course's values)."""
     pi = math.pi
     walls = (
-        _wall("west", -1.5, 0.0, pi / 2, 6.0),
-        _wall("east", 5.5, 0.0, pi / 2, 6.0),
-        _wall("south", 2.0, -3.0, 0.0, 7.15),
-        _wall("north", 2.0, 3.0, 0.0, 7.15),
+        wall("west", -1.5, 0.0, pi / 2, 6.0),
+        wall("east", 5.5, 0.0, pi / 2, 6.0),
+        wall("south", 2.0, -3.0, 0.0, 7.15),
+        wall("north", 2.0, 3.0, 0.0, 7.15),
     )
     # the marker is on the crate's east face, behind a robot arriving from the west: it must
     # turn to see it, as the project's robot did

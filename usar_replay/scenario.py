@@ -167,7 +167,8 @@ class Scenario:
         }
 
 
-def _wall(name: str, x: float, y: float, yaw: float, length: float) -> Box:
+def wall(name: str, x: float, y: float, yaw: float, length: float) -> Box:
+    """A standard wall (0.15 m thick, 1 m high) centred at (x, y), ``length`` along its yaw."""
     return Box(
         name=name,
         x=x,
@@ -184,17 +185,17 @@ def course_world() -> Scenario:
     """The ENPM809Y Fall 2021 "US&R Simplified" world, from ``course-world.md``."""
     pi = math.pi
     walls = (
-        _wall("west_outer", -5.033, 0.166, -pi / 2, 8.0),
-        _wall("east_outer", 8.567, 0.166, pi / 2, 8.0),
-        _wall("south_outer", 1.767, -3.759, 0.0, 13.75),
-        _wall("north_outer", 1.767, 4.091, pi, 13.75),
-        _wall("divider_west", -2.389, 0.037, -0.000773, 5.32209),
-        _wall("divider_east", 5.602, 0.059, 0.0, 6.0),
-        _wall("start_strip", -3.095, 1.930, 0.0, 4.0),
-        _wall("north_centre", 2.904, 1.462, pi, 4.0),
-        _wall("north_east", 4.829, 2.762, -pi / 2, 2.75),
-        _wall("diagonal_sw", 0.847, -1.091, -1.04726, 2.75),
-        _wall("diagonal_se", 4.675, -2.599, 1.0472, 2.75),
+        wall("west_outer", -5.033, 0.166, -pi / 2, 8.0),
+        wall("east_outer", 8.567, 0.166, pi / 2, 8.0),
+        wall("south_outer", 1.767, -3.759, 0.0, 13.75),
+        wall("north_outer", 1.767, 4.091, pi, 13.75),
+        wall("divider_west", -2.389, 0.037, -0.000773, 5.32209),
+        wall("divider_east", 5.602, 0.059, 0.0, 6.0),
+        wall("start_strip", -3.095, 1.930, 0.0, 4.0),
+        wall("north_centre", 2.904, 1.462, pi, 4.0),
+        wall("north_east", 4.829, 2.762, -pi / 2, 2.75),
+        wall("diagonal_sw", 0.847, -1.091, -1.04726, 2.75),
+        wall("diagonal_se", 4.675, -2.599, 1.0472, 2.75),
     )
     boxes = (
         Box(name="box_a", x=-3.487, y=-1.494, z=0.5, size_x=1.0, size_y=1.0, size_z=1.0),
@@ -375,7 +376,7 @@ def _list(source: str, path: str, value: Any) -> list[dict[str, Any]]:
     return value
 
 
-def _parse_wall(src: str, path: str, t: dict[str, Any]) -> Box:
+def _parsewall(src: str, path: str, t: dict[str, Any]) -> Box:
     _check_keys(
         src,
         path,
@@ -534,7 +535,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
     scn = Scenario(
         name=_str(src, "name", data["name"]),
         walls=tuple(
-            _parse_wall(src, f"walls[{i}]", t)
+            _parsewall(src, f"walls[{i}]", t)
             for i, t in enumerate(_list(src, "walls", data["walls"]))
         ),
         boxes=tuple(
