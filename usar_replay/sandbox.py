@@ -103,7 +103,10 @@ def install(policy: SandboxPolicy) -> None:
     sys.dont_write_bytecode = True  # never write __pycache__ into a submission or the venv
     prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
     path_entries = [p for p in sys.path if p and os.path.isabs(p)]
-    norm = [os.path.realpath(p) for p in (*prefixes, *path_entries, *policy.read_roots)]
+    # usar's own package: an editable (development) install is not under the prefixes
+    package = os.path.dirname(os.path.abspath(__file__))
+    roots = (*prefixes, *path_entries, package, *policy.read_roots)
+    norm = [os.path.realpath(p) for p in roots]
     read_roots = tuple(sorted(set(norm)))
     write_roots = tuple(os.path.realpath(p) for p in policy.write_roots)
     deny_roots = tuple(os.path.realpath(p) for p in policy.deny_roots)
