@@ -36,8 +36,9 @@ from usar_replay.record import RecordResult
 from usar_replay.run import open_run
 from usar_replay.scenario import course_world
 
-COURSE_LINES = 20  # 4 targets, 4 x (detected, broadcast), only_on_detection, home, 4 follower, 2
-ROOM_LINES = 8
+COURSE_LINES = 22  # 4 targets, 4 x (detected, broadcast), only_on_detection, home, 4 follower,
+# 2 more, and one cmd_vel line per robot
+ROOM_LINES = 10  # + one cmd_vel line per robot
 
 
 # --- synthetic course-world missions ------------------------------------------------------------
