@@ -386,8 +386,13 @@ def _grade_all(
     with progress:
         task = progress.add_task("", total=len(files))
         if jobs > 1 and len(files) > 1:
+            import multiprocessing
+
+            # spawn, not fork: the progress bar's refresh thread may hold a lock at fork time
             pool = ProcessPoolExecutor(
-                max_workers=min(jobs, len(files)), initializer=_ignore_sigint
+                max_workers=min(jobs, len(files)),
+                initializer=_ignore_sigint,
+                mp_context=multiprocessing.get_context("spawn"),
             )
             try:
                 futures: dict[Future[GradeReport | tuple[str, int]], int] = {
