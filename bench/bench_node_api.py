@@ -2,7 +2,7 @@
 recording and replay against the code before the node API (printed, never asserted).
 
     python bench/bench_node_api.py                       # executor + boundary micro-benchmarks
-    python bench/bench_node_api.py --baseline-rev fbdb45e   # + one-room record/replay vs then
+    python bench/bench_node_api.py --baseline-rev 3ca31dc   # + one-room record/replay vs then
 
 The baseline is checked out into a temporary git worktree and run in a subprocess with the same
 Python; both recordings run one after the other on the same world, and the ratio of their times
@@ -118,7 +118,7 @@ def run_tree(tree: Path, out: Path) -> tuple[float, float, float, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--baseline-rev", help="git revision before the node API (e.g. fbdb45e)")
+    ap.add_argument("--baseline-rev", help="git revision before the node API (e.g. 3ca31dc)")
     args = ap.parse_args()
     print(f"executor: {bench_executor():.1f} us per tick (4 inputs, 6 subscriptions, 2 publishes)")
     print(f"process boundary: {bench_boundary():.0f} us per tick (a 25 kB frame, CDR + IPC)")
