@@ -24,3 +24,13 @@ def one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: s
     assert len(lines) == 1 and lines[0].startswith("usar: error: "), out.stderr
     for n in needles:
         assert n in lines[0], lines[0]
+
+
+def default_signals() -> None:
+    """``preexec_fn`` for a child that a test interrupts: SIGINT, SIGTERM and SIGHUP as a
+    terminal delivers them, whatever this test run inherited (a runner started in the
+    background has SIGINT ignored, and usar, like any Unix program, keeps an inherited ignore)."""
+    import signal
+
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_DFL)

@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from clitools import default_signals
 from conftest import one_room
 from logtools import digest
 
@@ -324,7 +325,9 @@ def test_ctrl_c_cuts_runs_that_are_redone(tmp_path: Path) -> None:
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "usar_replay.cli", "batch", str(subs), "--scenario", str(room)]
     cmd += ["-o", str(out), "--max-sim-time", "3", "--quiet"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=default_signals
+    )
     part = out / "slow" / "room.mcap.part"
     while not part.exists():
         assert proc.poll() is None, proc.communicate()

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from clitools import one_error_line, usar
+from clitools import default_signals, one_error_line, usar
 
 from usar_replay.record import RecordResult
 
@@ -124,6 +124,7 @@ def test_ctrl_c_during_a_parallel_batch_is_one_line_and_130(
     master, slave = pty.openpty()
     proc = subprocess.Popen(
         [sys.executable, "-m", "usar_replay.cli", "grade", str(tmp_path / "runs"), "--jobs", "2"],
+        preexec_fn=default_signals,
         stdout=subprocess.PIPE, stderr=slave, start_new_session=True,
     )  # fmt: skip
     os.close(slave)

@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import pytest
+from clitools import default_signals
 from conftest import one_room
 from logtools import digest
 
@@ -156,6 +157,7 @@ def test_ctrl_c_in_the_cli_exits_130_with_a_closed_log(tmp_path: Path) -> None:
     argv = ["record", "--scenario", str(scenario), "--out", str(out)]
     proc = subprocess.Popen(
         [sys.executable, "-m", "usar_replay.cli", *argv],
+        preexec_fn=default_signals,
         stderr=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,

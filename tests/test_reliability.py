@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from clitools import one_error_line, usar
+from clitools import default_signals, one_error_line, usar
 from conftest import one_room
 
 from usar_replay import bag, msgs
@@ -239,6 +239,7 @@ def _record(tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     argv = ["record", "--scenario", str(scenario), "--out", str(out)]
     proc = subprocess.Popen(
         [sys.executable, "-m", "usar_replay.cli", *argv],
+        preexec_fn=default_signals,
         stderr=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,

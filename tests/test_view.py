@@ -25,7 +25,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 import rerun as rr
-from clitools import one_error_line, usar
+from clitools import default_signals, one_error_line, usar
 
 from usar_replay import bag, msgs
 from usar_replay.bag import BagReader
@@ -453,6 +453,7 @@ def test_cli_web_serves_until_ctrl_c(room_log: tuple[Path, RecordResult]) -> Non
     args = ["view", str(room_log[0]), "--web", "--web-port", str(web), "--grpc-port", str(grpc)]
     proc = subprocess.Popen(
         [sys.executable, "-m", "usar_replay.cli", *args],
+        preexec_fn=default_signals,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
