@@ -23,6 +23,8 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import tomli_w
+
 from usar_replay import bag, contract
 from usar_replay.errors import IncompleteLog, LogError, MissingTopic, UsageError
 from usar_replay.scenario import Scenario, from_toml
@@ -54,9 +56,15 @@ class MissionInfo:
         )
 
     def to_toml(self) -> str:
-        return (
-            f'target = "{self.target}"\nmodule = "{self.module}"\n'
-            f'sha256 = "{self.sha256}"\nusar_version = "{self.usar_version}"\n'
+        """TOML through the same library as the settings, so a target path holding a quote or
+        a backslash still reads back (f-strings wrote invalid TOML for those)."""
+        return tomli_w.dumps(
+            {
+                "target": self.target,
+                "module": self.module,
+                "sha256": self.sha256,
+                "usar_version": self.usar_version,
+            }
         )
 
 
