@@ -1,22 +1,21 @@
 """`usar record`'s speed and size, with where the time goes (printed, never asserted).
 
     python bench/bench_record.py [--course-seconds 120] [--only room|course] [--encoding E]
-                                 [--keep DIR]
+                                 [--keep DIR] [--latency 0|1]
 
 Records the one-room world of the tests (the whole mission: explorer, then follower) and the
 first ``--course-seconds`` of sim time of the course world, into a temporary directory, and
-prints per world: the real-time factor (sim time / wall time, and sim time / CPU time of this
-process: the second is the fairer figure on a shared machine), MB per sim-minute, frames
-rendered against frames recorded, and the CPU time split by stage as a share of the run:
+prints per world: the real-time factor (sim time / wall time, and sim time / CPU time of both
+processes, usar's and the mission's: the second is the fairer figure on a shared machine), MB
+per sim-minute, frames rendered against frames recorded, and usar's CPU split by stage:
 
 * ``render``: pybullet renders (frames reused because nothing moved cost nothing here);
 * ``encode``: compressing frames (a frame equal to the previous one costs one comparison);
-* ``detect``: the ArUco detector, of which ``decode`` is the image decoding (a frame whose
-  bytes equal the previous frame's reuses its detections and is not decoded);
 * ``log``: serialising and writing messages; ``physics``: the sim's steps;
-* ``rest``: the mission's thinking, tf, and the loop itself.
+* ``rest``: tf, odometry, the process boundary and the loop itself.
 
-The split is measured by wrapping those functions with CPU-time counters; the wrappers cost
+The mission process (image decoding, ArUco detection, planning) is reported as one figure. The
+split is measured by wrapping those functions with CPU-time counters; the wrappers cost
 microseconds per call. Ratios are to sim time, as the issue asks; nothing here is asserted.
 """
 
@@ -24,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import resource
 import sys
 import tempfile
 import time
@@ -32,14 +32,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from usar_replay import bag, detect, record, sim
-from usar_replay.record import RecordSettings
+from usar_replay import bag, record, sim
 from usar_replay.scenario import Scenario, course_world
+from usar_replay.settings import RecordSettings, RunSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import one_room
 
-STAGES = ("render", "encode", "detect", "decode", "log", "physics")
+STAGES = ("render", "encode", "log", "physics")
 _spent: defaultdict[str, float] = defaultdict(float)
 _calls: defaultdict[str, int] = defaultdict(int)
 
@@ -61,27 +61,34 @@ def _instrument() -> None:
     points: list[tuple[Any, str, str]] = [
         (sim.Simulator, "_render", "render"),
         (record, "encode_image", "encode"),
-        (detect, "_detections", "detect"),
-        (detect, "decode_image", "decode"),
         (bag.BagWriter, "write", "log"),
+        (bag.BagWriter, "write_raw", "log"),
         (sim.Simulator, "step", "physics"),
     ]
     if not hasattr(sim.Simulator, "_render"):  # before frames were reused
         points[0] = (sim.Simulator, "render_camera", "render")
-    if not hasattr(detect, "_detections"):
-        points[2] = (detect, "detect_with_corners", "detect")
     for owner, name, stage in points:
         if hasattr(owner, name):
             setattr(owner, name, _timed(stage, getattr(owner, name)))
 
 
-def bench(label: str, scenario: Scenario, max_sim_time: float | None, out: Path) -> None:
+def _children_cpu() -> float:
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def bench(
+    label: str, scenario: Scenario, max_sim_time: float | None, out: Path, latency: int
+) -> None:
     _spent.clear()
     _calls.clear()
-    settings = RecordSettings(max_sim_time_s=max_sim_time)
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+    settings = RunSettings(
+        record=RecordSettings(max_sim_time_s=max_sim_time, actuation_latency_ticks=latency)
+    )
+    wall0, cpu0, child0 = time.perf_counter(), time.process_time(), _children_cpu()
     result = record.record(scenario, out, settings)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    child = _children_cpu() - child0
     minutes = result.sim_duration_s / 60
     rendered = _calls["render"]
     print(
@@ -96,16 +103,17 @@ def bench(label: str, scenario: Scenario, max_sim_time: float | None, out: Path)
     )
     print(
         f"  real-time factor {result.sim_duration_s / wall:5.2f} (wall {wall:.1f} s), "
-        f"{result.sim_duration_s / cpu:5.2f} per CPU second (CPU {cpu:.1f} s)"
+        f"{result.sim_duration_s / (cpu + child):5.2f} per CPU second (CPU {cpu:.1f} s in"
+        f" usar, {child:.1f} s in the mission process), actuation latency {latency} tick(s)"
     )
     print(
         f"  log {result.size_bytes / 1e6:.2f} MB = {result.size_bytes / 1e6 / minutes:.2f} MB"
         f" per sim-minute; {result.frames} frames" + f", {rendered} rendered"
     )
     shown = {s: _spent.get(s, 0.0) for s in STAGES}
-    rest = cpu - sum(v for s, v in shown.items() if s != "decode")
+    rest = cpu - sum(shown.values())
     split = "  ".join(f"{s} {100 * v / cpu:4.1f}%" for s, v in shown.items())
-    print(f"  CPU split: {split}  rest {100 * rest / cpu:4.1f}%")
+    print(f"  usar's CPU: {split}  rest {100 * rest / cpu:4.1f}%")
 
 
 def main() -> None:
@@ -114,6 +122,7 @@ def main() -> None:
     ap.add_argument("--only", choices=("room", "course"))
     ap.add_argument("--encoding", choices=("png", "jpeg"), help="default: the scenario's")
     ap.add_argument("--keep", type=Path, help="write the logs into this directory and keep them")
+    ap.add_argument("--latency", type=int, default=0, choices=(0, 1), help="actuation latency")
     args = ap.parse_args()
     _instrument()
 
@@ -127,13 +136,20 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="usar-bench-") as scratch:
         tmp = args.keep or Path(scratch)
         if args.only in (None, "room"):
-            bench("one-room (whole mission)", world(one_room()), None, Path(tmp) / "room.mcap")
+            bench(
+                "one-room (whole mission)",
+                world(one_room()),
+                None,
+                Path(tmp) / "room.mcap",
+                args.latency,
+            )
         if args.only in (None, "course"):
             bench(
                 f"course (first {args.course_seconds:g} s)",
                 world(course_world()),
                 args.course_seconds,
                 Path(tmp) / "course.mcap",
+                args.latency,
             )
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import hashlib
 import math
+import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -245,3 +247,36 @@ def test_a_robot_moving_in_view_or_the_camera_moving_renders_again() -> None:
         a.teleport("explorer", -1.2, 0.0, 1e-12)  # the smallest turn is a new view
         a.render_camera()
         assert a.frames_rendered == 4
+
+
+def _egl_sim() -> Simulator:
+    sim = Simulator(course_world(), renderer="auto")
+    if sim.renderer_name != "egl":
+        sim.close()
+        pytest.skip("the EGL renderer plugin does not load on this machine")
+    return sim
+
+
+def test_egl_honours_shadow_off_so_hidden_motion_changes_no_pixel() -> None:
+    """The EGL plugin ignores ``shadow=0``; with its shadow-map pass switched off, a body that
+    moves behind a wall changes no pixel, and a reused frame equals a fresh render."""
+    with _egl_sim() as a:
+        assert not a.egl_shadow_map
+        a.teleport("explorer", -4.0, 2.5, 0.0)
+        base = a.render_camera()
+        a.teleport("follower", 5.0, -2.0, 0.3)  # in the frustum, behind the divider
+        assert np.array_equal(a._render(), base)
+        with _egl_sim() as fresh:
+            fresh.teleport("explorer", -4.0, 2.5, 0.0)
+            fresh.teleport("follower", 5.0, -2.0, 0.3)
+            assert np.array_equal(fresh.render_camera(), base)
+
+
+def test_shadow_switch_refuses_a_file_that_is_not_the_loaded_plugin(tmp_path: Path) -> None:
+    from usar_replay import eglshadow
+
+    text = tmp_path / "not-elf.so"
+    text.write_text("not an ELF file")
+    assert eglshadow.disable_shadow_map(text) is False
+    assert eglshadow.disable_shadow_map(tmp_path / "missing.so") is False
+    assert eglshadow.disable_shadow_map(sys.executable) is False  # no such symbol there

@@ -260,7 +260,8 @@ def record(
         writer.add_attachment(
             contract.MISSION_ATTACHMENT, "application/toml", info.to_toml().encode(), t0
         )
-        writer.add_metadata(contract.RUN_METADATA, _run_metadata(renderer))
+        shown = f"{renderer}+shadowmap" if sim.egl_shadow_map else renderer
+        writer.add_metadata(contract.RUN_METADATA, _run_metadata(shown))
         writer.write(contract.TRUTH_MARKERS, _truth_markers(scenario, t0), t0, publisher="recorder")
         first: list[tuple[str, msgs.Message]] = [
             (contract.TF_STATIC, sim.tf_static()),
