@@ -111,8 +111,14 @@ ROBOT_VISUAL_OFFSET = (-0.064, 0.0, 0.057)
 """Centre of a robot's visual box, in base_footprint."""
 NEAR_PLANE = 0.02
 """m, the camera's near clipping distance."""
+FAR_PLANE = 30.0
+"""m, the camera's far clipping distance."""
 CULL_MARGIN_PX = 8.0
-"""Pixels of slack around the image when deciding that a robot cannot be in view."""
+"""Pixels of slack around the image, or around a robot's projected box, when deciding that the
+robot cannot be in view."""
+OCCLUSION_MARGIN_M = 0.05
+"""m: a robot counts as hidden only when the static scene is this much nearer than all of it
+(the depth buffer's resolution at 10 m is about 0.3 mm)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -224,6 +230,9 @@ class Simulator:
         self.frames_rendered = 0
         """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
         self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
+        self._static_depth: tuple[object, np.ndarray] | None = None
+        """The depth image of the last render with no robot in view, and the camera pose it
+        was rendered from: what may hide the other robot (:meth:`_maybe_in_view`)."""
         self.renderer_name = "tiny"
         self._renderer_flag = p.ER_TINY_RENDERER
         self.egl_shadow_map = False
@@ -248,7 +257,7 @@ class Simulator:
             fov=fov_v,
             aspect=cam.width / cam.height,
             nearVal=NEAR_PLANE,
-            farVal=30.0,
+            farVal=FAR_PLANE,
             physicsClientId=self._client,
         )
 
@@ -594,39 +603,51 @@ class Simulator:
         The image depends only on the camera's pose and on what is in view: the world is static
         but for the two robots, every lighting argument is passed on each call, and there are no
         shadows. So when the explorer has not moved (its pose bit-identical) and the other robot
-        has either not moved or stayed wholly outside the view, the previous image *is* the
-        image a fresh render gives, and it is returned again (read-only) instead of rendering:
-        the parked explorer of the follower phase costs nothing. :attr:`frames_rendered` counts
-        the renders that happened.
+        has either not moved or stayed where it cannot add a pixel (wholly outside the view, or
+        wholly behind the static scene: :meth:`_hidden`), the previous image *is* the image a
+        fresh render gives, and it is returned again (read-only) instead of rendering: the
+        parked explorer of the follower phase costs nothing while the follower is out of sight.
+        :attr:`frames_rendered` counts the renders that happened.
         """
         key = self._view_key()
         if self._last_frame is not None and self._last_frame[0] == key:
             img = self._last_frame[1]
         else:
-            img = self._render()
+            img, depth = self._render()
             img.setflags(write=False)
             self._last_frame = (key, img)
             self.frames_rendered += 1
+            if all(k is None for k in key[1:]):  # nothing but the static world was in view
+                self._static_depth = (key[0], depth)
         self.frame_seq += 1
         while self.next_frame_ns <= self.now_ns:
             self.next_frame_ns += self.camera_period_ns
         return img
 
     def _view_key(self) -> tuple[object, ...]:
-        """What the explorer's image depends on: its pose and every robot that may be in view."""
+        """What the explorer's image depends on: its pose and every robot that may be in view
+        (None for one that cannot add a pixel)."""
         me = self.robots[self.camera_robot]
-        key: list[object] = [(me.x, me.y, me.yaw)]
+        pose = (me.x, me.y, me.yaw)
+        key: list[object] = [pose]
+        static = self._static_depth
+        depth = static[1] if static is not None and static[0] == pose else None
         for name, r in self.robots.items():
             if name != self.camera_robot:
-                key.append((name, (r.x, r.y, r.yaw) if self._maybe_in_view(r) else None))
+                seen = self._maybe_in_view(r, depth)
+                key.append((name, (r.x, r.y, r.yaw)) if seen else None)
         return tuple(key)
 
-    def _maybe_in_view(self, r: _RobotState) -> bool:
-        """False only when the robot's visual box lies wholly outside the camera's frustum.
+    def _maybe_in_view(self, r: _RobotState, static_depth: np.ndarray | None = None) -> bool:
+        """False only when the robot's visual box cannot add a pixel to the explorer's image.
 
-        Conservative (the usual frustum test: all eight corners outside one plane through the
-        optical centre, or all nearer than the near plane), so a robot it calls out of
-        view contributes no pixel: OpenGL and TinyRenderer both clip to the frustum.
+        Conservative on both counts. Outside the view: the usual frustum test (all eight corners
+        outside one plane through the optical centre, or all nearer than the near plane); OpenGL
+        and TinyRenderer both clip to the frustum. Behind the scene: with ``static_depth``, the
+        depth image of this same camera pose rendered with no robot in it, the box is hidden when
+        every pixel of its projected bounding rectangle (widened by :data:`CULL_MARGIN_PX`)
+        already holds a surface nearer than the box's nearest corner (less
+        :data:`OCCLUSION_MARGIN_M`): every fragment of the box then fails the depth test.
         """
         cam = self.scenario.camera
         fx, fy, cx, cy = self._intrinsics
@@ -650,9 +671,22 @@ class Simulator:
             y * fy + (cy + m) * z < 0.0,  # above it
             y * fy - (cam.height - cy + m) * z > 0.0,  # below it
         )
-        return not any(bool(np.all(o)) for o in outside)
+        if any(bool(np.all(o)) for o in outside):
+            return False
+        if static_depth is None or bool(np.any(z < NEAR_PLANE)):
+            return True
+        u, v = x * fx / z + cx, y * fy / z + cy
+        u0 = max(0, math.floor(float(u.min()) - m))
+        u1 = min(cam.width, math.ceil(float(u.max()) + m) + 1)
+        v0 = max(0, math.floor(float(v.min()) - m))
+        v1 = min(cam.height, math.ceil(float(v.max()) + m) + 1)
+        if u0 >= u1 or v0 >= v1:
+            return False
+        farthest = float(static_depth[v0:v1, u0:u1].max())
+        return farthest >= float(z.min()) - OCCLUSION_MARGIN_M
 
-    def _render(self) -> np.ndarray:
+    def _render(self) -> tuple[np.ndarray, np.ndarray]:
+        """(BGR image, depth along the optical axis in metres, float32) from pybullet."""
         cam = self.scenario.camera
         eye, rot = self.camera_pose()
         target = eye + rot[:, 2]
@@ -662,7 +696,7 @@ class Simulator:
         )
         quiet = _quiet_stdout() if self.renderer_name == "egl" else contextlib.nullcontext()
         with quiet:  # the EGL plugin prints its GL vendor on stdout on some frames
-            _, _, rgba, _, _ = p.getCameraImage(
+            _, _, rgba, buf, _ = p.getCameraImage(
                 cam.width,
                 cam.height,
                 viewMatrix=view,
@@ -679,7 +713,11 @@ class Simulator:
                 physicsClientId=self._client,
             )
         img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
-        return np.ascontiguousarray(img[:, :, 2::-1])
+        bgr = cv2.cvtColor(img, cv2.COLOR_RGBA2BGR)
+        d = np.asarray(buf, dtype=np.float32).reshape(cam.height, cam.width)
+        near, far = NEAR_PLANE, FAR_PLANE  # OpenGL's depth buffer back to metres
+        depth = (far * near / (far - (far - near) * d)).astype(np.float32)
+        return bgr, depth
 
     def marker_poses(self) -> dict[int, msgs.Pose]:
         """Ground-truth marker poses in map (face along +x of each pose)."""
