@@ -121,6 +121,12 @@ OCCLUSION_MARGIN_M = 0.05
 (the depth buffer's resolution at 10 m is about 0.3 mm)."""
 
 
+def _depth_buffer_value(z: float) -> float:
+    """The depth-buffer value of a point ``z`` metres along the optical axis: pybullet's
+    documented ``z = far * near / (far - (far - near) * d)``, solved for ``d``."""
+    return FAR_PLANE * (z - NEAR_PLANE) / (z * (FAR_PLANE - NEAR_PLANE))
+
+
 @dataclass(frozen=True, slots=True)
 class RobotLimits:
     """The waffle's limits; accelerations are TurtleBot3's DWA defaults."""
@@ -231,7 +237,7 @@ class Simulator:
         """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
         self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
         self._static_depth: tuple[object, np.ndarray] | None = None
-        """The depth image of the last render with no robot in view, and the camera pose it
+        """The depth buffer of the last render with no robot in view, and the camera pose it
         was rendered from: what may hide the other robot (:meth:`_maybe_in_view`)."""
         self.renderer_name = "tiny"
         self._renderer_flag = p.ER_TINY_RENDERER
@@ -682,11 +688,15 @@ class Simulator:
         v1 = min(cam.height, math.ceil(float(v.max()) + m) + 1)
         if u0 >= u1 or v0 >= v1:
             return False
-        farthest = float(static_depth[v0:v1, u0:u1].max())
-        return farthest >= float(z.min()) - OCCLUSION_MARGIN_M
+        nearest = float(z.min()) - OCCLUSION_MARGIN_M
+        if nearest <= NEAR_PLANE:
+            return True
+        # compare in the depth buffer's own units (monotonic in distance): no per-pixel maths
+        return float(static_depth[v0:v1, u0:u1].max()) >= _depth_buffer_value(nearest)
 
     def _render(self) -> tuple[np.ndarray, np.ndarray]:
-        """(BGR image, depth along the optical axis in metres, float32) from pybullet."""
+        """(BGR image, OpenGL depth buffer in [0, 1]: :func:`_depth_buffer_value`) from
+        pybullet."""
         cam = self.scenario.camera
         eye, rot = self.camera_pose()
         target = eye + rot[:, 2]
@@ -714,9 +724,7 @@ class Simulator:
             )
         img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
         bgr = cv2.cvtColor(img, cv2.COLOR_RGBA2BGR)
-        d = np.asarray(buf, dtype=np.float32).reshape(cam.height, cam.width)
-        near, far = NEAR_PLANE, FAR_PLANE  # OpenGL's depth buffer back to metres
-        depth = (far * near / (far - (far - near) * d)).astype(np.float32)
+        depth = np.asarray(buf, dtype=np.float32).reshape(cam.height, cam.width)
         return bgr, depth
 
     def marker_poses(self) -> dict[int, msgs.Pose]:
