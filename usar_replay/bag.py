@@ -28,13 +28,14 @@ import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
-
-from mcap.writer import CompressionType, Writer
+from typing import IO, TYPE_CHECKING, Any
 
 from usar_replay import __version__, contract, mcapfile, msgs
 from usar_replay.cdr import decode, encode, schema_text, typestore
 from usar_replay.errors import LogError, NotAnMcapFile, UsageError
+
+if TYPE_CHECKING:
+    from mcap.writer import Writer
 
 __all__ = [
     "PROFILE",
@@ -101,6 +102,9 @@ class BagWriter:
         chunk_size: int = 1 << 20,
         compression: str = "zstd",
     ) -> None:
+        # imported here: reading a log (grade, info, view) never needs the writer's imports
+        from mcap.writer import CompressionType, Writer
+
         self.path = Path(path)
         self.part_path = self.path.with_name(self.path.name + ".part")
         self._file: IO[bytes] = _open_part(self.part_path)
@@ -111,7 +115,7 @@ class BagWriter:
         if comp is None:
             comp = CompressionType.NONE
         # data CRCs on: a reader can check every byte of the file, not only the chunks
-        self._writer = Writer(
+        self._writer: Writer = Writer(
             self._file, chunk_size=chunk_size, compression=comp, enable_data_crcs=True
         )
         self._writer.start(profile=PROFILE, library=f"usar-replay/{__version__}")
