@@ -666,13 +666,20 @@ class BagReader:
                 except mcapfile.Broken as err:
                     self._note_bad_chunk(ref, str(err))
                     continue
+                window = start_ns is not None or end_ns is not None
                 for info, t, data in found:
-                    if (start_ns is not None and t < start_ns) or (
-                        end_ns is not None and t >= end_ns
+                    if window and (
+                        (start_ns is not None and t < start_ns)
+                        or (end_ns is not None and t >= end_ns)
                     ):
                         continue
-                    yield _bag_message(
-                        info.topic, info.msgtype, t, data, decode_messages, info.publisher
+                    yield _new_bag_message(
+                        info.topic,
+                        info.msgtype,
+                        t,
+                        data,
+                        _decoded(info.topic, info.msgtype, t, data) if decode_messages else None,
+                        info.publisher,
                     )
                 del found
 
@@ -684,20 +691,15 @@ class BagReader:
         return any(chans[c].topic in wanted for c in ref.channel_ids if c in chans)
 
 
-def _bag_message(
-    topic: str, msgtype: str, t: int, data: bytes, dec: bool, publisher: str = ""
-) -> BagMessage:
-    value: msgs.Message | None = None
-    if dec:
-        try:
-            value = decode(bytes(data), msgtype)
-        except KeyError:
-            value = None  # a type usar-replay does not know: keep the bytes only
-        except Exception as err:
-            raise LogError(
-                f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}"
-            ) from err
-    return _new_bag_message(topic, msgtype, int(t), bytes(data), value, publisher)
+def _decoded(topic: str, msgtype: str, t: int, data: bytes) -> msgs.Message | None:
+    """The value of a logged message; None for a type usar-replay does not know (the bytes are
+    kept); :class:`LogError` when the bytes do not decode."""
+    try:
+        return decode(data, msgtype)
+    except KeyError:
+        return None
+    except Exception as err:
+        raise LogError(f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}") from err
 
 
 # BagMessage is built once per message read: its slots are set directly, which is what its

@@ -63,6 +63,7 @@ _FOOTER_LEN = 1 + 8 + 20  # opcode, length, summary_start, summary_offset_start,
 _DATA_END_LEN = 1 + 8 + 4
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel_id, sequence, log_time, publish_time
 _RECORD_HEAD = struct.Struct("<BQ")  # opcode, length
+_MESSAGE_RECORD_HEAD = struct.Struct("<BQHIQ")  # opcode, length, channel_id, sequence, log_time
 _MESSAGE = int(Opcode.MESSAGE)
 _MESSAGE_DATA = 9 + _MESSAGE_HEAD.size  # where a message record's data starts
 
@@ -366,21 +367,27 @@ def chunk_messages(
         raise Broken(ref.offset, f"{where} fails its CRC check (its bytes were changed)")
     found: list[tuple[ChannelInfo, int, bytes]] = []
     channels, schemas = layout.channels, layout.schemas
-    record_head, message_head = _RECORD_HEAD.unpack_from, _MESSAGE_HEAD.unpack_from
+    record_head, message_head = _RECORD_HEAD.unpack_from, _MESSAGE_RECORD_HEAD.unpack_from
     total = len(data)
     count = 0
     pos = 0
     while pos < total:
-        if pos + 9 > total:
+        # most records are messages: their head and the record's are read by one unpack (what
+        # it reads past a shorter record is never used: that record is not a message or is
+        # damaged, and the checks below say so in the same order as for any record)
+        if pos + _MESSAGE_RECORD_HEAD.size <= total:
+            opcode, length, cid, _, log_time = message_head(data, pos)
+        elif pos + 9 > total:
             raise Broken(ref.offset, f"{where} holds a damaged record")
-        opcode, length = record_head(data, pos)
+        else:
+            opcode, length = record_head(data, pos)
         end = pos + 9 + length
         if end > total:
             raise Broken(ref.offset, f"{where} holds a damaged record")
         if opcode == _MESSAGE:
             if length < _MESSAGE_HEAD.size:
                 raise Broken(ref.offset, f"{where} holds a damaged message")
-            cid, _, log_time, _ = message_head(data, pos + 9)
+            # here end <= total and length >= 22, so the combined unpack above was taken
             info = channels.get(cid)
             if info is None:
                 raise Broken(ref.offset, f"{where} holds a message on an unknown channel {cid}")
