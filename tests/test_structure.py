@@ -36,6 +36,7 @@ CORE_MODULES = (
     "variants",
     # the node API: what a mission process loads (it must stay light and never reach the log)
     "cdr",
+    "cdrdecode",
     "node",
     "executor",
     "tf2",

@@ -154,6 +154,32 @@ def test_refused_inserts() -> None:
     assert "c" in b.frames() and b.frames()["c"] == "map"
 
 
+@pytest.mark.parametrize(
+    ("msg", "errors"),
+    [
+        (ts("a", "a"), ["TF_SELF_TRANSFORM"]),
+        (ts("/a", "a"), ["TF_SELF_TRANSFORM"]),
+        (ts("", "a"), ["TF_NO_FRAME_ID"]),
+        (ts("a", ""), ["TF_NO_CHILD_FRAME_ID"]),
+        (ts("", ""), ["TF_SELF_TRANSFORM", "TF_NO_CHILD_FRAME_ID", "TF_NO_FRAME_ID"]),
+        (ts("a", "b", (0, math.nan, 0)), ["TF_NAN_INPUT"]),
+        (ts("a", "b", q=(0, 0, math.nan, 1)), ["TF_NAN_INPUT", "TF_DENORMALIZED_QUATERNION"]),
+        (ts("a", "a", q=(0, 0, 0, 2)), ["TF_SELF_TRANSFORM", "TF_DENORMALIZED_QUATERNION"]),
+        (ts("a", "b", q=(0, 0, 0, 0)), ["TF_DENORMALIZED_QUATERNION"]),
+    ],
+)
+def test_a_refusal_logs_every_failing_check_in_tf2_order(
+    msg: msgs.TransformStamped, errors: list[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """The insert checks are one condition on the fast path; a refused transform still logs
+    each of tf2's errors that applies, in tf2's order, and leaves no trace in the buffer."""
+    b = Buffer()
+    with caplog.at_level("ERROR", logger="usar_replay.tf_tree"):
+        assert not b.set_transform(msg)
+    assert [r.getMessage().split(":")[0] for r in caplog.records] == errors
+    assert b.frames() == {}
+
+
 def test_cache_time_prunes_and_refuses_old_data() -> None:
     b = Buffer(cache_time=10.0)
     b.set_transform(ts("a", "b", stamp=1 * S))

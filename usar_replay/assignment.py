@@ -11,6 +11,10 @@ everything assignment-specific from it.
 
 The rubric is named by module (:attr:`Assignment.rubric_module`), not imported here: the grader
 imports this module, and a rubric module imports the grader's report types.
+
+The worlds and variant makers (:mod:`usar_replay.ros2_world`, :mod:`usar_replay.variants`: the
+planner, numpy and scipy) are imported when first called, not here: ``usar grade`` reads an
+assignment only for its rubric and would otherwise spend most of its start-up loading scipy.
 """
 
 from __future__ import annotations
@@ -18,13 +22,14 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from usar_replay import contract
-from usar_replay.ros2_world import make_ros2_variant, ros2_final_world, task_of
 from usar_replay.scenario import Scenario, course_world
 from usar_replay.settings import RunSettings
-from usar_replay.variants import make_variant
+
+if TYPE_CHECKING:
+    from usar_replay.ros2_world import Ros2Task
 
 __all__ = [
     "ASSIGNMENTS",
@@ -143,6 +148,31 @@ def _ros2_static(scenario: Scenario) -> tuple[tuple[str, str, float, float, floa
     return tuple((contract.MAP, o, *origins[o]) for o in contract.ORIGIN_FRAMES)
 
 
+def task_of(scenario: Scenario) -> Ros2Task:
+    """:func:`usar_replay.ros2_world.task_of`, imported on first use."""
+    from usar_replay import ros2_world
+
+    return ros2_world.task_of(scenario)
+
+
+def _ros2_final_world() -> Scenario:
+    from usar_replay import ros2_world
+
+    return ros2_world.ros2_final_world()
+
+
+def _make_ros2_variant(scenario: Scenario, seed: int) -> Scenario:
+    from usar_replay import ros2_world
+
+    return ros2_world.make_ros2_variant(scenario, seed)
+
+
+def _make_variant(scenario: Scenario, seed: int) -> Scenario:
+    from usar_replay import variants
+
+    return variants.make_variant(scenario, seed)
+
+
 def _usar_starts(s: Scenario) -> tuple[tuple[float, float, float], ...]:
     return tuple((r.x, r.y, r.yaw) for r in (s.explorer, s.follower))
 
@@ -166,7 +196,7 @@ USAR = Assignment(
     builtin_mission="builtin",
     rubric_module="usar_replay.rubric",
     world=course_world,
-    variant=make_variant,
+    variant=_make_variant,
 )
 
 ROS2_FINAL = Assignment(
@@ -183,8 +213,8 @@ ROS2_FINAL = Assignment(
     parameters=ros2_parameters,
     builtin_mission="ros2-final",
     rubric_module="usar_replay.rubric_ros2",
-    world=ros2_final_world,
-    variant=make_ros2_variant,
+    world=_ros2_final_world,
+    variant=_make_ros2_variant,
 )
 
 ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (USAR, ROS2_FINAL)}

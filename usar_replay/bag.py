@@ -28,13 +28,14 @@ import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
-
-from mcap.writer import CompressionType, Writer
+from typing import IO, TYPE_CHECKING, Any
 
 from usar_replay import __version__, contract, mcapfile, msgs
 from usar_replay.cdr import decode, encode, schema_text, typestore
 from usar_replay.errors import LogError, NotAnMcapFile, UsageError
+
+if TYPE_CHECKING:
+    from mcap.writer import Writer
 
 __all__ = [
     "PROFILE",
@@ -101,6 +102,9 @@ class BagWriter:
         chunk_size: int = 1 << 20,
         compression: str = "zstd",
     ) -> None:
+        # imported here: reading a log (grade, info, view) never needs the writer's imports
+        from mcap.writer import CompressionType, Writer
+
         self.path = Path(path)
         self.part_path = self.path.with_name(self.path.name + ".part")
         self._file: IO[bytes] = _open_part(self.part_path)
@@ -111,7 +115,7 @@ class BagWriter:
         if comp is None:
             comp = CompressionType.NONE
         # data CRCs on: a reader can check every byte of the file, not only the chunks
-        self._writer = Writer(
+        self._writer: Writer = Writer(
             self._file, chunk_size=chunk_size, compression=comp, enable_data_crcs=True
         )
         self._writer.start(profile=PROFILE, library=f"usar-replay/{__version__}")
@@ -658,19 +662,24 @@ class BagReader:
                 if wanted is not None and not self._may_hold(ref, wanted):
                     continue
                 try:
-                    found = list(mcapfile.chunk_messages(f, ref, self.size_bytes, lay))
+                    found = list(mcapfile.chunk_messages(f, ref, self.size_bytes, lay, wanted))
                 except mcapfile.Broken as err:
                     self._note_bad_chunk(ref, str(err))
                     continue
+                window = start_ns is not None or end_ns is not None
                 for info, t, data in found:
-                    if wanted is not None and info.topic not in wanted:
-                        continue
-                    if (start_ns is not None and t < start_ns) or (
-                        end_ns is not None and t >= end_ns
+                    if window and (
+                        (start_ns is not None and t < start_ns)
+                        or (end_ns is not None and t >= end_ns)
                     ):
                         continue
-                    yield _bag_message(
-                        info.topic, info.msgtype, t, data, decode_messages, info.publisher
+                    yield _new_bag_message(
+                        info.topic,
+                        info.msgtype,
+                        t,
+                        data,
+                        _decoded(info.topic, info.msgtype, t, data) if decode_messages else None,
+                        info.publisher,
                     )
                 del found
 
@@ -682,17 +691,36 @@ class BagReader:
         return any(chans[c].topic in wanted for c in ref.channel_ids if c in chans)
 
 
-def _bag_message(
-    topic: str, msgtype: str, t: int, data: bytes, dec: bool, publisher: str = ""
+def _decoded(topic: str, msgtype: str, t: int, data: bytes) -> msgs.Message | None:
+    """The value of a logged message; None for a type usar-replay does not know (the bytes are
+    kept); :class:`LogError` when the bytes do not decode."""
+    try:
+        return decode(data, msgtype)
+    except KeyError:
+        return None
+    except Exception as err:
+        raise LogError(f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}") from err
+
+
+# BagMessage is built once per message read: its slots are set directly, which is what its
+# frozen __init__ does at about twice the cost (the same object either way).
+_new = object.__new__
+_set_topic = BagMessage.__dict__["topic"].__set__
+_set_msgtype = BagMessage.__dict__["msgtype"].__set__
+_set_time = BagMessage.__dict__["log_time_ns"].__set__
+_set_data = BagMessage.__dict__["data"].__set__
+_set_msg = BagMessage.__dict__["msg"].__set__
+_set_publisher = BagMessage.__dict__["publisher"].__set__
+
+
+def _new_bag_message(
+    topic: str, msgtype: str, t: int, data: bytes, msg: msgs.Message | None, publisher: str
 ) -> BagMessage:
-    value: msgs.Message | None = None
-    if dec:
-        try:
-            value = decode(bytes(data), msgtype)
-        except KeyError:
-            value = None  # a type usar-replay does not know: keep the bytes only
-        except Exception as err:
-            raise LogError(
-                f"message on {topic} at {t / 1e9:.3f} s cannot be decoded: {err}"
-            ) from err
-    return BagMessage(topic, msgtype, int(t), bytes(data), value, publisher)
+    m: BagMessage = _new(BagMessage)
+    _set_topic(m, topic)
+    _set_msgtype(m, msgtype)
+    _set_time(m, t)
+    _set_data(m, data)
+    _set_msg(m, msg)
+    _set_publisher(m, publisher)
+    return m

@@ -20,7 +20,7 @@ from __future__ import annotations
 import io
 import struct
 import zlib
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
 from dataclasses import dataclass, field
 from typing import IO
 
@@ -62,6 +62,10 @@ _BLOCK = 1 << 20
 _FOOTER_LEN = 1 + 8 + 20  # opcode, length, summary_start, summary_offset_start, summary_crc
 _DATA_END_LEN = 1 + 8 + 4
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel_id, sequence, log_time, publish_time
+_RECORD_HEAD = struct.Struct("<BQ")  # opcode, length
+_MESSAGE_RECORD_HEAD = struct.Struct("<BQHIQ")  # opcode, length, channel_id, sequence, log_time
+_MESSAGE = int(Opcode.MESSAGE)
+_MESSAGE_DATA = 9 + _MESSAGE_HEAD.size  # where a message record's data starts
 
 
 class Broken(Exception):
@@ -334,9 +338,15 @@ def _decompress(chunk: Chunk) -> bytes:
 
 
 def chunk_messages(
-    f: IO[bytes], ref: ChunkRef, size: int, layout: Layout
+    f: IO[bytes],
+    ref: ChunkRef,
+    size: int,
+    layout: Layout,
+    topics: Container[str] | None = None,
 ) -> Iterator[tuple[ChannelInfo, int, bytes]]:
-    """(channel, log time, data) of every message in the chunk, after checking its CRC.
+    """(channel, log time, data) of every message in the chunk, after checking its CRC; only
+    those on ``topics`` when given (the others are checked and counted, never copied: most of a
+    usar chunk is camera frames that ``usar grade`` skips).
 
     Channel and schema records found inside the chunk are added to ``layout``. Raises
     :class:`Broken` (saying how) before yielding anything when the chunk is damaged.
@@ -357,23 +367,33 @@ def chunk_messages(
         raise Broken(ref.offset, f"{where} fails its CRC check (its bytes were changed)")
     found: list[tuple[ChannelInfo, int, bytes]] = []
     channels, schemas = layout.channels, layout.schemas
-    view = memoryview(data)
+    record_head, message_head = _RECORD_HEAD.unpack_from, _MESSAGE_RECORD_HEAD.unpack_from
+    total = len(data)
+    count = 0
     pos = 0
-    while pos < len(data):
-        if pos + 9 > len(data):
+    while pos < total:
+        # most records are messages: their head and the record's are read by one unpack (what
+        # it reads past a shorter record is never used: that record is not a message or is
+        # damaged, and the checks below say so in the same order as for any record)
+        if pos + _MESSAGE_RECORD_HEAD.size <= total:
+            opcode, length, cid, _, log_time = message_head(data, pos)
+        elif pos + 9 > total:
             raise Broken(ref.offset, f"{where} holds a damaged record")
-        opcode, length = data[pos], int.from_bytes(data[pos + 1 : pos + 9], "little")
+        else:
+            opcode, length = record_head(data, pos)
         end = pos + 9 + length
-        if end > len(data):
+        if end > total:
             raise Broken(ref.offset, f"{where} holds a damaged record")
-        if opcode == Opcode.MESSAGE:
+        if opcode == _MESSAGE:
             if length < _MESSAGE_HEAD.size:
                 raise Broken(ref.offset, f"{where} holds a damaged message")
-            cid, _, log_time, _ = _MESSAGE_HEAD.unpack_from(data, pos + 9)
+            # here end <= total and length >= 22, so the combined unpack above was taken
             info = channels.get(cid)
             if info is None:
                 raise Broken(ref.offset, f"{where} holds a message on an unknown channel {cid}")
-            found.append((info, log_time, bytes(view[pos + 9 + _MESSAGE_HEAD.size : end])))
+            count += 1
+            if topics is None or info.topic in topics:
+                found.append((info, log_time, data[pos + _MESSAGE_DATA : end]))
         elif opcode == Opcode.SCHEMA:
             rec = _parse(opcode, data[pos + 9 : end], ref.offset)
             assert isinstance(rec, Schema)
@@ -389,7 +409,7 @@ def chunk_messages(
             )
             channels.setdefault(rec.id, info)
         pos = end
-    ref.message_count = len(found)
+    ref.message_count = count
     yield from found
 
 
