@@ -84,6 +84,7 @@ def _detector(params: DetectorParams) -> cv2.aruco.ArucoDetector:
     dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, params.dictionary))
     p = cv2.aruco.DetectorParameters()
     p.cornerRefinementMethod = _REFINE[params.corner_refinement]
+    p.adaptiveThreshWinSizeStep = params.threshold_window_step
     return cv2.aruco.ArucoDetector(dictionary, p)
 
 
