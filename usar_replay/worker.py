@@ -276,7 +276,14 @@ def _serve(conn: multiprocessing.connection.Connection, executor: Executor) -> N
             if frame[:1] == _STOP:
                 return
             _, t_ns, items, _ = _unpack(frame)
-            inputs = [(topic, cdr.decode(data, msgtype)) for topic, msgtype, data in items]
+            # decoded one by one as the executor delivers them, and only where a node subscribes
+            # (checked at that moment: a callback may subscribe to a topic later in the tick):
+            # a message nobody receives costs no decoding, exactly as if it were delivered
+            inputs = (
+                (topic, cdr.decode(data, msgtype))
+                for topic, msgtype, data in items
+                if executor.subscription_count(topic)
+            )
             # a mission that said it is done runs no more callbacks (live, the run ends there)
             outputs = [] if executor.shutdown_requested else executor.tick(t_ns, inputs)
             wire = [(topic, type(m).__msgtype__, cdr.encode(m)) for topic, m in outputs]
