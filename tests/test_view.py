@@ -231,15 +231,15 @@ def test_detection_outlines_land_on_the_detected_corners(viewed: Viewed) -> None
     info = next(_messages(viewed.reader, "/explorer/camera/rgb/camera_info"))
     assert isinstance(info, msgs.CameraInfo)
     times = detections.times()
-    for i, (image, array) in enumerate(
-        zip(
-            _messages(viewed.reader, CAMERA_TOPIC),
-            arrays,
-            strict=True,
-        )
-    ):
+    # the detector runs only while the explorer searches: frames and arrays pair by stamp
+    images = {
+        m.header.stamp.ns: m
+        for m in _messages(viewed.reader, CAMERA_TOPIC)
+        if isinstance(m, msgs.CompressedImage)
+    }
+    for i, array in enumerate(arrays):
         if isinstance(array, msgs.FiducialTransformArray) and array.transforms:
-            assert isinstance(image, msgs.CompressedImage)
+            image = images[array.header.stamp.ns]
             _, corners = detect_with_corners(image, info, DetectorParams())
             mid = array.transforms[0].fiducial_id
             drawn = np.asarray(strips[i][0], dtype=np.float64)[:4]

@@ -12,6 +12,7 @@ from usar_replay import contract
 from usar_replay.executor import shutdown
 from usar_replay.msgs import (
     ArucoMarkers,
+    Bool,
     CameraInfo,
     CompressedImage,
     DiagnosticStatus,
@@ -51,6 +52,7 @@ from usar_replay.tf2 import (
 
 __all__ = [
     "ArucoMarkers",
+    "Bool",
     "Buffer",
     "CameraInfo",
     "CompressedImage",

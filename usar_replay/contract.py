@@ -26,6 +26,7 @@ __all__ = [
     "CAMERA_FRAME",
     "CAMERA_INFO",
     "CLOCK",
+    "ENABLE_DETECTIONS",
     "FIDUCIALS",
     "GROUND_TRUTH_TOPICS",
     "IMAGE",
@@ -111,6 +112,10 @@ IMAGE = "/explorer/camera/rgb/image_raw/compressed"
 CAMERA_INFO = "/explorer/camera/rgb/camera_info"
 FIDUCIALS = "/fiducial_transforms"
 """aruco_detect's output: one ``FiducialTransformArray`` per camera frame."""
+ENABLE_DETECTIONS = "/aruco_detect/enable_detections"
+"""std_msgs/Bool switching the built-in mission's detector on (true) and off (false): the
+topic form of aruco_detect's ``enable_detections`` service. The explorer turns detection on
+only while it searches at a target, so frames taken on the way are not decoded at all."""
 MARKER_POSES = "/explorer/marker_poses"
 """The listener's stored marker poses in ``map``."""
 ROSOUT = "/rosout"

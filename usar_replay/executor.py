@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import contextlib
 from collections import deque
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 from usar_replay import contract, msgs
@@ -177,8 +177,12 @@ class Executor:
 
     # -- running ---------------------------------------------------------------------------------
 
-    def tick(self, t_ns: int, inputs: Sequence[Output]) -> list[Output]:
-        """Run one simulator tick (see the module docstring); returns what was published."""
+    def tick(self, t_ns: int, inputs: Iterable[Output]) -> list[Output]:
+        """Run one simulator tick (see the module docstring); returns what was published.
+
+        ``inputs`` is iterated once, in order, each message taken just before it is delivered
+        (the mission process decodes them lazily there, skipping topics nobody subscribes to).
+        """
         if t_ns < self.now_ns:
             raise ValueError(f"time went backwards: {t_ns} < {self.now_ns}")
         if not self._started:

@@ -30,6 +30,7 @@ __all__ = [
     "Duration",
     "Header",
     "String",
+    "Bool",
     "Vector3",
     "Quaternion",
     "Point",
@@ -118,6 +119,15 @@ class String(Message):
     __msgtype__: ClassVar[str] = "std_msgs/msg/String"
     __msgdef__: ClassVar[str] = "string data\n"
     data: str = ""
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Bool(Message):
+    """std_msgs/msg/Bool (the built-in mission switches its detector on and off with one)."""
+
+    __msgtype__: ClassVar[str] = "std_msgs/msg/Bool"
+    __msgdef__: ClassVar[str] = "bool data\n"
+    data: bool = False
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -468,6 +478,7 @@ MESSAGE_TYPES: tuple[type[Message], ...] = (
     Duration,
     Header,
     String,
+    Bool,
     Vector3,
     Quaternion,
     Point,

@@ -2,7 +2,9 @@
 
 This is the code the assignment asks students to write, in the course's split:
 
-* :class:`ArucoDetect` (aruco_detect's role): each camera frame -> ``/fiducial_transforms``;
+* :class:`ArucoDetect` (aruco_detect's role): each camera frame -> ``/fiducial_transforms``,
+  while detection is enabled (``/aruco_detect/enable_detections``, aruco_detect's
+  ``enable_detections`` switch as a topic);
 * :class:`Explorer`: visits ``aruco_lookup_locations.target_1..N`` with the navigation action;
   at each it rotates in place (``linear.x = 0``, ``angular.z = mission.spin_speed``) until a
   marker it has not stored yet is detected within ``mission.max_detection_range`` (the known
@@ -11,7 +13,9 @@ This is the code the assignment asks students to write, in the course's split:
   the camera's optical frame, stamped with the image's stamp, only on a frame with an accepted
   detection; its **listener** looks ``marker_frame`` up in ``map`` at that stamp and stores the
   median of ``mission.settle_frames`` such poses by marker ID (``/explorer/marker_poses``);
-  then it returns home;
+  then it returns home. It enables detection only while it searches at a target: frames on
+  the way and while parked are then neither decoded nor searched (two thirds of a course run's
+  frames; the detector was most of the mission's CPU time, live and in replay);
 * :class:`Follower`: once the explorer's home goal succeeded, visits the stored markers in ID
   order, each at an approach point computed from the marker's pose and the free space (in
   front of its face, within the follower tolerance when possible), returns home, and ends the
@@ -63,22 +67,31 @@ def _range(f: msgs.FiducialTransform) -> float:
 
 class ArucoDetect(Node):
     """aruco_detect: detects ArUco markers in each frame and publishes their poses in the
-    camera's optical frame (one ``FiducialTransformArray`` per frame, empty when none)."""
+    camera's optical frame (one ``FiducialTransformArray`` per frame, empty when none).
+
+    Like aruco_detect it starts enabled; a ``Bool`` on :data:`contract.ENABLE_DETECTIONS`
+    switches it (false: frames are ignored, nothing is published and ``image_seq`` does not
+    count them, as aruco_detect's image callback returns before it counts)."""
 
     def __init__(self) -> None:
         super().__init__("aruco_detect")
         self.params = from_mapping(DetectorParams, _group(self, "detector"), "detector.")
         self.info: msgs.CameraInfo | None = None
         self.seq = 0
+        self.enabled = True
         self.pub = self.create_publisher(msgs.FiducialTransformArray, contract.FIDUCIALS)
+        self.create_subscription(msgs.Bool, contract.ENABLE_DETECTIONS, self._on_enable)
         self.create_subscription(msgs.CameraInfo, contract.CAMERA_INFO, self._on_info)
         self.create_subscription(msgs.CompressedImage, contract.IMAGE, self._on_image)
 
     def _on_info(self, msg: msgs.CameraInfo) -> None:
         self.info = msg
 
+    def _on_enable(self, msg: msgs.Bool) -> None:
+        self.enabled = msg.data
+
     def _on_image(self, msg: msgs.CompressedImage) -> None:
-        if self.info is None:
+        if self.info is None or not self.enabled:
             return
         self.pub.publish(detect(msg, self.info, self.params, self.seq))
         self.seq += 1
@@ -102,6 +115,7 @@ class Explorer(Node):
         self.broadcaster = TransformBroadcaster(self)
         self.cmd = self.create_publisher(msgs.Twist, contract.cmd_vel("explorer"))
         self.markers_pub = self.create_publisher(msgs.FiducialTransformArray, contract.MARKER_POSES)
+        self.detection = self.create_publisher(msgs.Bool, contract.ENABLE_DETECTIONS)
         # the explorer's own odometry callback first: it starts the mission on the first one
         self.create_subscription(msgs.Odometry, contract.odom("explorer"), self._on_odom)
         self.nav = NavigateClient(
@@ -147,6 +161,7 @@ class Explorer(Node):
                 self._spin_step(pose[2])
 
     def _next_target(self) -> None:
+        self.detection.publish(msgs.Bool(data=False))  # nothing to look for until the next spin
         if self.target_index >= len(self.targets):
             self.phase = "home"
             self.nav.send_goal(_pose_msg(*self.home), self._home_done, name="home")
@@ -163,6 +178,7 @@ class Explorer(Node):
     def _target_done(self, result: NavResult) -> None:
         # a target that cannot be reached is still searched from where the robot stopped
         self.phase = "spin"
+        self.detection.publish(msgs.Bool(data=True))
         self._turned = 0.0
         self._last_yaw = result.pose[2] if result.pose else None
         self._candidate = None
