@@ -226,6 +226,17 @@ def _limit_cpu(seconds: int) -> None:
         resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 5))
 
 
+def _preload() -> None:
+    """Import what the node API and usar's own decoding load lazily, before the sandbox is on:
+    numpy's import calls ``ctypes.dlopen``, which the sandbox refuses to a mission, and the
+    rosbags typestore (the CDR fallback) reads its definitions from files."""
+    import cv2  # noqa: F401 - loaded for the mission's detector
+    import numpy  # noqa: F401
+
+    importlib.import_module("usar_replay.api")
+    cdr.typestore()
+
+
 def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, Any]) -> None:
     """The mission process: load the target, run ``main()``, then serve ticks until told to
     stop. Every failure is reported as text, never raised into the parent."""
@@ -241,6 +252,7 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
     policy = PublishPolicy(sim_topics=setup["sim_topics"], sim_frames=setup["sim_frames"])
     executor = Executor(setup["parameters"], policy)
     if setup.get("sandbox") is not None:
+        _preload()
         setup["sandbox"].install()  # after usar's own imports, before the user's code
     try:
         with executor.activate():
