@@ -236,6 +236,10 @@ class _TimeCache:
                 del self.samples[:cut]
             if s.stamp < oldest_kept:
                 return False
+        if not stamps or s.stamp > stamps[-1]:  # the usual case, newer than all: no search
+            stamps.append(s.stamp)
+            self.samples.append(s)
+            return True
         i = bisect.bisect_right(stamps, s.stamp)
         j = i - 1
         while j >= 0 and stamps[j] == s.stamp:
