@@ -649,6 +649,35 @@ class BagReader:
         and exits 3). Messages are yielded in file order, which is log-time order in a usar log
         (the writer refuses times that go backwards).
         """
+        window = start_ns is not None or end_ns is not None
+        for found in self._chunks(topics, start_ns, end_ns):
+            for info, t, data in found:
+                if window and (
+                    (start_ns is not None and t < start_ns) or (end_ns is not None and t >= end_ns)
+                ):
+                    continue
+                yield _new_bag_message(
+                    info.topic,
+                    info.msgtype,
+                    t,
+                    data,
+                    _decoded(info.topic, info.msgtype, t, data) if decode_messages else None,
+                    info.publisher,
+                )
+
+    def decoded(self, topics: Iterable[str]) -> Iterator[tuple[str, msgs.Message | None, int]]:
+        """(topic, value, log time) of every message on ``topics``: :meth:`messages` with the
+        same checks, order and errors, without a :class:`BagMessage` per message (``usar
+        grade`` reads tens of thousands of small messages and needs only these three)."""
+        for found in self._chunks(topics, None, None):
+            for info, t, data in found:
+                yield info.topic, _decoded(info.topic, info.msgtype, t, data), t
+
+    def _chunks(
+        self, topics: Iterable[str] | None, start_ns: int | None, end_ns: int | None
+    ) -> Iterator[list[tuple[mcapfile.ChannelInfo, int, bytes]]]:
+        """The wanted messages of each intact chunk that may hold some, a chunk at a time (its
+        CRC checked before any of it is given; a damaged one is noted and skipped)."""
         wanted = None if topics is None else set(topics)
         lay = self._layout
         with open(self.path, "rb") as f:
@@ -666,21 +695,7 @@ class BagReader:
                 except mcapfile.Broken as err:
                     self._note_bad_chunk(ref, str(err))
                     continue
-                window = start_ns is not None or end_ns is not None
-                for info, t, data in found:
-                    if window and (
-                        (start_ns is not None and t < start_ns)
-                        or (end_ns is not None and t >= end_ns)
-                    ):
-                        continue
-                    yield _new_bag_message(
-                        info.topic,
-                        info.msgtype,
-                        t,
-                        data,
-                        _decoded(info.topic, info.msgtype, t, data) if decode_messages else None,
-                        info.publisher,
-                    )
+                yield found
                 del found
 
     def _may_hold(self, ref: mcapfile.ChunkRef, wanted: set[str]) -> bool:

@@ -77,8 +77,9 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
                 f"{run.path}: topic {missing[0]} is missing; it cannot be graded"
                 + (f" (also missing: {', '.join(missing[1:])})" if missing[1:] else "")
             )
-    for m in run.messages(rubric.GRADE_TOPICS):
-        grader.feed(m.topic, m.msg, m.log_time_ns)
+    feed = grader.feed
+    for topic, msg, t in run.reader.decoded(rubric.GRADE_TOPICS):
+        feed(topic, msg, t)
     problem = run.problem()
     report: GradeReport = grader.report(
         str(run.path), log_complete=not problem, log_problem=problem

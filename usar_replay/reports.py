@@ -9,14 +9,10 @@ the same shape with ``status`` ``error``.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
-import json
 import re
 import shutil
 import textwrap
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -213,6 +209,8 @@ def _thresholds_dict(th: object) -> dict[str, object]:
 def to_json(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
     """``{"schema_version", "tool", "tool_version", "recordings": [...]}``: graded recordings
     first, in the order given, then those that could not be graded."""
+    import json  # deferred: the table alone needs none
+
     doc = {
         "schema_version": SCHEMA_VERSION,
         "tool": "usar-replay",
@@ -231,6 +229,8 @@ def _classname(source: str) -> str:
 
 def to_junit(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
     """JUnit XML: a suite per recording, a test case per rubric line, totals on the root."""
+    import xml.etree.ElementTree as ET  # deferred: the table alone needs none
+
     suites = ET.Element("testsuites", name="usar grade")
     total = {"tests": 0, "failures": 0, "errors": 0}
     seconds = 0.0
@@ -307,6 +307,9 @@ def to_junit(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
 
 def to_csv(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
     """One row per recording: totals, then each rubric line's ``pass``/``fail`` by id."""
+    import csv  # deferred: the table alone needs none
+    import io
+
     ids: list[str] = []
     for r in reports:
         for c in r.checks:
@@ -394,6 +397,8 @@ def replay_dict(report: ReplayReport) -> dict[str, object]:
 def replay_to_json(report: ReplayReport, grades: Sequence[GradeReport] = ()) -> str:
     """``usar replay --json``: the grade document's shape (``recordings``: the replayed run's
     grade when ``--grade``, else empty) plus ``replay``, the comparison."""
+    import json  # deferred: the table alone needs none
+
     doc = json.loads(to_json(grades))
     doc["replay"] = replay_dict(report)
     return json.dumps(doc, indent=2) + "\n"
@@ -402,6 +407,8 @@ def replay_to_json(report: ReplayReport, grades: Sequence[GradeReport] = ()) -> 
 def replay_to_junit(report: ReplayReport, grades: Sequence[GradeReport] = ()) -> str:
     """``usar replay --junit``: a suite ``usar.replay`` with a test case per compared topic (a
     failure when it differs) and one for the mission's run, then the grade's suites."""
+    import xml.etree.ElementTree as ET  # deferred: the table alone needs none
+
     root = ET.fromstring(to_junit(grades).split("?>", 1)[-1])
     suite = ET.Element("testsuite", name=f"{report.source} (replay)")
     cls = "usar.replay." + (
@@ -440,6 +447,9 @@ def replay_to_junit(report: ReplayReport, grades: Sequence[GradeReport] = ()) ->
 
 def replay_to_csv(report: ReplayReport) -> str:
     """``usar replay --csv`` without ``--grade``: one row per compared topic."""
+    import csv  # deferred: the table alone needs none
+    import io
+
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
     w.writerow(["schema_version", "source", "topic", "recorded", "replayed", "identical"])

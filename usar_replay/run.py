@@ -23,8 +23,6 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import tomli_w
-
 from usar_replay import bag, contract
 from usar_replay.errors import IncompleteLog, LogError, MissingTopic, UsageError
 from usar_replay.scenario import Scenario, from_toml
@@ -58,6 +56,8 @@ class MissionInfo:
     def to_toml(self) -> str:
         """TOML through the same library as the settings, so a target path holding a quote or
         a backslash still reads back (f-strings wrote invalid TOML for those)."""
+        import tomli_w  # deferred: opening a run never writes TOML
+
         return tomli_w.dumps(
             {
                 "target": self.target,

@@ -10,16 +10,14 @@ metres and radians.
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import tomli_w
 
 from usar_replay.errors import InvalidScenario
 
@@ -336,7 +334,7 @@ def _check_keys(
 ) -> None:
     for key in table:
         if key not in allowed:
-            close = difflib.get_close_matches(key, allowed, n=1)
+            close = _close_matches(key, allowed)
             hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(allowed)})"
             raise _err(source, f"{path}.{key}" if path else key, "unknown field" + hint)
     for key in required:
@@ -417,7 +415,7 @@ def _parse_marker(src: str, path: str, t: dict[str, Any]) -> Marker:
     _check_keys(src, path, t, keys, ["id", "x", "y", "yaw"])
     dictionary = _str(src, f"{path}.dictionary", t.get("dictionary", "DICT_4X4_50"))
     if dictionary not in DICTIONARIES:
-        close = difflib.get_close_matches(dictionary, list(DICTIONARIES), n=1)
+        close = _close_matches(dictionary, list(DICTIONARIES))
         hint = f" (did you mean '{close[0]}'?)" if close else ""
         raise _err(src, f"{path}.dictionary", f"unknown ArUco dictionary {dictionary!r}{hint}")
     mid = _int(src, f"{path}.id", t["id"])
@@ -704,7 +702,7 @@ def validate(scn: Scenario, source: str = "scenario") -> None:
     if not scn.targets:
         raise _err(source, "aruco_lookup_locations", "at least one target is needed")
     if scn.assignment not in ASSIGNMENTS:
-        close = difflib.get_close_matches(scn.assignment, ASSIGNMENTS, n=1)
+        close = _close_matches(scn.assignment, ASSIGNMENTS)
         hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(ASSIGNMENTS)})"
         raise _err(source, "assignment", f"unknown assignment {scn.assignment!r}{hint}")
     check_ranges(scn, source)
@@ -817,6 +815,8 @@ def to_toml(scn: Scenario) -> str:
         }
         for m in scn.markers
     ]
+    import tomli_w  # deferred: loading a world (every command) never writes TOML
+
     # tomli_w splits every array over lines; keep [x, y] pairs on one line for people
     text = re.sub(r"\[\n\s+([^,\n]+),\n\s+([^,\n]+),\n\]", r"[\1, \2]", tomli_w.dumps(data))
     return _commented(text)
@@ -899,3 +899,11 @@ def save(scn: Scenario, path: str | os.PathLike[str], *, overwrite: bool = False
     from usar_replay.outfiles import write_text
 
     write_text(path, to_toml(scn), overwrite=overwrite)
+
+
+def _close_matches(word: str, choices: Sequence[str]) -> list[str]:
+    """The nearest of ``choices`` to a misspelt ``word`` (difflib, imported only when a
+    scenario has a mistake: loading a good one never needs it)."""
+    import difflib
+
+    return difflib.get_close_matches(word, choices, n=1)

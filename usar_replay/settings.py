@@ -23,8 +23,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-import tomli_w
-
 from usar_replay.errors import UsageError
 
 __all__ = [
@@ -282,6 +280,8 @@ def to_mapping(obj: Any) -> dict[str, Any]:
 
 def to_toml(obj: Any) -> str:
     """A settings dataclass as TOML text (what the log stores; stable: fields in class order)."""
+    import tomli_w  # deferred: reading settings (every command) never writes TOML
+
     return tomli_w.dumps(to_mapping(obj))
 
 

@@ -38,12 +38,11 @@ The course's pitfalls, explained
 from __future__ import annotations
 
 import bisect
-import logging
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from math import isnan
-from typing import Literal, overload
+from typing import Any, Literal, overload
 
 from usar_replay import contract, msgs
 
@@ -60,7 +59,18 @@ __all__ = [
     "TransformListener",
 ]
 
-log = logging.getLogger("usar_replay.tf_tree")
+
+class _Log:
+    """The module's logger, made on first use: :mod:`logging` costs ``usar grade`` a few ms
+    to import, and a log whose transforms are all accepted never logs."""
+
+    def __getattr__(self, name: str) -> Any:
+        import logging
+
+        return getattr(logging.getLogger("usar_replay.tf_tree"), name)
+
+
+log = _Log()
 
 MAX_GRAPH_DEPTH = 1000
 NS = 1_000_000_000
@@ -226,6 +236,10 @@ class _TimeCache:
                 del self.samples[:cut]
             if s.stamp < oldest_kept:
                 return False
+        if not stamps or s.stamp > stamps[-1]:  # the usual case, newer than all: no search
+            stamps.append(s.stamp)
+            self.samples.append(s)
+            return True
         i = bisect.bisect_right(stamps, s.stamp)
         j = i - 1
         while j >= 0 and stamps[j] == s.stamp:
