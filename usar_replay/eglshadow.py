@@ -28,8 +28,10 @@ SHADOW_FLAG = "useShadowMap"
 """The plugin's global that switches its shadow-map pass on."""
 
 
-def _symbol(path: Path, name: str) -> tuple[int, int] | None:
-    """(virtual address, size) of a data symbol in the file's ``.symtab``, or None."""
+def _flag_and_first_load(path: Path, name: str) -> tuple[int, int, int] | None:
+    """From one read of the file: the virtual address of the one-byte data symbol ``name`` in
+    its ``.symtab``, and the file offset and virtual address of its first loadable segment
+    (what :func:`_load_bias` needs); None when the file has no such symbol."""
     from elftools.common.exceptions import ELFError
     from elftools.elf.elffile import ELFFile
     from elftools.elf.sections import SymbolTableSection
@@ -40,33 +42,36 @@ def _symbol(path: Path, name: str) -> tuple[int, int] | None:
             tab = elf.get_section_by_name(".symtab")
             if not isinstance(tab, SymbolTableSection):
                 return None
-            found = tab.get_symbol_by_name(name) or []
-            for sym in found:
-                if sym["st_info"]["type"] == "STT_OBJECT" and sym["st_size"] == 1:
-                    return int(sym["st_value"]), int(sym["st_size"])
+            flag = next(
+                (
+                    int(sym["st_value"])
+                    for sym in tab.get_symbol_by_name(name) or []
+                    if sym["st_info"]["type"] == "STT_OBJECT" and sym["st_size"] == 1
+                ),
+                None,
+            )
+            loads = [s for s in elf.iter_segments() if s["p_type"] == "PT_LOAD"]
+            if flag is None or not loads:
+                return None
+            first = min(loads, key=lambda s: s["p_offset"])
+            return flag, int(first["p_offset"]), int(first["p_vaddr"])
     except (OSError, ELFError):
         return None
-    return None
 
 
-def _load_bias(path: Path) -> int | None:
-    """Where the loader placed the file's virtual address 0, from ``/proc/self/maps``."""
-    from elftools.common.exceptions import ELFError
-    from elftools.elf.elffile import ELFFile
-
+def _load_bias(path: Path, first_offset: int, first_vaddr: int) -> int | None:
+    """Where the loader placed the file's virtual address 0, from ``/proc/self/maps``: the
+    mapping of this very file at its first loadable segment's offset."""
     try:
         real = os.path.realpath(path)
-        with path.open("rb") as f:
-            loads = [s for s in ELFFile(f).iter_segments() if s["p_type"] == "PT_LOAD"]
-        first = min(loads, key=lambda s: s["p_offset"])
         with open("/proc/self/maps", encoding="utf-8") as maps:
             for line in maps:
                 fields = line.split(maxsplit=5)
-                if len(fields) == 6 and fields[5].strip() == real:
+                here = len(fields) == 6 and fields[5].strip() == real
+                if here and int(fields[2], 16) == first_offset:
                     start = int(fields[0].split("-")[0], 16)
-                    if int(fields[2], 16) == first["p_offset"]:
-                        return start - (int(first["p_vaddr"]) - int(first["p_offset"]))
-    except (OSError, ELFError, ValueError):
+                    return start - (first_vaddr - first_offset)
+    except (OSError, ValueError):
         return None
     return None
 
@@ -78,11 +83,14 @@ def disable_shadow_map(plugin_path: str | os.PathLike[str]) -> bool:
     rendering. Idempotent; every simulator in the process shares the plugin and so the setting.
     """
     path = Path(plugin_path)
-    sym = _symbol(path, SHADOW_FLAG)
-    bias = _load_bias(path)
-    if sym is None or bias is None:
+    facts = _flag_and_first_load(path, SHADOW_FLAG)
+    if facts is None:
         return False
-    flag = ctypes.c_uint8.from_address(bias + sym[0])
+    vaddr, first_offset, first_vaddr = facts
+    bias = _load_bias(path, first_offset, first_vaddr)
+    if bias is None:
+        return False
+    flag = ctypes.c_uint8.from_address(bias + vaddr)
     if flag.value not in (0, 1):
         return False
     flag.value = 0
