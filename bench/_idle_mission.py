@@ -1,7 +1,7 @@
 """A mission whose node subscribes to every simulator topic and does nothing (for benchmarks)."""
 
-from usar_replay import contract, msgs
-from usar_replay.node import Node
+from usar_replay.core import contract, msgs
+from usar_replay.node.node import Node
 
 
 def main() -> None:

@@ -15,11 +15,11 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from usar_replay.grade import grade_file
-from usar_replay.record import record
-from usar_replay.scenario import course_world
-from usar_replay.settings import RunSettings
-from usar_replay.variants import make_variant
+from usar_replay.core.settings import RunSettings
+from usar_replay.grading.grade import grade_file
+from usar_replay.pipeline.record import record
+from usar_replay.world.scenario import course_world
+from usar_replay.world.variants import make_variant
 
 
 def run(seed: int | None, out_dir: Path) -> str:

@@ -25,13 +25,13 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from conftest import one_room  # noqa: E402
 
-from usar_replay import bag  # noqa: E402
-from usar_replay.batch import Limits  # noqa: E402
-from usar_replay.batch_main import grade_class, plan_class  # noqa: E402
-from usar_replay.engines import make_engine  # noqa: E402
-from usar_replay.scenario import to_toml  # noqa: E402
-from usar_replay.settings import RecordSettings, RunSettings  # noqa: E402
-from usar_replay.settings import to_toml as settings_to_toml  # noqa: E402
+from usar_replay.batch.driver import grade_class, plan_class  # noqa: E402
+from usar_replay.batch.engines import make_engine  # noqa: E402
+from usar_replay.batch.plan import Limits  # noqa: E402
+from usar_replay.core.settings import RecordSettings, RunSettings  # noqa: E402
+from usar_replay.core.settings import to_toml as settings_to_toml  # noqa: E402
+from usar_replay.log import bag  # noqa: E402
+from usar_replay.world.scenario import to_toml  # noqa: E402
 
 MINIMAL = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
 ARRIVED = "    def arrived(self, _result: object) -> None:\n        self.spinning = True\n"

@@ -27,10 +27,11 @@ from itertools import pairwise
 import cv2
 import numpy as np
 
-from usar_replay import msgs
-from usar_replay.detect import DetectorParams, decode_image, detect, encode_image
-from usar_replay.scenario import course_world
-from usar_replay.sim import Simulator
+from usar_replay.core import msgs
+from usar_replay.sim.camera import encode_image
+from usar_replay.sim.simulator import Simulator
+from usar_replay.world.detect import DetectorParams, decode_image, detect
+from usar_replay.world.scenario import course_world
 
 TARGET_MARKER = {0: 0, 1: 1, 2: 3, 3: 2}
 """The marker each course target sees (course-world.md)."""

@@ -26,9 +26,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from usar_replay import cdr, contract, msgs
-from usar_replay.detect import _REFINE, DetectorParams, _object_points
-from usar_replay.run import open_run
+from usar_replay.core import cdr, contract, msgs
+from usar_replay.log.run import open_run
+from usar_replay.world.detect import _REFINE, DetectorParams, _object_points
 
 
 @dataclasses.dataclass

@@ -24,9 +24,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
-from usar_replay import cdr, contract, msgs  # noqa: E402
-from usar_replay.executor import Executor, PublishPolicy  # noqa: E402
-from usar_replay.node import Node  # noqa: E402
+from usar_replay.core import cdr, contract, msgs  # noqa: E402
+from usar_replay.node.executor import Executor, PublishPolicy  # noqa: E402
+from usar_replay.node.node import Node  # noqa: E402
 
 
 def _tick(t: int, image_bytes: int) -> list[tuple[str, msgs.Message]]:
@@ -69,7 +69,7 @@ def bench_executor(n: int = 20_000) -> float:
 
 def bench_boundary(n: int = 2_000, image_bytes: int = 25_000) -> float:
     """µs per tick through a mission process whose nodes do nothing (CDR both ways + IPC)."""
-    from usar_replay.worker import MissionProcess, resolve_target
+    from usar_replay.node.worker import MissionProcess, resolve_target
 
     target = resolve_target(str(ROOT / "bench" / "_idle_mission.py"))
     wire = [(t, m.__msgtype__, cdr.encode(m)) for t, m in _tick(1_000_000_000, image_bytes)]
@@ -86,12 +86,12 @@ _RECORD = """
 import sys, time, resource
 sys.path.insert(0, {tests!r})
 from conftest import one_room
-from usar_replay.record import record
+from usar_replay.pipeline.record import record
 try:
-    from usar_replay.settings import RunSettings as S
+    from usar_replay.core.settings import RunSettings as S
 except ImportError:
-    from usar_replay.record import RecordSettings as S
-from usar_replay.replay import replay
+    from usar_replay.pipeline.record import RecordSettings as S
+from usar_replay.pipeline.replay import replay
 if __name__ == "__main__":
     import dataclasses as dc
     room = one_room()

@@ -8,8 +8,8 @@ from __future__ import annotations
 import itertools
 import time
 
-from usar_replay.nav import Navigator, OccupancyGrid, plan
-from usar_replay.scenario import course_world
+from usar_replay.world.nav import Navigator, OccupancyGrid, plan
+from usar_replay.world.scenario import course_world
 
 
 def main() -> None:

@@ -4,7 +4,7 @@
 
 For each log, the best of three runs of:
 
-* opening it at each check level of :class:`usar_replay.bag.BagReader` (``summary``: trust the
+* opening it at each check level of :class:`usar_replay.log.bag.BagReader` (``summary``: trust the
   summary, ``usar info --quick``; ``data``: the data CRC over the whole file, header and
   attachments, what grade/replay/view do; ``full``: every chunk decompressed and CRC-checked,
   what ``usar info`` does);
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from mcap.reader import make_reader
 
-from usar_replay.bag import BagReader
+from usar_replay.log.bag import BagReader
 
 DEFAULT_LOG = Path("recordings/course.mcap")
 

@@ -32,9 +32,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from usar_replay import bag, record, sim
-from usar_replay.scenario import Scenario, course_world
-from usar_replay.settings import RecordSettings, RunSettings
+from usar_replay.core.settings import RecordSettings, RunSettings
+from usar_replay.log import bag
+from usar_replay.pipeline import record
+from usar_replay.sim import simulator as sim
+from usar_replay.world.scenario import Scenario, course_world
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import one_room

@@ -12,9 +12,9 @@ import dataclasses
 import statistics
 import time
 
-from usar_replay import msgs
-from usar_replay.scenario import course_world
-from usar_replay.sim import Simulator
+from usar_replay.core import msgs
+from usar_replay.sim.simulator import Simulator
+from usar_replay.world.scenario import course_world
 
 
 def bench_render(renderer: str, width: int, height: int, frames: int = 20) -> float | None:

@@ -24,9 +24,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from usar_replay.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader, grade_file
-from usar_replay.replay import ReplayReport, replay
-from usar_replay.run import open_run
+from usar_replay.grading.grade import GRADE_TOPICS, REQUIRED_TOPICS, Grader, grade_file
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.replay import ReplayReport, replay
 
 DEFAULT_LOG = Path("recordings/course.mcap")
 

@@ -11,8 +11,8 @@ import itertools
 import math
 import time
 
-from usar_replay import msgs
-from usar_replay.tf_tree import Buffer
+from usar_replay.core import msgs
+from usar_replay.core.tf_tree import Buffer
 
 S = 1_000_000_000
 

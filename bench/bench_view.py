@@ -2,8 +2,8 @@
 
     python bench/bench_view.py [LOG.mcap ...]   # default: recordings/course.mcap
 
-Measures :func:`usar_replay.view.view_run` on an opened run (module imports excluded; the log is
-opened for each repeat, as the command does), three times,
+Measures :func:`usar_replay.viewer.view.view_run` on an opened run (module imports excluded; the log
+is opened for each repeat, as the command does), three times,
 and prints the best and the median with camera frames per second. On the course log (477 sim-s,
 4776 frames of 640x480 PNG, 71736 messages) the write took about 5 s on a 2-core machine.
 The time splits roughly evenly between reading the MCAP, decoding CDR and collecting columns;
@@ -18,9 +18,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from usar_replay.contract import IMAGE
-from usar_replay.run import open_run
-from usar_replay.view import Output, view_run
+from usar_replay.core.contract import IMAGE
+from usar_replay.log.run import open_run
+from usar_replay.viewer.view import Output, view_run
 
 DEFAULT_LOG = Path("recordings/course.mcap")
 

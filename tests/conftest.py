@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.record import RecordResult, record
-from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
-from usar_replay.settings import RunSettings
+from usar_replay.core.settings import RunSettings
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.world.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
 
 
 def one_room() -> Scenario:

@@ -7,8 +7,8 @@ import math
 
 from conftest import one_room
 
-from usar_replay.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
-from usar_replay.settings import DetectorParams, RunSettings
+from usar_replay.core.settings import DetectorParams, RunSettings
+from usar_replay.world.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
 
 MARKER_SIZE = 0.3
 """The corridor's markers: twice the course's, so that 320x240 frames read them 3 m away."""

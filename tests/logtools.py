@@ -6,9 +6,10 @@ import hashlib
 from collections.abc import Callable
 from pathlib import Path
 
-from usar_replay import bag, msgs
-from usar_replay.contract import SCENARIO_ATTACHMENT
-from usar_replay.scenario import Scenario, to_toml
+from usar_replay.core import msgs
+from usar_replay.core.contract import SCENARIO_ATTACHMENT
+from usar_replay.log import bag
+from usar_replay.world.scenario import Scenario, to_toml
 
 
 def digest(path: Path) -> str:

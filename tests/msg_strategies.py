@@ -11,7 +11,8 @@ from typing import Any
 from hypothesis import strategies as st
 from rosbags.typesys.base import Nodetype
 
-from usar_replay import bag, msgs
+from usar_replay.core import msgs
+from usar_replay.log import bag
 
 _INT_RANGES = {
     "int8": (-(2**7), 2**7 - 1),

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.grade import grade_file
-from usar_replay.record import record
-from usar_replay.replay import replay
-from usar_replay.scenario import course_world
+from usar_replay.grading.grade import grade_file
+from usar_replay.pipeline.record import record
+from usar_replay.pipeline.replay import replay
+from usar_replay.world.scenario import course_world
 
 pytestmark = pytest.mark.slow
 

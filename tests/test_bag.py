@@ -14,8 +14,9 @@ from mcap.reader import make_reader
 from msg_strategies import message
 from rosbags.highlevel import AnyReader
 
-from usar_replay import bag, msgs
-from usar_replay.errors import NotAnMcapFile, UsageError
+from usar_replay.core import msgs
+from usar_replay.core.errors import NotAnMcapFile, UsageError
+from usar_replay.log import bag
 
 T0 = 1_000_000_000
 

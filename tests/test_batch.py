@@ -25,8 +25,8 @@ from clitools import default_signals
 from conftest import one_room
 from logtools import digest
 
-from usar_replay import cli
-from usar_replay.batch import (
+from usar_replay.batch.classreport import ClassGrades, collect, to_table
+from usar_replay.batch.plan import (
     Limits,
     RunResult,
     discover,
@@ -35,9 +35,9 @@ from usar_replay.batch import (
     parse_seeds,
     submission_digest,
 )
-from usar_replay.classreport import ClassGrades, collect, to_table
-from usar_replay.errors import UsageError
-from usar_replay.scenario import to_toml
+from usar_replay.cli import main as cli
+from usar_replay.core.errors import UsageError
+from usar_replay.world.scenario import to_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 MINIMAL = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
@@ -235,8 +235,8 @@ def test_deleted_log_is_recorded_again_to_the_same_bytes(
 
 def test_changed_inputs_are_run_again(graded_class: tuple[Path, Path, Path, str]) -> None:
     subs, room, out, _ = graded_class
-    from usar_replay.settings import RunSettings
-    from usar_replay.settings import to_toml as settings_toml
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.core.settings import to_toml as settings_toml
 
     worlds = make_worlds((), [str(room)])
     toml = settings_toml(RunSettings())
@@ -394,7 +394,7 @@ def test_parse_seeds() -> None:
 
 
 def test_table_fits_100_columns_with_many_worlds(tmp_path: Path) -> None:
-    from usar_replay.batch import Plan, Submission, World
+    from usar_replay.batch.plan import Plan, Submission, World
 
     teams = [f"team_with_a_rather_long_name_{i}" for i in range(3)]
     worlds = [f"seed{i}" for i in range(20)]
@@ -418,7 +418,7 @@ def test_sandbox_refuses_other_files_and_processes(tmp_path: Path) -> None:
     (own / "mine.txt").write_text("mine")
     (other / "theirs.txt").write_text("theirs")
     script = f"""
-from usar_replay.sandbox import SandboxPolicy
+from usar_replay.node.sandbox import SandboxPolicy
 SandboxPolicy(read_roots=({str(own)!r},), write_roots=({str(work)!r},),
               deny_roots=({str(tmp_path)!r},), own_roots=({str(own)!r},)).install()
 import os, subprocess
@@ -446,7 +446,7 @@ for attempt in (lambda: open({str(other / "theirs.txt")!r}).read(),
 
 
 def test_output_inside_the_submissions_is_refused(tmp_path: Path) -> None:
-    from usar_replay.batch_main import plan_class
+    from usar_replay.batch.driver import plan_class
 
     (tmp_path / "a.py").write_text("def main(): pass\n")
     with pytest.raises(UsageError, match="must not contain each other"):

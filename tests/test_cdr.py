@@ -1,4 +1,4 @@
-"""The generated CDR decoders (:mod:`usar_replay.cdrdecode`) against rosbags, the reference.
+"""The generated CDR decoders (:mod:`usar_replay.core.cdrdecode`) against rosbags, the reference.
 
 Why: the generated decoders are what grade and replay see, so they must give exactly rosbags'
 values (same classes, same field types, same float bits) for every type, and must never accept
@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from msg_strategies import message
 
-from usar_replay import cdr, cdrdecode, msgs
+from usar_replay.core import cdr, cdrdecode, msgs
 
 
 def _same(a: Any, b: Any) -> bool:

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 from clitools import usar
 
-from usar_replay import bag, msgs
 from usar_replay.cli import main
+from usar_replay.core import msgs
+from usar_replay.log import bag
 
 T0 = 1_000_000_000
 
@@ -92,8 +93,8 @@ def test_missing_log_is_one_line_exit_2(command: str, tmp_path: Path) -> None:
 def test_scenario_writes_a_variant_that_loads_back(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from usar_replay.scenario import course_world, load
-    from usar_replay.variants import make_variant
+    from usar_replay.world.scenario import course_world, load
+    from usar_replay.world.variants import make_variant
 
     out = tmp_path / "demo3.toml"
     assert main(["scenario", "--seed", "3", "--out", str(out), "--check"]) == 0

@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from usar_replay import detect as detect_module
-from usar_replay import msgs
-from usar_replay.detect import DetectError, DetectorParams, decode_image, detect, encode_image
-from usar_replay.errors import UsageError
-from usar_replay.scenario import course_world
-from usar_replay.sim import Simulator
+from usar_replay.core import msgs
+from usar_replay.core.errors import UsageError
+from usar_replay.sim.camera import encode_image
+from usar_replay.sim.simulator import Simulator
+from usar_replay.world import detect as detect_module
+from usar_replay.world.detect import DetectError, DetectorParams, decode_image, detect
+from usar_replay.world.scenario import course_world
 
 # the marker each course target sees, in target order (course-world.md)
 TARGET_MARKER = {0: 0, 1: 1, 2: 3, 3: 2}

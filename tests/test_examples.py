@@ -24,14 +24,14 @@ import pytest
 from conftest import one_room
 from example_worlds import CORRIDOR_SETTINGS, corridor, quick_room
 
-from usar_replay import contract, msgs
 from usar_replay.cli import main
-from usar_replay.grade import GRADE_TOPICS, Grader, GradeReport, grade_file
-from usar_replay.record import RecordResult, record
-from usar_replay.replay import ReplayReport, replay
-from usar_replay.run import open_run
-from usar_replay.scenario import save
-from usar_replay.settings import RecordSettings, RunSettings
+from usar_replay.core import contract, msgs
+from usar_replay.core.settings import RecordSettings, RunSettings
+from usar_replay.grading.grade import GRADE_TOPICS, Grader, GradeReport, grade_file
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.pipeline.replay import ReplayReport, replay
+from usar_replay.world.scenario import save
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 FAULTY = EXAMPLES / "faulty"
@@ -199,7 +199,7 @@ def test_listening_before_anything_was_broadcast_crashes(
     assert run.outcome == "crashed" and run.file_state == "complete"
     reason = run.outcome_reason
     assert f'File "{mission}"' in reason and "in on_timer" in reason
-    assert reason.rstrip().splitlines()[-1].startswith("usar_replay.tf_tree.LookupException")
+    assert reason.rstrip().splitlines()[-1].startswith("usar_replay.core.tf_tree.LookupException")
     assert '"marker_frame" passed to lookupTransform argument source_frame does not exist' in reason
     assert "The mission crashed:" in capsys.readouterr().out
     report = grade_file(out)

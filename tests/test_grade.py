@@ -20,10 +20,10 @@ import pytest
 from clitools import one_error_line, usar
 from logtools import SyntheticRun, rewrite, synthetic_mission, truncate_at
 
-from usar_replay import bag, msgs
 from usar_replay.cli import main
-from usar_replay.errors import MissingTopic, UsageError
-from usar_replay.grade import (
+from usar_replay.core import msgs
+from usar_replay.core.errors import MissingTopic, UsageError
+from usar_replay.grading.grade import (
     DETECTION_MEMORY_NS,
     MAX_VISITS,
     Grader,
@@ -32,9 +32,10 @@ from usar_replay.grade import (
     grade_file,
     load_thresholds,
 )
-from usar_replay.record import RecordResult
-from usar_replay.run import open_run
-from usar_replay.scenario import course_world
+from usar_replay.log import bag
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.record import RecordResult
+from usar_replay.world.scenario import course_world
 
 COURSE_LINES = 22  # 4 targets, 4 x (detected, broadcast), only_on_detection, home, 4 follower,
 # 2 more, and one cmd_vel line per robot

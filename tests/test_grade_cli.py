@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from clitools import default_signals, one_error_line, usar
 
-from usar_replay.record import RecordResult
+from usar_replay.pipeline.record import RecordResult
 
 
 def _batch(room_log: tuple[Path, RecordResult], root: Path, n: int) -> list[Path]:

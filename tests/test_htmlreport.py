@@ -9,10 +9,11 @@ from pathlib import Path
 
 from clitools import one_error_line, usar
 
-from usar_replay import bag, contract, msgs
 from usar_replay.cli import main
-from usar_replay.grade import grade_file
-from usar_replay.record import RecordResult
+from usar_replay.core import contract, msgs
+from usar_replay.grading.grade import grade_file
+from usar_replay.log import bag
+from usar_replay.pipeline.record import RecordResult
 
 
 class _Page(HTMLParser):

@@ -12,14 +12,13 @@ import math
 import pytest
 from conftest import one_room
 
-from usar_replay import contract, msgs
-from usar_replay.executor import Executor, PublishPolicy
+from usar_replay.core import contract, msgs
+from usar_replay.core.rotations import quat_from_yaw
+from usar_replay.core.settings import RunSettings
 from usar_replay.missions import usar
-from usar_replay.nav import OccupancyGrid
-from usar_replay.navigation import grid_to_msg
-from usar_replay.record import mission_parameters
-from usar_replay.rotations import quat_from_yaw
-from usar_replay.settings import RunSettings
+from usar_replay.node.executor import Executor, PublishPolicy
+from usar_replay.pipeline.record import mission_parameters
+from usar_replay.world.nav import OccupancyGrid, grid_to_msg
 
 T0 = contract.START_TIME_NS
 TICK = 50_000_000
@@ -200,7 +199,7 @@ def test_broadcast_and_store(mission: Executor) -> None:
 
 def test_the_mission_may_not_publish_the_simulators_links() -> None:
     ex = Executor({}, PublishPolicy(contract.SIM_TOPICS, contract.sim_frames()))
-    from usar_replay.node import Node
+    from usar_replay.node.node import Node
 
     with ex.activate():
         node = Node("rogue")

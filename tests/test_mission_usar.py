@@ -11,14 +11,15 @@ import pytest
 from conftest import one_room
 from scipy.spatial.transform import Rotation
 
-from usar_replay import bag, msgs
+from usar_replay.core import msgs
+from usar_replay.core.settings import MissionSettings, RunSettings
+from usar_replay.log import bag
+from usar_replay.log.run import open_run
 from usar_replay.missions.usar import approach_point
-from usar_replay.nav import OccupancyGrid, robot_disc
-from usar_replay.record import record
-from usar_replay.replay import replay
-from usar_replay.run import open_run
-from usar_replay.scenario import Marker, course_world
-from usar_replay.settings import MissionSettings, RunSettings
+from usar_replay.pipeline.record import record
+from usar_replay.pipeline.replay import replay
+from usar_replay.world.nav import OccupancyGrid, robot_disc
+from usar_replay.world.scenario import Marker, course_world
 
 COURSE = course_world()
 GRID = OccupancyGrid.from_scenario(COURSE)

@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from msg_strategies import message
 from rosbags.typesys import Stores, get_typestore
 
-from usar_replay import bag, msgs
+from usar_replay.core import msgs
+from usar_replay.log import bag
 
 
 def test_keyword_construction_from_the_issue() -> None:

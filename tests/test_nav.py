@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from usar_replay import msgs
-from usar_replay.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
-from usar_replay.scenario import course_world
+from usar_replay.core import msgs
+from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
+from usar_replay.world.scenario import course_world
 
 COURSE = course_world()
 HOME = (-4.0, 2.5)

@@ -13,7 +13,6 @@ from pathlib import Path
 import pytest
 from conftest import one_room
 
-from usar_replay import contract
 from usar_replay.api import (
     Node,
     Odometry,
@@ -24,9 +23,10 @@ from usar_replay.api import (
     TransformStamped,
 )
 from usar_replay.cli import main
-from usar_replay.executor import Executor, PublishPolicy
-from usar_replay.run import open_run
-from usar_replay.scenario import save
+from usar_replay.core import contract
+from usar_replay.log.run import open_run
+from usar_replay.node.executor import Executor, PublishPolicy
+from usar_replay.world.scenario import save
 
 S = 1_000_000_000
 T0 = 100 * S

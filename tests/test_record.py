@@ -10,11 +10,12 @@ from clitools import default_signals
 from conftest import one_room
 from logtools import digest
 
-from usar_replay import bag, msgs
 from usar_replay.cli import main
-from usar_replay.record import RecordResult, record
-from usar_replay.run import open_run
-from usar_replay.scenario import save
+from usar_replay.core import msgs
+from usar_replay.log import bag
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.world.scenario import save
 
 CONTRACT = {
     "/explorer/camera/rgb/image_raw/compressed": "sensor_msgs/msg/CompressedImage",

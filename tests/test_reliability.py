@@ -20,10 +20,11 @@ import pytest
 from clitools import default_signals, one_error_line, usar
 from conftest import one_room
 
-from usar_replay import bag, msgs
-from usar_replay.errors import UsageError
-from usar_replay.record import RecordResult
-from usar_replay.scenario import save
+from usar_replay.core import msgs
+from usar_replay.core.errors import UsageError
+from usar_replay.log import bag
+from usar_replay.pipeline.record import RecordResult
+from usar_replay.world.scenario import save
 
 ROOT = os.geteuid() == 0
 

@@ -11,16 +11,17 @@ import pytest
 from clitools import one_error_line, usar
 from logtools import rewrite, truncate_at
 
-from usar_replay import bag, msgs
 from usar_replay.cli import main
-from usar_replay.contract import CAMERA_INFO, FIDUCIALS, IMAGE
-from usar_replay.detect import decode_image, detect, detect_with_corners
-from usar_replay.detect import encode_image as encode_png
-from usar_replay.errors import UsageError
-from usar_replay.record import RecordResult
-from usar_replay.replay import MISSION_TF_KEY, outputs_digest, replay
-from usar_replay.run import open_run
-from usar_replay.settings import DetectorParams, RunSettings, apply_overrides, load
+from usar_replay.core import msgs
+from usar_replay.core.contract import CAMERA_INFO, FIDUCIALS, IMAGE
+from usar_replay.core.errors import UsageError
+from usar_replay.core.settings import DetectorParams, RunSettings, apply_overrides, load
+from usar_replay.log import bag
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.record import RecordResult
+from usar_replay.pipeline.replay import MISSION_TF_KEY, outputs_digest, replay
+from usar_replay.sim.camera import encode_image as encode_png
+from usar_replay.world.detect import decode_image, detect, detect_with_corners
 
 CAMERA_INFO_TOPIC, IMAGE_TOPIC = CAMERA_INFO, IMAGE
 

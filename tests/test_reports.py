@@ -9,9 +9,16 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from usar_replay.grade import Check, GradeReport
-from usar_replay.reports import SCHEMA_VERSION, summary_line, to_csv, to_json, to_junit, to_table
-from usar_replay.settings import Thresholds
+from usar_replay.core.settings import Thresholds
+from usar_replay.grading.grade import Check, GradeReport
+from usar_replay.grading.reports import (
+    SCHEMA_VERSION,
+    summary_line,
+    to_csv,
+    to_json,
+    to_junit,
+    to_table,
+)
 
 T0 = 1_000_000_000
 

@@ -18,15 +18,17 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay import assignment, contract, msgs, scenario
-from usar_replay.errors import InvalidScenario
-from usar_replay.executor import PublishPolicy
-from usar_replay.grade import GradeReport, grade_file
-from usar_replay.record import RecordResult, record
-from usar_replay.replay import outputs_digest, replay
-from usar_replay.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
-from usar_replay.run import open_run
-from usar_replay.settings import RecordSettings, RunSettings
+from usar_replay.core import contract, msgs
+from usar_replay.core.errors import InvalidScenario
+from usar_replay.core.settings import RecordSettings, RunSettings
+from usar_replay.grading import assignment
+from usar_replay.grading.grade import GradeReport, grade_file
+from usar_replay.log.run import open_run
+from usar_replay.node.executor import PublishPolicy
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.pipeline.replay import outputs_digest, replay
+from usar_replay.world import scenario
+from usar_replay.world.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "ros2_final"
 ALL_LINES = {
@@ -125,7 +127,7 @@ def test_the_mission_may_broadcast_base_footprint_but_not_the_simulators_links()
 
 
 def test_simulator_leaves_the_tree_broken_and_publishes_the_origins() -> None:
-    from usar_replay.sim import SimRobot, Simulator
+    from usar_replay.sim.simulator import SimRobot, Simulator
 
     world = ros2_final_world()
     asg = assignment.ROS2_FINAL
@@ -206,7 +208,7 @@ def test_builtin_log_has_the_projects_topics(builtin_log: tuple[Path, RecordResu
 def test_builtin_replay_is_bit_identical_and_grades_the_same(
     builtin_log: tuple[Path, RecordResult],
 ) -> None:
-    from usar_replay.rubric_ros2 import GRADE_TOPICS, Grader
+    from usar_replay.grading.rubric_ros2 import GRADE_TOPICS, Grader
 
     path, _ = builtin_log
     run = open_run(path)

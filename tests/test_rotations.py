@@ -10,8 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from usar_replay import msgs
-from usar_replay.rotations import (
+from usar_replay.core import msgs
+from usar_replay.core.rotations import (
     quat_from_yaw,
     wrap_angle,
     xyzw_from_yaw,

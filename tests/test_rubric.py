@@ -12,8 +12,9 @@ import sys
 
 import pytest
 
-from usar_replay import contract, msgs
-from usar_replay.rubric import (
+from usar_replay.core import contract, msgs
+from usar_replay.core.settings import Thresholds
+from usar_replay.grading.rubric_usar import (
     Disc,
     Grader,
     explorer_home_before_follower,
@@ -27,8 +28,7 @@ from usar_replay.rubric import (
     only_on_detection,
     time_limit,
 )
-from usar_replay.scenario import Marker, RobotStart, Scenario
-from usar_replay.settings import Thresholds
+from usar_replay.world.scenario import Marker, RobotStart, Scenario
 
 S = 1_000_000_000
 EXPLORER_HOME = (0.0, 0.0)
@@ -269,8 +269,9 @@ def test_time_limit_counts_from_the_log_start() -> None:
 
 def test_the_rubric_imports_no_mcap_and_no_simulator() -> None:
     code = (
-        "import sys, usar_replay.rubric; "
-        "bad = [m for m in ('mcap', 'usar_replay.bag', 'pybullet', 'rerun') if m in sys.modules]; "
+        "import sys, usar_replay.grading.rubric_usar; "
+        "bad = [m for m in ('mcap', 'usar_replay.log.bag', 'pybullet', 'rerun')"
+        " if m in sys.modules]; "
         "print(bad)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from usar_replay import scenario as scn
-from usar_replay.errors import InvalidScenario
+from usar_replay.core.errors import InvalidScenario
+from usar_replay.world import scenario as scn
 
 
 def test_course_world_facts() -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from clitools import one_error_line, usar
 
-from usar_replay import scenario as scn
+from usar_replay.world import scenario as scn
 
 COURSE = scn.to_toml(scn.course_world())
 

@@ -1,4 +1,4 @@
-"""The viewer's scene (usar_replay.scene) on hand-made messages: no rerun, no log file.
+"""The viewer's scene (usar_replay.viewer.scene) on hand-made messages: no rerun, no log file.
 
 Each test feeds a few messages built here and checks the columns the viewer would send: where a
 tf frame lands in the entity tree, where a detection's outline lands in the image, which marker a
@@ -14,9 +14,8 @@ import sys
 import numpy as np
 import pytest
 
-from usar_replay import contract, msgs, rotations
-from usar_replay.scenario import Marker, RobotStart, Scenario
-from usar_replay.scene import (
+from usar_replay.core import contract, msgs, rotations
+from usar_replay.viewer.scene import (
     PATH_ROW_PERIOD_NS,
     Scene,
     escape_path_part,
@@ -25,6 +24,7 @@ from usar_replay.scene import (
     project,
     robot_body,
 )
+from usar_replay.world.scenario import Marker, RobotStart, Scenario
 
 S = 1_000_000_000
 OPTICAL_PATH = (
@@ -265,6 +265,9 @@ def test_the_body_is_the_waffle_footprint() -> None:
 
 
 def test_the_scene_imports_no_rerun() -> None:
-    code = "import sys, usar_replay.scene as s; print(sorted({'rerun', 'mcap'} & set(sys.modules)))"
+    code = (
+        "import sys, usar_replay.viewer.scene as s; "
+        "print(sorted({'rerun', 'mcap'} & set(sys.modules)))"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"

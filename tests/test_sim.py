@@ -11,10 +11,10 @@ import cv2
 import numpy as np
 import pytest
 
-from usar_replay import msgs
-from usar_replay.nav import Navigator, NavStatus, OccupancyGrid
-from usar_replay.scenario import course_world
-from usar_replay.sim import FOOTPRINT, Simulator
+from usar_replay.core import msgs
+from usar_replay.sim.simulator import FOOTPRINT, Simulator
+from usar_replay.world.nav import Navigator, NavStatus, OccupancyGrid
+from usar_replay.world.scenario import course_world
 
 # the marker each course target sees, in target order (course-world.md)
 TARGET_MARKER = {0: 0, 1: 1, 2: 3, 3: 2}
@@ -273,7 +273,7 @@ def test_egl_honours_shadow_off_so_hidden_motion_changes_no_pixel() -> None:
 
 
 def test_shadow_switch_refuses_a_file_that_is_not_the_loaded_plugin(tmp_path: Path) -> None:
-    from usar_replay import eglshadow
+    from usar_replay.sim import eglshadow
 
     text = tmp_path / "not-elf.so"
     text.write_text("not an ELF file")

@@ -1,54 +1,84 @@
-"""The package's shape: no import cycles, and a core that loads without the heavy back ends.
+"""The package's shape: folders are layers, each imports only the layers below it, no cycles,
+and the layers a mission process loads never pull in a heavy back end.
 
-Why: the node API and the mission run in processes that need neither the simulator (pybullet),
-the log format (mcap) nor the viewer (rerun); a core module that pulls one of them in makes
-every process pay its import time and its native libraries. And an import cycle works only
-by accident of import order.
+Why: the tree is the architecture a newcomer reads (``usar_replay/<layer>/<module>.py``); these
+rules keep it true. The node API and the mission run in processes that need neither the
+simulator (pybullet), the log format (mcap) nor the viewer (rerun); a module of those layers
+that pulls one in makes every mission process pay for it. An import cycle works only by
+accident of import order.
 
-Imports are read with :mod:`ast`, not by importing, so the graph covers every module.
+Imports are read with :mod:`ast`, not by importing, so the graph covers every module, and
+:func:`violations` takes any tree, so a deliberately misplaced module can be checked in a copy.
 """
 
 from __future__ import annotations
 
 import ast
 import graphlib
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 PACKAGE = "usar_replay"
 ROOT = Path(__file__).resolve().parents[1] / PACKAGE
 
-# Modules every process may import: they must not load a heavy back end. Add new core
-# modules (the node API) here.
-CORE_MODULES = (
-    "msgs",
-    "contract",
-    "settings",
-    "rotations",
-    "errors",
-    "tf_tree",
-    "detect",
-    "nav",
-    "scenario",
-    "variants",
-    # the node API: what a mission process loads (it must stay light and never reach the log)
-    "cdr",
-    "cdrdecode",
-    "node",
-    "executor",
-    "tf2",
-    "navigation",
-    "worker",
-    "sandbox",
-)
+# Each layer and the layers it may import (the package root, for __version__, is open to all).
+# The order is the layers' order: a layer may import only layers listed before it.
+LAYERS: dict[str, frozenset[str]] = {
+    "core": frozenset(),
+    "world": frozenset({"core"}),
+    "log": frozenset({"core", "world"}),
+    "sim": frozenset({"core", "world"}),
+    "node": frozenset({"core", "world"}),
+    "api": frozenset({"core", "world", "node"}),
+    "missions": frozenset({"core", "world", "node", "api"}),
+    "grading": frozenset({"core", "world", "log"}),
+    "pipeline": frozenset({"core", "world", "log", "sim", "node", "grading"}),
+    "viewer": frozenset({"core", "world", "log", "grading"}),
+    "batch": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline"}),
+    "cli": frozenset(
+        {"core", "world", "log", "sim", "node", "api", "grading", "pipeline", "viewer", "batch"}
+    ),
+}
+# What each layer is for, for the message that says where a misplaced module belongs.
+PURPOSE = {
+    "core": "shared facts and codecs (messages, contract, settings, errors, tf buffer, CDR)",
+    "world": "the world as data and the course's infrastructure (scenario, planner, detector)",
+    "log": "the MCAP file (reading, writing, the opened run, info, recover)",
+    "sim": "the pybullet simulator and its camera",
+    "node": "the node API and the mission process",
+    "api": "the one import for mission authors",
+    "missions": "the built-in missions, written on the node API",
+    "grading": "rubrics, grades and their reports",
+    "pipeline": "record and replay",
+    "viewer": "what rerun shows",
+    "batch": "grading a class",
+    "cli": "the usar command",
+}
+# Layers a mission process loads: they must not import a heavy back end, even indirectly.
+LIGHT_LAYERS = ("core", "world", "node", "api", "missions")
 HEAVY = ("pybullet", "mcap", "rerun")
+# The one layer that may import each heavy back end.
+HEAVY_HOME = {"pybullet": "sim", "mcap": "log", "rerun": "viewer"}
 
 
-def _modules() -> dict[str, Path]:
-    return {p.stem: p for p in sorted(ROOT.glob("*.py")) if p.stem != "__init__"}
+def _layer_of(module: str) -> str:
+    """``usar_replay.world.nav`` -> ``world``; ``usar_replay.api`` -> ``api``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def modules(root: Path = ROOT) -> dict[str, Path]:
+    """Every module of the package as its dotted name (``__init__`` files included)."""
+    out: dict[str, Path] = {}
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root.parent).with_suffix("")
+        parts = list(rel.parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        out[".".join(parts)] = path
+    return out
 
 
 def _is_type_checking(node: ast.If) -> bool:
@@ -58,36 +88,42 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-def _targets(node: ast.Import | ast.ImportFrom, modules: dict[str, Path]) -> set[str]:
-    """The package modules one import statement loads."""
-    out: set[str] = set()
+def _targets(node: ast.Import | ast.ImportFrom, mods: dict[str, Path], here: str) -> set[str]:
+    """The package modules (and heavy back ends, as ``!name``) one import statement loads."""
+    names: list[str] = []
     if isinstance(node, ast.Import):
-        for alias in node.names:
-            parts = alias.name.split(".")
-            if parts[0] == PACKAGE and len(parts) > 1 and parts[1] in modules:
-                out.add(parts[1])
-        return out
-    if node.level:  # relative: from . import x / from .x import y
-        base = [PACKAGE] + ([node.module] if node.module else [])
+        names = [a.name for a in node.names]
     else:
-        base = (node.module or "").split(".")
-    if base[0] != PACKAGE:
-        return out
-    if len(base) > 1:
-        if base[1] in modules:
-            out.add(base[1])
-    else:
-        out.update(a.name for a in node.names if a.name in modules)
-    return out
+        if node.level:  # relative: from the module's package, up level - 1
+            pkg = here.split(".") if mods[here].stem == "__init__" else here.split(".")[:-1]
+            base = pkg[: len(pkg) - node.level + 1]
+            module = ".".join(base + ([node.module] if node.module else []))
+        else:
+            module = node.module or ""
+        names = [module] + [f"{module}.{a.name}" for a in node.names]
+    out: set[str] = set()
+    for name in names:
+        top = name.split(".")[0]
+        if top in HEAVY:
+            out.add("!" + top)
+        elif top == PACKAGE:
+            # the longest prefix that is a module of ours
+            parts = name.split(".")
+            for n in range(len(parts), 0, -1):
+                cand = ".".join(parts[:n])
+                if cand in mods:
+                    out.add(cand)
+                    break
+    return out - {here}
 
 
-def import_graph() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
+def import_graph(root: Path = ROOT) -> tuple[dict[str, set[str]], dict[str, set[str]]]:
     """(module-level edges, deferred edges): module-level imports run when the module is
     imported (class bodies and try blocks included); deferred ones are inside functions or
-    under ``if TYPE_CHECKING:`` (never run)."""
-    modules = _modules()
-    top: dict[str, set[str]] = {m: set() for m in modules}
-    deferred: dict[str, set[str]] = {m: set() for m in modules}
+    under ``if TYPE_CHECKING:`` (never run). Heavy back ends appear as ``!pybullet`` etc."""
+    mods = modules(root)
+    top: dict[str, set[str]] = {m: set() for m in mods}
+    deferred: dict[str, set[str]] = {m: set() for m in mods}
 
     def visit(node: ast.AST, name: str, is_deferred: bool) -> None:
         for child in ast.iter_child_nodes(node):
@@ -101,12 +137,56 @@ def import_graph() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
                     visit(ast.Module(body=[sub], type_ignores=[]), name, d)
                 continue
             if isinstance(child, ast.Import | ast.ImportFrom):
-                (deferred if d else top)[name].update(_targets(child, modules) - {name})
+                (deferred if d else top)[name].update(_targets(child, mods, name))
             visit(child, name, d)
 
-    for name, path in modules.items():
+    for name, path in mods.items():
         visit(ast.parse(path.read_text(encoding="utf-8"), str(path)), name, False)
     return top, deferred
+
+
+def _allowed_for(layer: str) -> str:
+    return ", ".join(sorted(LAYERS[layer])) or "nothing of usar's"
+
+
+def _homes_for(needs: str) -> str:
+    """The layers that may import ``needs``: where a module needing it belongs."""
+    return ", ".join(k for k, v in LAYERS.items() if needs in v or k == needs)
+
+
+def violations(root: Path = ROOT) -> list[str]:
+    """Every broken layer rule, one line each, saying where the module belongs."""
+    top, deferred = import_graph(root)
+    out: list[str] = []
+    for mod in sorted(top):
+        layer = _layer_of(mod)
+        rel = modules(root)[mod].relative_to(root.parent)
+        if mod == PACKAGE:
+            continue
+        if layer not in LAYERS:
+            out.append(
+                f"{rel} is in no layer: put it in one of "
+                + ", ".join(f"{k}/ ({v})" for k, v in PURPOSE.items() if k not in ("api",))
+            )
+            continue
+        for dep in sorted(top[mod] | deferred[mod]):
+            if dep.startswith("!"):
+                lib = dep[1:]
+                if HEAVY_HOME[lib] != layer and layer != "cli":
+                    out.append(
+                        f"{rel} imports {lib}: only {HEAVY_HOME[lib]}/ may import it; move the "
+                        f"code that needs {lib} into {HEAVY_HOME[lib]}/"
+                    )
+                continue
+            dep_layer = _layer_of(dep)
+            if dep == PACKAGE or dep_layer == layer:
+                continue
+            if dep_layer not in LAYERS[layer]:
+                out.append(
+                    f"{rel} imports {dep}: the {layer} layer may import only {_allowed_for(layer)};"
+                    f" a module that needs {dep_layer} belongs in {_homes_for(dep_layer)}"
+                )
+    return out
 
 
 def _cycle(graph: dict[str, set[str]]) -> list[str]:
@@ -117,43 +197,100 @@ def _cycle(graph: dict[str, set[str]]) -> list[str]:
     return []
 
 
+def _ours(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    return {m: {d for d in ds if not d.startswith("!")} for m, ds in graph.items()}
+
+
 def test_the_graph_reader_sees_imports() -> None:
-    """A guard against a reader that finds nothing (and so no cycles)."""
+    """A guard against a reader that finds nothing (and so no cycles, no violations)."""
     top, deferred = import_graph()
-    assert "msgs" in top["tf_tree"]
-    assert "rotations" in top["nav"]
-    assert sum(len(v) for v in top.values()) > 20
-    assert any(deferred.values())  # cli.py imports its commands lazily
+    assert "usar_replay.core.msgs" in top["usar_replay.core.tf_tree"]
+    assert "usar_replay.core.rotations" in top["usar_replay.world.nav"]
+    assert "!pybullet" in top["usar_replay.sim.simulator"]
+    assert sum(len(v) for v in top.values()) > 100
+    assert any(deferred.values())  # the cli imports its commands lazily
+
+
+def test_every_module_sits_in_a_layer_and_imports_only_the_layers_below() -> None:
+    problems = violations()
+    assert problems == [], "layer rules broken:\n" + "\n".join(problems)
+
+
+def test_a_misplaced_module_fails_with_where_it_belongs(tmp_path: Path) -> None:
+    """A copy of the package with three deliberate mistakes: each is named, with a fix."""
+    copy = tmp_path / PACKAGE
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "world" / "misplaced.py").write_text(
+        "from usar_replay.log.bag import BagReader\n", encoding="utf-8"
+    )
+    (copy / "core" / "heavy.py").write_text(
+        "def f() -> None:\n    import pybullet\n", encoding="utf-8"
+    )
+    (copy / "stray.py").write_text("X = 1\n", encoding="utf-8")
+    problems = violations(copy)
+    assert len(problems) == 3, problems
+    world, heavy, stray = (
+        next(p for p in problems if p.startswith(f"{PACKAGE}/{f}")) for f in (
+            "world/misplaced.py", "core/heavy.py", "stray.py"
+        )
+    )
+    assert "the world layer may import only core" in world
+    assert "belongs in log, grading, pipeline, viewer, batch, cli" in world
+    assert "only sim/ may import it" in heavy
+    assert "is in no layer" in stray and "world/" in stray
 
 
 def test_no_cycles_among_module_level_imports() -> None:
     top, _ = import_graph()
-    assert _cycle(top) == [], f"import cycle at module level: {' -> '.join(_cycle(top))}"
+    cyc = _cycle(_ours(top))
+    assert cyc == [], f"import cycle at module level: {' -> '.join(cyc)}"
 
 
 def test_no_cycles_counting_deferred_imports_too() -> None:
     """Also the imports inside functions and under TYPE_CHECKING: a cycle there is a design
     smell (two modules that each need the other), even when import order hides it."""
     top, deferred = import_graph()
-    both = {m: top[m] | deferred[m] for m in top}
-    assert _cycle(both) == [], f"import cycle (with deferred imports): {' -> '.join(_cycle(both))}"
+    both = _ours({m: top[m] | deferred[m] for m in top})
+    cyc = _cycle(both)
+    assert cyc == [], f"import cycle (with deferred imports): {' -> '.join(cyc)}"
 
 
-@pytest.mark.parametrize("module", CORE_MODULES)
-def test_core_module_loads_no_heavy_back_end(module: str) -> None:
-    """Imported alone in a fresh interpreter, a core module leaves none of pybullet, mcap,
-    rerun in ``sys.modules``."""
-    assert module in _modules(), f"{module} is listed as core but does not exist"
+LIGHT_MODULES = sorted(m for m in modules() if _layer_of(m) in LIGHT_LAYERS)
+
+
+def test_every_layer_has_an_init_that_says_what_it_is() -> None:
+    for layer in LAYERS:
+        init = ROOT / layer / "__init__.py"
+        if layer in ("api",):
+            continue
+        assert init.is_file(), f"{layer}/ has no __init__.py"
+        doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+        assert doc.startswith(f"{layer}:"), f"{init} must open with '{layer}: what it is'"
+        assert "import" in doc, f"{init} must say what the layer may import"
+
+
+def test_the_light_layers_load_no_heavy_back_end() -> None:
+    """Every module a mission process may load, imported in a fresh interpreter, leaves none
+    of pybullet, mcap, rerun in ``sys.modules`` (one interpreter per module: an import that
+    pulls a back end in indirectly is caught where it starts)."""
+    assert len(LIGHT_MODULES) > 20
     code = (
         "import sys, importlib\n"
-        f"importlib.import_module('{PACKAGE}.{module}')\n"
-        f"heavy = {HEAVY!r}\n"
-        "print(' '.join(sorted({k.split('.')[0] for k in sys.modules} & set(heavy))))\n"
+        "bad = {}\n"
+        "for m in sys.argv[1:]:\n"
+        "    before = {k.split('.')[0] for k in sys.modules}\n"
+        "    importlib.import_module(m)\n"
+        f"    new = {{k.split('.')[0] for k in sys.modules}} & set({HEAVY!r})\n"
+        "    if new: bad[m] = sorted(new)\n"
+        "print(bad)\n"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
-    )
-    assert out.stdout.strip() == "", f"{PACKAGE}.{module} imports {out.stdout.strip()}"
+    # each module alone (a shared interpreter would hide who loaded it first)
+    for mod in LIGHT_MODULES:
+        out = subprocess.run(
+            [sys.executable, "-c", code, mod], capture_output=True, text=True, check=True,
+            timeout=120,
+        )
+        assert out.stdout.strip() == "{}", f"{mod} loads {out.stdout.strip()}"
 
 
 def test_the_package_ships_py_typed() -> None:
@@ -163,3 +300,10 @@ def test_the_package_ships_py_typed() -> None:
     assert (ROOT / "py.typed").is_file()
     project = tomllib.loads((ROOT.parent / "pyproject.toml").read_text(encoding="utf-8"))
     assert "py.typed" in project["tool"]["setuptools"]["package-data"][PACKAGE]
+
+
+def test_every_folder_is_a_package() -> None:
+    """setuptools ships only folders with an ``__init__.py``: a layer without one would be
+    left out of the wheel."""
+    for folder in sorted({p.parent for p in ROOT.rglob("*.py")}):
+        assert (folder / "__init__.py").is_file(), f"{folder} has no __init__.py"

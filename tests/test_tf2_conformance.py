@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import pytest
 
-from usar_replay import msgs
-from usar_replay.tf_tree import (
+from usar_replay.core import msgs
+from usar_replay.core.tf_tree import (
     Buffer,
     ConnectivityException,
     ExtrapolationException,

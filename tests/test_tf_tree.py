@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from usar_replay import msgs
-from usar_replay.tf_tree import (
+from usar_replay.core import msgs
+from usar_replay.core.tf_tree import (
     Buffer,
     ConnectivityException,
     ExtrapolationException,
@@ -174,7 +174,7 @@ def test_a_refusal_logs_every_failing_check_in_tf2_order(
     """The insert checks are one condition on the fast path; a refused transform still logs
     each of tf2's errors that applies, in tf2's order, and leaves no trace in the buffer."""
     b = Buffer()
-    with caplog.at_level("ERROR", logger="usar_replay.tf_tree"):
+    with caplog.at_level("ERROR", logger="usar_replay.core.tf_tree"):
         assert not b.set_transform(msg)
     assert [r.getMessage().split(":")[0] for r in caplog.records] == errors
     assert b.frames() == {}

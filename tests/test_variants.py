@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from usar_replay.errors import InvalidScenario
-from usar_replay.nav import OccupancyGrid
-from usar_replay.scenario import course_world, from_toml, to_toml
-from usar_replay.variants import (
+from usar_replay.core.errors import InvalidScenario
+from usar_replay.world.nav import OccupancyGrid
+from usar_replay.world.scenario import course_world, from_toml, to_toml
+from usar_replay.world.variants import (
     MAX_DRIVE_FRACTION,
     MAX_RANGE,
     check_variant,

@@ -1,7 +1,7 @@
 """`usar view`: the .rrd holds what the log holds, in the tf tree's shape, read back with rerun.
 
 Every check reads the written ``.rrd`` with rerun's own reader (``rerun.chunk.RrdReader``) and
-compares it with the ``.mcap`` read by :class:`usar_replay.bag.BagReader`. Nothing here opens a
+compares it with the ``.mcap`` read by :class:`usar_replay.log.bag.BagReader`. Nothing here opens a
 window or blocks: views go to files, the web server test runs in a subprocess with a timeout.
 """
 
@@ -27,17 +27,17 @@ import pytest
 import rerun as rr
 from clitools import default_signals, one_error_line, usar
 
-from usar_replay import bag, msgs
-from usar_replay.bag import BagReader
 from usar_replay.cli import main
-from usar_replay.contract import IMAGE as CAMERA_TOPIC
-from usar_replay.contract import SCENARIO_ATTACHMENT
-from usar_replay.detect import DetectorParams, detect_with_corners
-from usar_replay.grade import grade_file
-from usar_replay.record import RecordResult
-from usar_replay.run import open_run
-from usar_replay.scene import escape_path_part, frame_entity_path, frame_entity_paths
-from usar_replay.view import (
+from usar_replay.core import msgs
+from usar_replay.core.contract import IMAGE as CAMERA_TOPIC
+from usar_replay.core.contract import SCENARIO_ATTACHMENT
+from usar_replay.grading.grade import grade_file
+from usar_replay.log import bag
+from usar_replay.log.bag import BagReader
+from usar_replay.log.run import open_run
+from usar_replay.pipeline.record import RecordResult
+from usar_replay.viewer.scene import escape_path_part, frame_entity_path, frame_entity_paths
+from usar_replay.viewer.view import (
     Output,
     ViewResult,
     choose_output,
@@ -45,6 +45,7 @@ from usar_replay.view import (
     open_command,
     view_run,
 )
+from usar_replay.world.detect import DetectorParams, detect_with_corners
 
 OPTICAL = (
     "/map/explorer_tf/odom/explorer_tf/base_footprint/explorer_tf/camera_rgb_frame"

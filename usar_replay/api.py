@@ -8,9 +8,8 @@ modules without breaking anyone's mission. What is here is the public, documente
 
 from __future__ import annotations
 
-from usar_replay import contract
-from usar_replay.executor import shutdown
-from usar_replay.msgs import (
+from usar_replay.core import contract
+from usar_replay.core.msgs import (
     ArucoMarkers,
     Bool,
     CameraInfo,
@@ -36,10 +35,11 @@ from usar_replay.msgs import (
     Twist,
     Vector3,
 )
-from usar_replay.navigation import NavigateClient, NavResult, grid_from_msg
-from usar_replay.node import Duration, Node, Parameter, ParameterNotDeclared, Time, Timer
-from usar_replay.rotations import quat_from_yaw, wrap_angle, yaw_from_quat
-from usar_replay.tf2 import (
+from usar_replay.core.rotations import quat_from_yaw, wrap_angle, yaw_from_quat
+from usar_replay.node.executor import shutdown
+from usar_replay.node.navigation import NavigateClient, NavResult
+from usar_replay.node.node import Duration, Node, Parameter, ParameterNotDeclared, Time, Timer
+from usar_replay.node.tf2 import (
     Buffer,
     ConnectivityException,
     ExtrapolationException,
@@ -49,6 +49,7 @@ from usar_replay.tf2 import (
     TransformException,
     TransformListener,
 )
+from usar_replay.world.nav import grid_from_msg
 
 __all__ = [
     "ArucoMarkers",

@@ -13,7 +13,7 @@ The project (the course's ROS 2 edition, one Turtlebot3 ``robot1``), in the cour
   ``final_destination.frame_id``, broadcasts it as the frame ``final_destination``, looks it
   up in ``robot1/odom`` and drives there; then ``shutdown()``.
 
-Driving uses the move_base-like :class:`~usar_replay.navigation.NavigateClient` (given
+Driving uses the move_base-like :class:`~usar_replay.node.navigation.NavigateClient` (given
 ``robot1/base_footprint`` as the base frame) rather than a hand-written controller: it plans
 around the room's obstacles, and it finds the robot through tf (``map -> robot1/odom ->
 robot1/base_footprint``), so, as in the course, nothing moves until the tree is connected.
@@ -24,14 +24,14 @@ method each (:meth:`TargetReacher.destination_frame`, :meth:`TargetReacher.desti
 
 from __future__ import annotations
 
-from usar_replay import contract, msgs
-from usar_replay.detect import detect
-from usar_replay.executor import shutdown
-from usar_replay.navigation import NavigateClient, NavResult
-from usar_replay.node import Node, Time
-from usar_replay.rotations import quat_from_yaw
-from usar_replay.settings import DetectorParams, from_mapping
-from usar_replay.tf2 import Buffer, TransformBroadcaster, TransformException, TransformListener
+from usar_replay.core import contract, msgs
+from usar_replay.core.rotations import quat_from_yaw
+from usar_replay.core.settings import DetectorParams, from_mapping
+from usar_replay.node.executor import shutdown
+from usar_replay.node.navigation import NavigateClient, NavResult
+from usar_replay.node.node import Node, Time
+from usar_replay.node.tf2 import Buffer, TransformBroadcaster, TransformException, TransformListener
+from usar_replay.world.detect import detect
 
 __all__ = ["SEARCH_SPEED", "ArucoNode", "OdomUpdater", "TargetReacher", "main"]
 

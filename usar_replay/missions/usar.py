@@ -31,15 +31,15 @@ import math
 
 import numpy as np
 
-from usar_replay import contract, msgs
-from usar_replay.detect import detect
-from usar_replay.executor import shutdown
-from usar_replay.nav import OccupancyGrid, robot_disc
-from usar_replay.navigation import NavigateClient, NavResult, grid_from_msg
-from usar_replay.node import Node, Time
-from usar_replay.rotations import quat_from_yaw, wrap_angle, yaw_from_quat
-from usar_replay.settings import DetectorParams, MissionSettings, from_mapping
-from usar_replay.tf2 import Buffer, TransformBroadcaster, TransformException, TransformListener
+from usar_replay.core import contract, msgs
+from usar_replay.core.rotations import quat_from_yaw, wrap_angle, yaw_from_quat
+from usar_replay.core.settings import DetectorParams, MissionSettings, from_mapping
+from usar_replay.node.executor import shutdown
+from usar_replay.node.navigation import NavigateClient, NavResult
+from usar_replay.node.node import Node, Time
+from usar_replay.node.tf2 import Buffer, TransformBroadcaster, TransformException, TransformListener
+from usar_replay.world.detect import detect
+from usar_replay.world.nav import OccupancyGrid, grid_from_msg, robot_disc
 
 __all__ = ["ArucoDetect", "Explorer", "Follower", "approach_point", "main"]
 

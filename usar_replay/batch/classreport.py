@@ -1,0 +1,268 @@
+"""A graded class for people and machines: the summary CSV and table, Gradescope's results.json.
+
+Everything is read from the runs' ``<world>.grade.json`` files (format ``usar-batch-grade/1``),
+so the summary of a resumed batch is the same as that of a batch run in one go. Teams and worlds
+keep the batch's order (teams sorted by name, worlds as given); nothing depends on which run
+finished first.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from usar_replay.batch.plan import GRADE_FORMAT, Plan, read_json
+
+__all__ = [
+    "GRADESCOPE_VISIBILITY",
+    "OUTCOME_MARKS",
+    "ClassGrades",
+    "collect",
+    "gradescope_results",
+    "to_csv",
+    "to_table",
+]
+
+OUTCOME_MARKS = {
+    "done": "",
+    "time_limit": "T",
+    "max_sim_time": "T",
+    "crashed": "C",
+    "hung": "H",
+    "out_of_memory": "M",
+    "refused": "R",
+    "wall_limit": "W",
+    "interrupted": "I",
+    "no_mission": "N",
+    "": "?",
+}
+"""The letter after a world's points in the table when the run did not end ``done``."""
+OUTCOME_WORDS = {
+    "done": "the mission finished",
+    "time_limit": "stopped at the time limit",
+    "max_sim_time": "stopped at --max-sim-time",
+    "crashed": "the mission's code raised an exception",
+    "hung": "a callback did not return in time (or the CPU-time limit)",
+    "out_of_memory": "the mission ran out of memory",
+    "refused": "the mission published something it may not",
+    "wall_limit": "the run took longer than its wall-clock limit",
+    "interrupted": "the run was interrupted",
+    "no_mission": "no mission found in the submission",
+    "": "not run",
+}
+GRADESCOPE_VISIBILITY = ("visible", "hidden", "after_due_date", "after_published")
+
+
+@dataclass(frozen=True, slots=True)
+class Cell:
+    """One (team, world) grade, or a missing one (``graded`` False: not run yet, or failed)."""
+
+    graded: bool
+    outcome: str
+    points: float
+    max_points: float
+    grade: dict[str, Any]
+
+
+@dataclass(frozen=True, slots=True)
+class ClassGrades:
+    teams: list[str]
+    worlds: list[str]
+    cells: dict[tuple[str, str], Cell]
+    problems: dict[str, str]
+    """Teams whose submission has no mission: why."""
+
+    def total(self, team: str) -> tuple[float, float]:
+        cells = [self.cells[(team, w)] for w in self.worlds]
+        return sum(c.points for c in cells), sum(c.max_points for c in cells)
+
+
+def collect(plan: Plan, max_points: dict[str, float]) -> ClassGrades:
+    """Read every run's grade; ``max_points`` per world fills runs without one."""
+    teams = [s.team for s in plan.submissions]
+    worlds = [w.name for w in plan.worlds]
+    problems = {s.team: s.problem for s in plan.submissions if s.problem}
+    cells: dict[tuple[str, str], Cell] = {}
+    for team in teams:
+        for world in worlds:
+            full = max_points.get(world, 0.0)
+            if team in problems:
+                cells[(team, world)] = Cell(True, "no_mission", 0.0, full, {})
+                continue
+            g = read_json(plan.out_root / team / f"{world}.grade.json")
+            if g is None or g.get("format") != GRADE_FORMAT:
+                cells[(team, world)] = Cell(False, "", 0.0, full, {})
+                continue
+            cells[(team, world)] = Cell(
+                True,
+                str(g.get("outcome", "")),
+                float(g.get("points", 0.0)),
+                float(g.get("max_points", full)),
+                g,
+            )
+    return ClassGrades(teams, worlds, cells, problems)
+
+
+def _num(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def to_csv(grades: ClassGrades) -> str:
+    """One row per team: points per world, total, maximum, and the runs that did not end
+    ``done`` (``world: outcome``)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["team", *grades.worlds, "total", "max_total", "problems"])
+    for team in grades.teams:
+        cells = [grades.cells[(team, wn)] for wn in grades.worlds]
+        total, full = grades.total(team)
+        notes = [
+            f"{wn}: {c.outcome or 'not graded'}"
+            for wn, c in zip(grades.worlds, cells, strict=True)
+            if c.outcome != "done"
+        ]
+        if team in grades.problems:
+            notes = [grades.problems[team]]
+        w.writerow(
+            [
+                team,
+                *(_num(c.points) if c.graded else "" for c in cells),
+                _num(total),
+                _num(full),
+                "; ".join(notes),
+            ]
+        )
+    return buf.getvalue()
+
+
+def to_table(grades: ClassGrades, width: int = 100) -> str:
+    """A table for people that fits ``width`` columns: points per world with a letter for a
+    run that did not finish (legend below), the total; worlds that do not fit are left to the
+    CSV and said so."""
+    name_w = min(max([4, *(len(t) for t in grades.teams)]), 24)
+    total_w = 13
+    col_ws = [max(len(w), 6) for w in grades.worlds]
+    room = width - name_w - total_w - 2
+    shown = 0
+    used = 0
+    for cw in col_ws:
+        if used + cw + 2 > room:
+            break
+        used += cw + 2
+        shown += 1
+    worlds = grades.worlds[:shown]
+    head = "team".ljust(name_w) + "".join(
+        "  " + w.rjust(cw) for w, cw in zip(worlds, col_ws, strict=False)
+    )
+    lines = [head + "  " + "total".rjust(total_w - 2)]
+    marks_used: set[str] = set()
+    for team in grades.teams:
+        row = (team[: name_w - 1] + "~" if len(team) > name_w else team).ljust(name_w)
+        for w, cw in zip(worlds, col_ws, strict=False):
+            c = grades.cells[(team, w)]
+            mark = OUTCOME_MARKS.get(c.outcome, "?") if c.graded else "-"
+            marks_used.add(mark)
+            text = (_num(c.points) if c.graded else "") + (mark or " ")
+            row += "  " + text.rjust(cw)
+        total, full = grades.total(team)
+        row += "  " + f"{_num(total)}/{_num(full)}".rjust(total_w - 2)
+        lines.append(row.rstrip())
+    legend = [
+        f"{m} {OUTCOME_WORDS[o]}"
+        for o, m in OUTCOME_MARKS.items()
+        if m and m in marks_used and OUTCOME_MARKS.get(o) == m and o not in ("max_sim_time", "")
+    ]
+    if "?" in marks_used:
+        legend.append("? outcome unknown")
+    if "-" in marks_used:
+        legend.append("- not graded (see the batch's errors)")
+    if legend:
+        lines.append(_wrap("runs that did not finish: " + "; ".join(legend), width))
+    if shown < len(grades.worlds):
+        lines.append(f"({len(grades.worlds) - shown} more worlds in summary.csv)")
+    return "\n".join(lines)
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width=width, subsequent_indent="  "))
+
+
+def _check_lines(grade: dict[str, Any]) -> list[str]:
+    out = []
+    for c in grade.get("checks", []):
+        verdict = "PASS" if c.get("passed") else "FAIL"
+        pts = f"{_num(float(c.get('points', 0)))}/{_num(float(c.get('max_points', 0)))}"
+        out.append(f"{verdict} {pts:>9}  {c.get('description', c.get('id', ''))}")
+        if not c.get("passed") and c.get("measured"):
+            out.append(f"               measured: {c['measured']}")
+    return out
+
+
+def gradescope_results(
+    grades: ClassGrades,
+    team: str,
+    sources: dict[str, str],
+    *,
+    execution_time_s: float,
+    visibility: str = "visible",
+) -> dict[str, Any]:
+    """Gradescope's autograder ``results.json`` for one team: a test per world (its points,
+    ``passed`` at full marks, the rubric lines and the outcome as output)."""
+    tests = []
+    for number, world in enumerate(grades.worlds, start=1):
+        c = grades.cells[(team, world)]
+        lines = [f"World {world} ({sources.get(world, world)})"]
+        lines.append(f"Outcome: {c.outcome or 'not graded'} - {OUTCOME_WORDS.get(c.outcome, '')}")
+        if team in grades.problems:
+            lines.append(grades.problems[team])
+        reason = str(c.grade.get("outcome_reason", "")) if c.outcome != "done" else ""
+        if reason:
+            lines += ["", reason.rstrip()[-4000:]]
+        if c.grade:
+            lines += ["", *_check_lines(c.grade)]
+        tests.append(
+            {
+                "name": f"{world}: the course rubric",
+                "number": str(number),
+                "score": round(c.points, 3),
+                "max_score": round(c.max_points, 3),
+                "status": "passed" if c.graded and c.points >= c.max_points > 0 else "failed",
+                "output": "\n".join(lines),
+                "visibility": visibility,
+            }
+        )
+    total, full = grades.total(team)
+    failed = [w for w in grades.worlds if grades.cells[(team, w)].outcome != "done"]
+    summary = f"usar batch: {_num(total)}/{_num(full)} points on {len(grades.worlds)} worlds"
+    if failed:
+        summary += f"; did not finish on: {', '.join(failed)}"
+    return {
+        "score": round(total, 3),
+        "max_score": round(full, 3),
+        "execution_time": round(execution_time_s),
+        "output": summary,
+        "visibility": visibility,
+        "stdout_visibility": "hidden",
+        "tests": tests,
+    }
+
+
+def gradescope_json(results: dict[str, Any]) -> str:
+    return json.dumps(results, indent=2, sort_keys=True) + "\n"
+
+
+def team_wall_s(plan: Plan, team: str, worlds: Sequence[str]) -> float:
+    """Sum of the team's recorded run times (what Gradescope shows as ``execution_time``)."""
+    total = 0.0
+    for w in worlds:
+        rec = read_json(Path(plan.out_root) / team / f"{w}.run.json")
+        if rec is not None:
+            total += float(rec.get("wall_s", 0.0))
+    return total

@@ -1,0 +1,431 @@
+"""`usar batch`: grade a class, every team's mission on every world, resumably.
+
+Why this shape: a class is 30-100 teams and a fair grade uses several worlds per team; that is
+hours of CPU, cut off now and then (a laptop lid, Ctrl-C, a cluster node lost). So the batch is
+a plan of independent runs, each one (team, world) pair that writes only its own files, and a
+finished run is recognised from its files alone:
+
+``OUT/<team>/<world>.mcap``
+    the log (``usar record``'s, through the same code);
+``OUT/<team>/<world>.run.json``
+    the run's manifest entry, written last: the inputs' digests (the team's code, the world, the
+    settings and limits, the usar version), the log's size and sha256, the outcome;
+``OUT/<team>/<world>.grade.json``
+    the grade (format ``usar-batch-grade/1``, docs/batch.md), tied to the log by its sha256;
+``OUT/<team>/<world>.output.txt``
+    what the mission printed (and the recorder's own messages).
+
+A run whose manifest entry matches the current inputs and whose log has the recorded size is
+finished and is not run again; one whose grade is missing or stale is only graded again; any
+other is recorded from scratch (a log left by a run cut off is replaced). Every file is written
+under a temporary name and renamed (:mod:`usar_replay.core.outfiles`), so a cut never leaves a file
+that looks finished.
+
+The runs themselves are executed by an engine (:mod:`usar_replay.batch.engines`: a local pool or
+Ray), each in its own process (:mod:`usar_replay.batch.run_one`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import tomllib
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from usar_replay import __version__
+from usar_replay.core.errors import UsageError
+
+__all__ = [
+    "GRADE_FORMAT",
+    "RUN_FORMAT",
+    "Limits",
+    "Plan",
+    "RunJob",
+    "RunResult",
+    "Submission",
+    "World",
+    "discover",
+    "make_plan",
+    "parse_seeds",
+    "submission_digest",
+]
+
+RUN_FORMAT = "usar-batch-run/1"
+GRADE_FORMAT = "usar-batch-grade/1"
+CONFIG_FILE = "usar.toml"
+DEFAULT_MISSION_FILE = "mission.py"
+WORK_DIR = ".work"
+_NAME = re.compile(r"[^A-Za-z0-9._-]+")
+_SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
+
+
+@dataclass(frozen=True, slots=True)
+class Submission:
+    """One team: a sub-folder or a ``.py`` file of the submissions folder."""
+
+    team: str
+    path: Path
+    """The folder (or the single file) the team handed in: its files are the team's own."""
+    target: str
+    """The mission target for ``usar record --mission`` (an absolute ``.py`` path, maybe with
+    ``:function``); empty when the submission has none (:attr:`problem` says why)."""
+    sha256: str
+    """Digest of every file of the submission (sorted relative paths and bytes)."""
+    problem: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class World:
+    """One world every team is graded on: a seeded variant or a scenario file."""
+
+    name: str
+    """``seed3``, or the scenario file's stem: the run's file names."""
+    scenario_toml: str
+    """The scenario as TOML (what the run loads; its digest is the world's identity)."""
+    source: str
+    """Where it came from, for people (``course world, seed 3``, a file path)."""
+
+    @property
+    def sha256(self) -> str:
+        return hashlib.sha256(self.scenario_toml.encode()).hexdigest()
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """What one run may use. Wall-clock limits decide verdicts only, never a logged byte."""
+
+    tick_timeout_s: float = 10.0
+    """Wall seconds one tick's callbacks may take (past it: ``hung``)."""
+    startup_timeout_s: float = 60.0
+    """Wall seconds for importing the mission and running its ``main()``."""
+    memory_mb: int = 4096
+    """Address-space limit of the mission process in MiB (past it: ``out_of_memory``)."""
+    cpu_s: int = 1800
+    """CPU-time limit of the mission process in seconds (past it: ``hung``)."""
+    wall_s: float = 3600.0
+    """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
+    sandbox: bool = True
+    """Keep the mission to its own files (usar_replay.node.sandbox)."""
+
+
+@dataclass(frozen=True, slots=True)
+class RunJob:
+    """One (team, world) run, as plain data: it crosses a process boundary and Ray as JSON."""
+
+    team: str
+    world: str
+    target: str
+    submission_path: str
+    scenario_toml: str
+    settings_toml: str
+    thresholds_toml: str
+    limits: dict[str, Any]
+    team_dir: str
+    out_root: str
+    submissions_root: str
+    inputs: dict[str, str]
+    grade_only: bool = False
+
+    @property
+    def inputs_key(self) -> str:
+        return _key(self.inputs)
+
+    @property
+    def thresholds_sha256(self) -> str:
+        return hashlib.sha256(self.thresholds_toml.encode()).hexdigest()
+
+    def path(self, suffix: str) -> Path:
+        """``<team_dir>/<world><suffix>`` (``.mcap``, ``.run.json``, ``.grade.json``, ...)."""
+        return Path(self.team_dir) / f"{self.world}{suffix}"
+
+    @property
+    def work_dir(self) -> Path:
+        return Path(self.team_dir) / WORK_DIR / self.world
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> RunJob:
+        return cls(**json.loads(text))
+
+
+@dataclass(frozen=True, slots=True)
+class RunResult:
+    """What an engine hands back for one run (plain data)."""
+
+    team: str
+    world: str
+    state: str
+    """``graded`` (recorded or re-graded now), ``finished`` (done before, skipped), ``error``
+    (usar could not record or grade it: it is redone next time), ``interrupted``."""
+    outcome: str = ""
+    points: float = 0.0
+    max_points: float = 0.0
+    wall_s: float = 0.0
+    error: str = ""
+
+    @property
+    def failed(self) -> bool:
+        """Did the team's code fail here (not done) or usar (error)?"""
+        return self.state == "error" or self.outcome not in ("done", "")
+
+
+@dataclass(slots=True)
+class Plan:
+    """Every run of a batch and what each needs: record, grade only, or nothing."""
+
+    out_root: Path
+    submissions: list[Submission]
+    worlds: list[World]
+    jobs: list[RunJob] = field(default_factory=list)
+    """The runs to execute (recording or grading only)."""
+    finished: list[RunResult] = field(default_factory=list)
+    """Runs finished before, with their grades."""
+    invalid: list[RunResult] = field(default_factory=list)
+    """Runs of submissions without a mission (0 points, nothing to run)."""
+
+    @property
+    def total(self) -> int:
+        return len(self.submissions) * len(self.worlds)
+
+
+def _key(data: dict[str, str]) -> str:
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+
+
+def team_name(raw: str) -> str:
+    """A file-name-safe team name (letters, digits, ``. _ -``)."""
+    name = _NAME.sub("_", raw).strip("._") or "team"
+    return name
+
+
+def submission_digest(path: Path) -> str:
+    """sha256 over every file of a submission (relative path and bytes, sorted), so that a
+    change in any helper module reruns the team; caches and hidden files are left out."""
+    h = hashlib.sha256()
+    if path.is_file():
+        h.update(path.read_bytes())
+        return h.hexdigest()
+    files = []
+    for root, dirs, names in os.walk(path):
+        dirs[:] = sorted(d for d in dirs if d not in _SKIP_DIRS and not d.startswith("."))
+        files += [Path(root) / n for n in names if not n.startswith(".") and not n.endswith(".pyc")]
+    for f in sorted(files, key=lambda p: p.relative_to(path).as_posix()):
+        rel = f.relative_to(path).as_posix().encode()
+        data = f.read_bytes()
+        h.update(len(rel).to_bytes(4, "little") + rel + len(data).to_bytes(8, "little") + data)
+    return h.hexdigest()
+
+
+def _folder_target(folder: Path) -> tuple[str, str]:
+    """(target, problem) of a team folder: ``usar.toml``'s ``[mission] target`` or
+    ``mission.py``."""
+    config = folder / CONFIG_FILE
+    if config.is_file():
+        try:
+            data = tomllib.loads(config.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+            return "", f"{CONFIG_FILE} is not valid TOML: {err}"
+        spec = data.get("mission", {}).get("target") if isinstance(data, dict) else None
+        if not isinstance(spec, str) or not spec.strip():
+            return "", f'{CONFIG_FILE} has no [mission] target = "FILE.py[:function]"'
+        file_part, colon, func = spec.strip().partition(":")
+        file = (folder / file_part).resolve()
+        if not file.is_relative_to(folder.resolve()):
+            return "", f"{CONFIG_FILE}: target {spec!r} is outside the team's folder"
+        if file.suffix != ".py" or not file.is_file():
+            return "", f"{CONFIG_FILE}: target {spec!r}: no such .py file in the team's folder"
+        return str(file) + (f":{func}" if colon and func else ""), ""
+    mission = folder / DEFAULT_MISSION_FILE
+    if mission.is_file():
+        return str(mission.resolve()), ""
+    return "", f"no {DEFAULT_MISSION_FILE} and no {CONFIG_FILE} in the team's folder"
+
+
+def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
+    """The teams of a submissions folder, sorted by name: each ``.py`` file and each sub-folder
+    (its ``mission.py``, or the ``[mission] target`` of its ``usar.toml``). Names starting with
+    ``.`` or ``_`` are skipped; a folder without a mission is a team with a :attr:`problem`."""
+    root = Path(submissions_dir)
+    if not root.is_dir():
+        raise UsageError(f"{root}: not a directory; give the folder of submissions")
+    subs: list[Submission] = []
+    seen: dict[str, str] = {}
+    for entry in sorted(root.iterdir(), key=lambda p: p.name):
+        if entry.name.startswith((".", "_")):
+            continue
+        if entry.is_file() and entry.suffix == ".py":
+            raw, target, problem = entry.stem, str(entry.resolve()), ""
+        elif entry.is_dir():
+            raw = entry.name
+            target, problem = _folder_target(entry)
+        else:
+            continue
+        team = team_name(raw)
+        if team in seen:
+            raise UsageError(
+                f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
+            )
+        seen[team] = entry.name
+        subs.append(Submission(team, entry.resolve(), target, submission_digest(entry), problem))
+    if not subs:
+        raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
+    return subs
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``0-4`` -> [0, 1, 2, 3, 4]; ``0,3,7-8`` -> [0, 3, 7, 8] (sorted, no repeats)."""
+    seeds: set[int] = set()
+    for part in text.split(","):
+        part = part.strip()
+        m = re.fullmatch(r"(\d+)(?:-(\d+))?", part)
+        if not m:
+            raise UsageError(f"--seeds {text!r}: expected N, N-M or a comma list, e.g. 0-4")
+        lo, hi = int(m.group(1)), int(m.group(2) or m.group(1))
+        if hi < lo or hi - lo > 10_000:
+            raise UsageError(f"--seeds {text!r}: {part} is not a range from low to high")
+        seeds.update(range(lo, hi + 1))
+    return sorted(seeds)
+
+
+def make_worlds(seeds: Sequence[int], scenario_files: Sequence[str]) -> list[World]:
+    """The worlds: each seed as a variant of the course world, then each scenario file (the
+    course world alone when neither is given)."""
+    from usar_replay.world.scenario import course_world, load, to_toml
+
+    worlds: list[World] = []
+    if seeds:
+        from usar_replay.world.variants import make_variant
+
+        base = course_world()
+        for s in seeds:
+            worlds.append(World(f"seed{s}", to_toml(make_variant(base, s)), f"course, seed {s}"))
+    for f in scenario_files:
+        worlds.append(World(team_name(Path(f).stem), to_toml(load(f)), str(f)))
+    if not worlds:
+        worlds.append(World("course", to_toml(course_world()), "the course world"))
+    names = [w.name for w in worlds]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise UsageError(f"two worlds are named {dup[0]!r}; give the scenario files other names")
+    return worlds
+
+
+def read_json(path: Path) -> dict[str, Any] | None:
+    """A JSON object, or None for a file that is missing or not one (a cut write cannot be
+    one: writes are atomic; a hand-edited file can)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def finished_record(job: RunJob) -> dict[str, Any] | None:
+    """The run's manifest entry when the run is finished for these inputs (else None)."""
+    rec = read_json(job.path(".run.json"))
+    if rec is None or rec.get("format") != RUN_FORMAT or rec.get("inputs_key") != job.inputs_key:
+        return None
+    log = job.path(".mcap")
+    try:
+        if log.stat().st_size != rec.get("log_bytes"):
+            return None
+    except OSError:
+        return None
+    return rec
+
+
+def current_grade(job: RunJob, record: dict[str, Any]) -> dict[str, Any] | None:
+    """The run's grade when it grades this very log with these thresholds (else None)."""
+    grade = read_json(job.path(".grade.json"))
+    if (
+        grade is None
+        or grade.get("format") != GRADE_FORMAT
+        or grade.get("log_sha256") != record.get("log_sha256")
+        or grade.get("thresholds_sha256") != job.thresholds_sha256
+    ):
+        return None
+    return grade
+
+
+def make_plan(
+    submissions: Sequence[Submission],
+    worlds: Sequence[World],
+    out_root: str | os.PathLike[str],
+    *,
+    settings_toml: str,
+    thresholds_toml: str = "",
+    limits: Limits | None = None,
+    submissions_root: str | os.PathLike[str],
+) -> Plan:
+    """Every (team, world) run and what it needs, judged from the files already in ``out_root``."""
+    limits = limits or Limits()
+    out = Path(out_root).resolve()
+    plan = Plan(out, list(submissions), list(worlds))
+    limits_dict = asdict(limits)
+    settings_sha = hashlib.sha256(
+        (settings_toml + json.dumps(limits_dict, sort_keys=True)).encode()
+    ).hexdigest()
+    for sub in submissions:
+        for world in worlds:
+            job = RunJob(
+                team=sub.team,
+                world=world.name,
+                target=sub.target,
+                submission_path=str(sub.path),
+                scenario_toml=world.scenario_toml,
+                settings_toml=settings_toml,
+                thresholds_toml=thresholds_toml,
+                limits=limits_dict,
+                team_dir=str(out / sub.team),
+                out_root=str(out),
+                submissions_root=str(Path(submissions_root).resolve()),
+                inputs={
+                    "mission_sha256": sub.sha256,
+                    "mission_target": _relative_target(sub),
+                    "scenario_sha256": world.sha256,
+                    "settings_sha256": settings_sha,
+                    "usar_version": __version__,
+                },
+            )
+            if sub.problem:
+                plan.invalid.append(
+                    RunResult(sub.team, world.name, "graded", "no_mission", error=sub.problem)
+                )
+                continue
+            record = finished_record(job)
+            if record is None:
+                plan.jobs.append(job)
+                continue
+            grade = current_grade(job, record)
+            if grade is None:
+                plan.jobs.append(RunJob(**{**asdict(job), "grade_only": True}))
+                continue
+            plan.finished.append(
+                RunResult(
+                    sub.team,
+                    world.name,
+                    "finished",
+                    str(grade.get("outcome", "")),
+                    float(grade.get("points", 0.0)),
+                    float(grade.get("max_points", 0.0)),
+                    float(record.get("wall_s", 0.0)),
+                )
+            )
+    return plan
+
+
+def _relative_target(sub: Submission) -> str:
+    """The target relative to the submission (a moved submissions folder is the same input)."""
+    if not sub.target:
+        return ""
+    file_part, colon, func = sub.target.partition(":")
+    base = sub.path.parent if sub.path.is_file() else sub.path
+    rel = Path(file_part).relative_to(base).as_posix()
+    return rel + (f":{func}" if colon else "")

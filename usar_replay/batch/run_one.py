@@ -1,0 +1,230 @@
+"""One batch run in its own process: record a team's mission on a world, grade it, write the
+run's files. ``python -m usar_replay.batch.run_one`` reads the
+:class:`~usar_replay.batch.plan.RunJob` as JSON on stdin.
+
+Why a process of its own (started by :mod:`usar_replay.batch.engines`): the recorder holds a
+pybullet world and an open log; a crash in it, a run past its wall-clock limit or a Ctrl-C ends this
+process only, and the engine can kill it and its mission process as one process group. The
+working directory is the run's own scratch folder; the mission process (started by
+:func:`usar_replay.pipeline.record.record`) inherits it and the limits of :class:`MissionLimits`.
+
+Signals: SIGTERM means "past the wall-clock limit": the log is closed (marked interrupted), graded
+as far as it goes, and the run is finished with the outcome ``wall_limit``. SIGINT (Ctrl-C) means
+"cut off": the log is closed and the process exits 130 without a manifest entry, so the next
+batch redoes the run. Exit 0: the run's files are written.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from usar_replay.batch.plan import GRADE_FORMAT, RUN_FORMAT, RunJob, finished_record
+from usar_replay.core.errors import UsarError
+from usar_replay.core.outfiles import write_text
+
+__all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
+
+
+class WallLimit(KeyboardInterrupt):
+    """SIGTERM from the engine: the run is past its wall-clock limit. A KeyboardInterrupt so
+    that the recorder closes the log the way it does for Ctrl-C."""
+
+
+def _on_sigterm(_signum: int, _frame: object) -> None:
+    raise WallLimit
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any]:
+    """The grade of one log as plain data: the only place that knows grade.py's names (so a
+    rename there is a fix here). A log that cannot be graded at all (the mission crashed before
+    the first tick, no log) gets every line of the rubric failed with 0 points."""
+    from usar_replay.grading.grade import Grader, grade_file, load_thresholds
+    from usar_replay.world.scenario import from_toml
+
+    thresholds = None
+    if thresholds_toml:
+        tmp = Path("thresholds.toml")
+        tmp.write_text(thresholds_toml, encoding="utf-8")
+        thresholds = load_thresholds(tmp)
+    try:
+        report = grade_file(log, thresholds)
+        zero = False
+    except UsarError as err:
+        report = Grader(from_toml(scenario_toml), thresholds).report(
+            str(log), log_complete=False, log_problem=str(err)
+        )
+        zero = True
+    checks: list[dict[str, Any]] = [
+        {
+            "id": c.id,
+            "description": c.description,
+            "passed": bool(c.passed) and not zero,
+            "points": 0.0 if zero else round(c.points, 3),
+            "max_points": round(c.max_points, 3),
+            "measured": c.measured,
+        }
+        for c in report.checks
+    ]
+    return {
+        "points": round(sum(float(c["points"]) for c in checks), 3),
+        "max_points": round(sum(float(c["max_points"]) for c in checks), 3),
+        "log_complete": report.log_complete,
+        "log_problem": report.log_problem,
+        "checks": checks,
+    }
+
+
+def grade_run(job: RunJob, record: dict[str, Any]) -> dict[str, Any]:
+    """Grade the run's log and write ``<world>.grade.json`` (atomically)."""
+    log = job.path(".mcap")
+    grade = {
+        "format": GRADE_FORMAT,
+        "team": job.team,
+        "world": job.world,
+        "outcome": record["outcome"],
+        "outcome_reason": record["outcome_reason"],
+        "log": log.name,
+        "log_sha256": record["log_sha256"],
+        "thresholds_sha256": job.thresholds_sha256,
+        **rubric(log, job.scenario_toml, job.thresholds_toml),
+    }
+    text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
+    write_text(job.path(".grade.json"), text, overwrite=True)
+    return grade
+
+
+def _mission_limits(job: RunJob) -> Any:
+    from usar_replay.node.sandbox import SandboxPolicy
+    from usar_replay.node.worker import MissionLimits
+
+    lim = job.limits
+    sandbox = None
+    if lim.get("sandbox", True):
+        own = str(Path(job.submission_path).resolve())
+        work = str(job.work_dir.resolve())
+        sandbox = SandboxPolicy(
+            read_roots=(own,),
+            write_roots=(work,),
+            deny_roots=(job.out_root, job.submissions_root),
+            own_roots=(own, work),
+        )
+    return MissionLimits(
+        tick_timeout_s=float(lim["tick_timeout_s"]),
+        startup_timeout_s=float(lim["startup_timeout_s"]),
+        memory_mb=int(lim["memory_mb"]),
+        cpu_s=int(lim["cpu_s"]),
+        sandbox=sandbox,
+    )
+
+
+def record_run(job: RunJob) -> dict[str, Any]:
+    """Record the run (replacing whatever a cut-off run left) and write its manifest entry.
+
+    Raises KeyboardInterrupt (not WallLimit) when cut off: then nothing is written."""
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.core.settings import from_toml as settings_from_toml
+    from usar_replay.pipeline.record import record
+    from usar_replay.world.scenario import from_toml
+
+    log = job.path(".mcap")
+    for stale in (job.path(".run.json"), job.path(".grade.json"), log):
+        stale.unlink(missing_ok=True)
+    scenario = from_toml(job.scenario_toml, source=f"world {job.world}")
+    settings = settings_from_toml(RunSettings, job.settings_toml, source="batch settings")
+    parent = os.getppid()
+
+    def watchdog(_progress: object) -> None:
+        # an engine that died (a killed Ray worker) leaves this process to its init: stop
+        if os.getppid() != parent:
+            raise KeyboardInterrupt
+
+    start = time.perf_counter()  # wall time is for people and the wall-limit verdict only
+    try:
+        result = record(
+            scenario, log, settings, watchdog, mission=job.target, limits=_mission_limits(job)
+        )
+        outcome, reason = result.outcome, result.outcome_reason
+        sim_s = result.sim_duration_s
+    except WallLimit:
+        wall = float(job.limits["wall_s"])
+        outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"
+        sim_s = 0.0
+    wall_s = time.perf_counter() - start
+    rec = {
+        "format": RUN_FORMAT,
+        "team": job.team,
+        "world": job.world,
+        "inputs": job.inputs,
+        "inputs_key": job.inputs_key,
+        "log": log.name,
+        "log_bytes": log.stat().st_size if log.exists() else 0,
+        "log_sha256": _sha256(log) if log.exists() else "",
+        "outcome": outcome,
+        "outcome_reason": reason,
+        "sim_duration_s": round(sim_s, 3),
+        "wall_s": round(wall_s, 3),
+    }
+    return rec
+
+
+def _write_record(job: RunJob, rec: dict[str, Any]) -> None:
+    text = json.dumps(rec, indent=2, sort_keys=True) + "\n"
+    write_text(job.path(".run.json"), text, overwrite=True)
+
+
+def run(job: RunJob) -> dict[str, Any]:
+    """Record (unless only the grade is missing), grade, then write the manifest entry last."""
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    record = finished_record(job) if job.grade_only else None
+    if record is None:
+        record = record_run(job)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the grade is quick: let it finish
+        job.path(".run.json").unlink(missing_ok=True)
+        grade = grade_run(job, record)
+        _write_record(job, record)
+    else:
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        grade = grade_run(job, record)
+    return {
+        "outcome": grade["outcome"],
+        "points": grade["points"],
+        "max_points": grade["max_points"],
+        "wall_s": record["wall_s"],
+    }
+
+
+def main() -> int:
+    job = RunJob.from_json(sys.stdin.read())
+    try:
+        run(job)
+    except KeyboardInterrupt:
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+
+
+def max_points(scenario_toml: str) -> float:
+    """The rubric's full marks on a world (for runs that have no grade)."""
+    from usar_replay.grading.grade import Grader
+    from usar_replay.world.scenario import from_toml
+
+    report = Grader(from_toml(scenario_toml)).report("", log_complete=False)
+    return round(sum(c.max_points for c in report.checks), 3)

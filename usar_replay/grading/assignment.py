@@ -1,0 +1,245 @@
+"""Assignments: what differs between the course's US&R mission and its ROS 2 final project.
+
+Why one value per assignment: recording, replay, grading and viewing are the same machinery for
+every assignment (sim -> mission process -> sim, one MCAP, per-tick replay, a streaming rubric);
+only names and a few rules differ: which robots there are and what their frames are called,
+which robot carries the camera, what the simulator publishes (a mission's inputs) and which tf
+links it owns (a mission may not broadcast them), the parameters a mission reads, the built-in
+reference mission, the rubric. A scenario names its assignment (``assignment = "ros2-final"``,
+default ``usar``); :func:`of` gives the :class:`Assignment`, and record, replay and grade take
+everything assignment-specific from it.
+
+The rubric travels as a factory (:attr:`Assignment.rubric`): the assignment says which rubric
+judges it, and the rubric module is imported when first asked for (``usar info`` and the viewer
+read assignments without grading).
+
+The worlds and variant makers (:mod:`usar_replay.world.ros2_world`,
+:mod:`usar_replay.world.variants`: the planner, numpy and scipy) are imported when first called,
+not here: ``usar grade`` reads an assignment only for its rubric and would otherwise spend most
+of its start-up loading scipy.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from usar_replay.core import contract
+from usar_replay.core.settings import RunSettings
+from usar_replay.grading.verdict import Rubric
+from usar_replay.world.scenario import Scenario, course_world
+
+if TYPE_CHECKING:
+    from usar_replay.world.ros2_world import Ros2Task
+
+__all__ = [
+    "ASSIGNMENTS",
+    "Assignment",
+    "ROS2_FINAL",
+    "USAR",
+    "by_name",
+    "of",
+    "ros2_parameters",
+    "usar_parameters",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class Assignment:
+    """Everything assignment-specific that record, replay, grade and view need."""
+
+    name: str
+    """``usar`` or ``ros2-final`` (the scenario's ``assignment``)."""
+    title: str
+    robots: tuple[contract.RobotFrames, ...]
+    """The robots, in the order the simulator publishes them, with their frame names."""
+    camera_robot: str
+    image_topic: str
+    camera_info_topic: str
+    sim_base_tf: bool
+    """Whether the simulator publishes ``odom -> base_footprint`` on ``/tf``."""
+    static_frames: tuple[str, ...]
+    """Extra frames the simulator publishes on ``/tf_static`` (the project's ``originN``)."""
+    static_links: Callable[[Scenario], tuple[tuple[str, str, float, float, float], ...]]
+    """Those links for one world: ``(parent, child, x, y, yaw)``."""
+    starts: Callable[[Scenario], tuple[tuple[float, float, float], ...]]
+    """Each robot's start pose in ``map``, in :attr:`robots` order."""
+    parameters: Callable[[Scenario, RunSettings], dict[str, Any]]
+    """The parameters the mission's nodes read (never ground truth)."""
+    builtin_mission: str
+    """The ``--mission`` name of the built-in reference mission."""
+    rubric: Callable[[], Rubric]
+    """The rubric that grades this assignment (its grader and the topics it reads)."""
+    world: Callable[[], Scenario]
+    """The built-in world."""
+    variant: Callable[[Scenario, int], Scenario]
+    """A seeded variant of a world."""
+
+    @property
+    def robot_names(self) -> tuple[str, ...]:
+        return tuple(r.robot for r in self.robots)
+
+    @property
+    def sim_topics(self) -> tuple[str, ...]:
+        """What the simulator publishes to the mission, in the order it publishes at one tick."""
+        return (
+            contract.TF_STATIC,
+            contract.MAP_TOPIC,
+            *((contract.TF,) if self.sim_base_tf else ()),
+            self.camera_info_topic,
+            self.image_topic,
+            *(contract.odom(r) for r in self.robot_names),
+        )
+
+    @property
+    def sim_frames(self) -> tuple[str, ...]:
+        """The tf links (child frames) the simulator owns: a mission may not broadcast them.
+        Without the simulator's base link, ``base_footprint`` is the mission's to broadcast."""
+        out: list[str] = []
+        for f in self.robots:
+            out += [f.odom, *((f.base,) if self.sim_base_tf else ()), f.camera, f.optical]
+        return (*out, *self.static_frames)
+
+    def frames_of(self, robot: str) -> contract.RobotFrames:
+        for f in self.robots:
+            if f.robot == robot:
+                return f
+        raise KeyError(robot)
+
+
+def usar_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
+    """The US&R mission's parameters, as the course's launch and parameter files give them:
+    ``aruco_lookup_locations.target_k`` ([x, y]), ``<robot>.home`` ([x, y, yaw]) and the run's
+    ``mission.*`` and ``detector.*`` settings. Never a marker position."""
+    params: dict[str, Any] = {}
+    for i, (x, y) in enumerate(scenario.targets):
+        params[f"aruco_lookup_locations.target_{i + 1}"] = [float(x), float(y)]
+    for start in (scenario.explorer, scenario.follower):
+        params[f"{start.name}.home"] = [start.x, start.y, start.yaw]
+    _settings_parameters(params, settings)
+    return params
+
+
+def _settings_parameters(params: dict[str, Any], settings: RunSettings) -> None:
+    for group in ("mission", "detector"):
+        for f in dataclasses.fields(getattr(settings, group)):
+            params[f"{group}.{f.name}"] = getattr(getattr(settings, group), f.name)
+    params["use_sim_time"] = True
+
+
+def ros2_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
+    """The final project's parameters, named as the course's ``final_params.yaml``:
+    ``aruco_target.x/y``, ``final_destination.frame_id``, ``final_destination.aruco_K.x/y``,
+    plus the run's ``mission.*`` and ``detector.*`` settings. Never the marker's ID or pose."""
+    task = task_of(scenario)
+    params: dict[str, Any] = {
+        "aruco_target.x": task.aruco_target[0],
+        "aruco_target.y": task.aruco_target[1],
+        "final_destination.frame_id": task.frame_id,
+    }
+    for k, (x, y) in sorted(task.destinations.items()):
+        params[f"final_destination.aruco_{k}.x"] = x
+        params[f"final_destination.aruco_{k}.y"] = y
+    _settings_parameters(params, settings)
+    return params
+
+
+def _ros2_static(scenario: Scenario) -> tuple[tuple[str, str, float, float, float], ...]:
+    origins = task_of(scenario).origins
+    return tuple((contract.MAP, o, *origins[o]) for o in contract.ORIGIN_FRAMES)
+
+
+def task_of(scenario: Scenario) -> Ros2Task:
+    """:func:`usar_replay.world.ros2_world.task_of`, imported on first use."""
+    from usar_replay.world import ros2_world
+
+    return ros2_world.task_of(scenario)
+
+
+def _ros2_final_world() -> Scenario:
+    from usar_replay.world import ros2_world
+
+    return ros2_world.ros2_final_world()
+
+
+def _make_ros2_variant(scenario: Scenario, seed: int) -> Scenario:
+    from usar_replay.world import ros2_world
+
+    return ros2_world.make_ros2_variant(scenario, seed)
+
+
+def _make_variant(scenario: Scenario, seed: int) -> Scenario:
+    from usar_replay.world import variants
+
+    return variants.make_variant(scenario, seed)
+
+
+def _usar_rubric() -> Rubric:
+    from usar_replay.grading import rubric_usar
+
+    return rubric_usar.RUBRIC
+
+
+def _ros2_rubric() -> Rubric:
+    from usar_replay.grading import rubric_ros2
+
+    return rubric_ros2.RUBRIC
+
+
+def _usar_starts(s: Scenario) -> tuple[tuple[float, float, float], ...]:
+    return tuple((r.x, r.y, r.yaw) for r in (s.explorer, s.follower))
+
+
+def _ros2_starts(scenario: Scenario) -> tuple[tuple[float, float, float], ...]:
+    return (task_of(scenario).start,)
+
+
+USAR = Assignment(
+    name="usar",
+    title="US&R Simplified (explorer and follower)",
+    robots=tuple(contract.RobotFrames.usar(r) for r in contract.ROBOTS),
+    camera_robot="explorer",
+    image_topic=contract.IMAGE,
+    camera_info_topic=contract.CAMERA_INFO,
+    sim_base_tf=True,
+    static_frames=(),
+    static_links=lambda scenario: (),
+    starts=_usar_starts,
+    parameters=usar_parameters,
+    builtin_mission="builtin",
+    rubric=_usar_rubric,
+    world=course_world,
+    variant=_make_variant,
+)
+
+ROS2_FINAL = Assignment(
+    name="ros2-final",
+    title="ROS 2 final project (robot1, an ArUco marker names the destination)",
+    robots=(contract.ROS2_FRAMES,),
+    camera_robot=contract.ROS2_ROBOT,
+    image_topic=contract.ROS2_IMAGE,
+    camera_info_topic=contract.ROS2_CAMERA_INFO,
+    sim_base_tf=False,
+    static_frames=contract.ORIGIN_FRAMES,
+    static_links=_ros2_static,
+    starts=_ros2_starts,
+    parameters=ros2_parameters,
+    builtin_mission="ros2-final",
+    rubric=_ros2_rubric,
+    world=_ros2_final_world,
+    variant=_make_ros2_variant,
+)
+
+ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (USAR, ROS2_FINAL)}
+
+
+def by_name(name: str) -> Assignment:
+    """The assignment called ``name`` (KeyError when there is none)."""
+    return ASSIGNMENTS[name]
+
+
+def of(scenario: Scenario) -> Assignment:
+    """The assignment a scenario is for."""
+    return ASSIGNMENTS[scenario.assignment]

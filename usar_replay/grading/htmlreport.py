@@ -1,0 +1,316 @@
+"""``usar report``: one self-contained HTML page per run, and an index page.
+
+Why a page: the rerun viewer is the place to dig into a run, but it takes a while to draw
+without a GPU and needs an installed viewer; a TA marking forty runs, or a student reading
+their grade, needs something a browser opens at once and that can be mailed. Each page holds a
+map of the run (walls, obstacles, targets, true and stored markers, both robots' true paths,
+and the evidence point of every rubric line, numbered as in the table), the rubric table, and
+the camera frame in which each marker was first detected. Everything is embedded (the picture
+as PNG, the frames as the recorded image bytes), so a page is one file with no links out.
+
+matplotlib draws the map with its Agg backend (no display needed); this module is its only
+importer.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from usar_replay import __version__
+from usar_replay.core import contract, msgs
+from usar_replay.grading.verdict import Check, GradeReport
+from usar_replay.log.run import Run
+from usar_replay.world.scenario import Box, Cylinder, Scenario, Sphere
+
+__all__ = ["RunPicture", "collect", "index_page", "map_png", "run_page"]
+
+FRAME_MEMORY = 64
+"""Camera frames kept while waiting for their detections (a detection names its image's stamp
+and arrives a few frames later at most)."""
+_EXPLORER_COLOR = "#1f77b4"
+_FOLLOWER_COLOR = "#9467bd"
+
+
+@dataclass(slots=True)
+class Detection:
+    """The frame in which a marker was first detected."""
+
+    marker_id: int
+    t_ns: int
+    image_format: str
+    image: bytes
+
+
+@dataclass(slots=True)
+class RunPicture:
+    """What a page shows besides the grade: paths, stored markers, detection frames."""
+
+    paths: dict[str, list[tuple[int, float, float]]] = field(default_factory=dict)
+    """robot -> [(log time, x, y)] from ground truth."""
+    stored: dict[int, tuple[float, float]] = field(default_factory=dict)
+    """Marker ID -> stored (x, y) in ``map``, the mission's last ``marker_poses``."""
+    detections: list[Detection] = field(default_factory=list)
+
+    def position(self, robot: str, t_ns: int) -> tuple[float, float] | None:
+        """The robot's true position at (or just before) ``t_ns``."""
+        path = self.paths.get(robot, [])
+        best = None
+        for t, x, y in path:
+            if t > t_ns:
+                break
+            best = (x, y)
+        return best if best is not None else (path[0][1:] if path else None)
+
+
+def collect(run: Run) -> RunPicture:
+    """One pass over the log for the picture: true paths, stored markers, detection frames."""
+    pic = RunPicture(paths={r: [] for r in contract.ROBOTS})
+    truth = {contract.truth_pose(r): r for r in contract.ROBOTS}
+    frames: dict[int, msgs.CompressedImage] = {}
+    topics = [*truth, contract.MARKER_POSES, contract.IMAGE, contract.FIDUCIALS]
+    for m in run.messages(topics):
+        msg = m.msg
+        if m.topic in truth and isinstance(msg, msgs.PoseStamped):
+            p = msg.pose.position
+            pic.paths[truth[m.topic]].append((m.log_time_ns, p.x, p.y))
+        elif isinstance(msg, msgs.CompressedImage):
+            frames[msg.header.stamp.ns] = msg
+            if len(frames) > FRAME_MEMORY:
+                del frames[next(iter(frames))]
+        elif m.topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
+            seen = {d.marker_id for d in pic.detections}
+            image = frames.get(msg.header.stamp.ns)
+            for f in msg.transforms:
+                if f.fiducial_id not in seen and image is not None:
+                    seen.add(f.fiducial_id)
+                    pic.detections.append(
+                        Detection(f.fiducial_id, m.log_time_ns, image.format, image.data)
+                    )
+        elif m.topic == contract.MARKER_POSES and isinstance(msg, msgs.FiducialTransformArray):
+            for f in msg.transforms:
+                pic.stored[f.fiducial_id] = (f.transform.translation.x, f.transform.translation.y)
+    pic.detections.sort(key=lambda d: d.marker_id)
+    return pic
+
+
+# --- the map --------------------------------------------------------------------------------------
+
+
+def _robot_of(check: Check) -> str:
+    """Whose position shows a line's evidence."""
+    if check.id.startswith("follower.") or check.id == "time_limit":
+        return "follower"
+    if check.evidence == "follower moved":
+        return "follower"
+    return "explorer"
+
+
+def _box_corners(b: Box) -> list[tuple[float, float]]:
+    c, s = math.cos(b.yaw), math.sin(b.yaw)
+    hx, hy = b.size_x / 2, b.size_y / 2
+    return [
+        (b.x + c * dx - s * dy, b.y + s * dx + c * dy)
+        for dx, dy in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+    ]
+
+
+def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
+    """The run seen from above, as PNG bytes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import patches
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 6.5), dpi=110)
+    ax = fig.add_subplot()
+    for b in scenario.walls:
+        ax.add_patch(patches.Polygon(_box_corners(b), closed=True, color="#555555", lw=0))
+    for b in scenario.boxes:
+        ax.add_patch(patches.Polygon(_box_corners(b), closed=True, color="#b08d57", lw=0))
+    round_things: list[Cylinder | Sphere] = [*scenario.cylinders, *scenario.spheres]
+    for r in round_things:
+        ax.add_patch(patches.Circle((r.x, r.y), r.radius, color="#b08d57", lw=0))
+    for robot, color in (("explorer", _EXPLORER_COLOR), ("follower", _FOLLOWER_COLOR)):
+        path = pic.paths.get(robot, [])
+        if path:
+            ax.plot([p[1] for p in path], [p[2] for p in path], color=color, lw=1.6,
+                    label=f"{robot} (true path)")  # fmt: skip
+        start = getattr(scenario, robot)
+        ax.plot(start.x, start.y, marker="s", ms=9, mfc="none", mec=color, mew=2)
+    for k, (x, y) in enumerate(scenario.targets):
+        ax.plot(x, y, marker="x", ms=9, mew=2, color="black")
+        ax.annotate(f"target_{k + 1}", (x, y), xytext=(5, -12), textcoords="offset points",
+                    fontsize=8)  # fmt: skip
+    for i, m in enumerate(sorted(scenario.markers, key=lambda m: m.id)):
+        ax.plot(m.x, m.y, marker="D", ms=8, color="#2ca02c", label="true marker" if not i else None)
+        right = m.x > sum(t[0] for t in scenario.targets) / max(len(scenario.targets), 1)
+        ax.annotate(f"marker {m.id}", (m.x, m.y), xytext=(-6 if right else 6, 6),
+                    textcoords="offset points", ha="right" if right else "left", fontsize=8,
+                    color="#2ca02c")  # fmt: skip
+    for i, (_mid, (x, y)) in enumerate(sorted(pic.stored.items())):
+        ax.plot(x, y, marker="o", ms=5, color="#ff7f0e", label="stored marker" if not i else None)
+    spots: dict[tuple[float, float], list[tuple[int, bool]]] = {}
+    for n, c in enumerate(report.checks, start=1):
+        at = None if c.evidence_ns is None else pic.position(_robot_of(c), c.evidence_ns)
+        if at is not None:  # lines evidenced at one place share a circle: "7,8"
+            spots.setdefault((round(at[0], 2), round(at[1], 2)), []).append((n, c.passed))
+    for at, lines in spots.items():
+        color = "#2ca02c" if all(ok for _, ok in lines) else "#d62728"
+        label = ",".join(str(n) for n, _ in lines)
+        ax.plot(*at, marker="o", ms=9 + 4 * len(label) ** 0.5, mfc="white", mec=color, mew=2,
+                zorder=5)  # fmt: skip
+        ax.annotate(label, at, ha="center", va="center", fontsize=7, color=color, zorder=6)
+    ax.plot([], [], marker="o", ms=10, mfc="white", mec="#2ca02c", mew=2, ls="none",
+            label="evidence (rubric line #)")  # fmt: skip
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (m, map)")
+    ax.set_ylabel("y (m, map)")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=5, fontsize=8, frameon=False)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    return buf.getvalue()
+
+
+# --- the pages ------------------------------------------------------------------------------------
+
+_STYLE = """
+body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1100px;color:#222;padding:0 1em}
+h1{font-size:1.4em;margin-bottom:.2em} .muted{color:#666}
+.pass{color:#1a7f37;font-weight:600} .fail{color:#cf222e;font-weight:600}
+table{border-collapse:collapse;width:100%;font-size:.9em;margin:1em 0}
+th,td{border-bottom:1px solid #ddd;padding:.35em .5em;text-align:left;vertical-align:top}
+th{background:#f6f8fa} td.num{text-align:right;white-space:nowrap}
+img.map{width:100%;border:1px solid #ddd}
+.frames{display:flex;flex-wrap:wrap;gap:1em} figure{margin:0}
+figure img{max-width:320px;border:1px solid #ddd} figcaption{font-size:.85em;color:#555}
+""".strip()
+
+
+def _data_uri(fmt: str, data: bytes) -> str:
+    mime = "image/jpeg" if fmt.lower() in ("jpeg", "jpg") else "image/png"
+    return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
+
+
+def _verdict(ok: bool) -> str:
+    return f'<span class="{"pass" if ok else "fail"}">{"PASS" if ok else "FAIL"}</span>'
+
+
+def _page(title: str, body: str) -> str:
+    return (
+        "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>"
+        f"<body>{body}<p class='muted'>usar-replay {html.escape(__version__)}</p></body></html>\n"
+    )
+
+
+def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
+    """One run's page."""
+    e = html.escape
+    scenario = run.require_scenario()
+    verdict = _verdict(report.passed and report.log_complete)
+    parts = [
+        f"<h1>{e(str(run.path))}</h1>",
+        f"<p>{verdict} &nbsp; <b>{report.points:.4g} / {report.max_points:.4g}</b> points"
+        f" &middot; world <b>{e(scenario.name)}</b> &middot; {run.duration_s:.1f} s of sim time"
+        f" &middot; file {e(run.file_state)}"
+        + ("" if run.outcome == "unknown" else f" &middot; mission {e(run.outcome)}")
+        + "</p>",
+    ]
+    if not report.log_complete:
+        parts.append(
+            f"<p class='fail'>The log is incomplete ({e(report.log_problem)}); "
+            "graded as far as it goes.</p>"
+        )
+    png = map_png(scenario, report, pic)
+    parts.append("<h2>The run</h2>")
+    parts.append(
+        f"<img class='map' alt='map of the run' src='{_data_uri('png', png)}'>"
+        "<p class='muted'>Walls grey, obstacles brown, true markers green, stored markers "
+        "orange; squares are the robots' starts. Numbered circles: where the robot was at each "
+        "rubric line's evidence time (green passed, red failed).</p>"
+    )
+    rows = [
+        "<tr><th>#</th><th></th><th>rubric line</th><th>measured</th><th>needed</th>"
+        "<th>points</th><th>at (sim time)</th></tr>"
+    ]
+    for n, c in enumerate(report.checks, start=1):
+        at = "" if c.evidence_ns is None else f"{c.evidence_ns / 1e9:.1f} s ({e(c.evidence)})"
+        rows.append(
+            f"<tr><td class='num'>{n}</td><td>{_verdict(c.passed)}</td>"
+            f"<td><code>{e(c.id)}</code><br>{e(c.description)}</td><td>{e(c.measured)}</td>"
+            f"<td>{e(c.threshold)}</td><td class='num'>{c.points:.3g}/{c.max_points:.3g}</td>"
+            f"<td>{at}</td></tr>"
+        )
+    parts.append("<h2>Rubric</h2><table>" + "".join(rows) + "</table>")
+    parts.append("<h2>Detections</h2>")
+    if pic.detections:
+        figs = [
+            f"<figure><img alt='marker {d.marker_id}' src='{_data_uri(d.image_format, d.image)}'>"
+            f"<figcaption>marker {d.marker_id}: first detected at {d.t_ns / 1e9:.1f} s"
+            "</figcaption></figure>"
+            for d in pic.detections
+        ]
+        parts.append("<div class='frames'>" + "".join(figs) + "</div>")
+    else:
+        parts.append("<p>No marker was detected.</p>")
+    return _page(f"usar report: {run.path.name}", "\n".join(parts))
+
+
+def index_page(
+    entries: Sequence[tuple[str, str, GradeReport | None, str]],
+) -> str:
+    """The index: (recording, page file name, report or None, error) per run."""
+    e = html.escape
+    rows = ["<tr><th>recording</th><th></th><th>points</th><th>failed lines</th></tr>"]
+    for source, page, report, error in entries:
+        if report is None:
+            rows.append(
+                f"<tr><td>{e(source)}</td><td class='fail'>ERROR</td><td></td>"
+                f"<td>{e(error)}</td></tr>"
+            )
+            continue
+        ok = report.passed and report.log_complete
+        failed = ", ".join(report.failed_ids()) + ("" if report.log_complete else " (incomplete)")
+        rows.append(
+            f"<tr><td><a href='{e(page)}'>{e(source)}</a></td><td>{_verdict(ok)}</td>"
+            f"<td class='num'>{report.points:.4g}/{report.max_points:.4g}</td>"
+            f"<td>{e(failed)}</td></tr>"
+        )
+    passed = sum(1 for _, _, r, _ in entries if r is not None and r.passed and r.log_complete)
+    body = (
+        f"<h1>usar report</h1><p>{passed}/{len(entries)} recordings pass</p>"
+        f"<table>{''.join(rows)}</table>"
+    )
+    return _page("usar report", body)
+
+
+def page_names(sources: Sequence[str]) -> list[str]:
+    """A distinct ``NAME.html`` per recording (``run.html``, ``run-2.html`` for two ``run.mcap``
+    in different folders)."""
+    names: list[str] = []
+    used: set[str] = set()
+    for src in sources:
+        stem = Path(src).name.removesuffix(".mcap") or "run"
+        name, k = f"{stem}.html", 2
+        while name in used or name == "index.html":
+            name, k = f"{stem}-{k}.html", k + 1
+        used.add(name)
+        names.append(name)
+    return names
+
+
+def output_paths(out_dir: str | os.PathLike[str], sources: Sequence[str]) -> list[Path]:
+    """Every file ``usar report`` will write: the pages, then ``index.html``."""
+    d = Path(out_dir)
+    return [*(d / n for n in page_names(sources)), d / "index.html"]

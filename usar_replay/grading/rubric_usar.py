@@ -1,0 +1,724 @@
+"""The course's live-demo rubric (60 points), pure: messages in, verdicts out.
+
+Why pure: the rubric is the part of usar a TA argues about, so it must be readable and testable
+on its own, without a log file, mcap or a simulator. This module reads no file and imports no
+mcap; :mod:`usar_replay.grading.grade` opens a log and feeds it here, ``usar replay --grade`` feeds
+the replayed outputs, and the tests feed hand-made message streams.
+
+Two halves:
+
+* :class:`Grader` (the *observations*): a streaming consumer, :meth:`Grader.feed` one message at
+  a time, keeping bounded state: entry times into a disc around each target, marker and home,
+  detections, ``marker_frame`` broadcasts looked up in ``map`` with the tf2 rules the mission
+  uses, and when the follower first moved;
+* one small function per rubric line (:func:`explorer_targets`, :func:`marker_detected`,
+  :func:`marker_broadcast`, :func:`only_on_detection`, :func:`explorer_home_before_follower`,
+  :func:`follower_markers`, :func:`follower_home`, :func:`time_limit`) turning observations into
+  :class:`Check` verdicts, each with its measured value and threshold as numbers with units, and
+  the sim time of its evidence.
+
+Robots are judged by the simulator's ground truth, never by what the mission believes.
+
+===================================  ======  ===================================================
+line (``Check.id``)                  points  passes when
+===================================  ======  ===================================================
+``explorer.target_k``                12      the explorer came within ``target_reached_m`` of
+                                             target_k after the earlier targets it reached
+``marker_k.detected``                12      ``/fiducial_transforms`` holds ID k at least once
+``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k and
+                                             every such broadcast, looked up in ``map``, lies
+                                             within ``marker_map_error_m`` of the true marker
+``marker_frame.only_on_detection``   4       every ``marker_frame`` is a child of the camera's
+                                             optical frame, stamped with a detected frame
+``explorer.home_before_follower``    4       after its last target the explorer came within
+                                             ``home_m`` of its start before the follower moved
+``follower.marker_k``                12      the follower came within ``follower_visit_m`` of
+                                             marker k after the lower IDs it visited
+``follower.home``                    4       after its last in-order marker, the follower came
+                                             within ``home_m`` of its start
+``time_limit``                       4       the follower was home within the time limit
+===================================  ======  ===================================================
+
+Points are scaled per item when a scenario has more or fewer than four targets/markers.
+
+Order is judged once, by :func:`in_order`, as a *subsequence* of arrivals: item k passes when it
+was reached after the in-order arrival at the previous reached item (greedily, earliest first).
+An explorer that skips target_2 fails only ``explorer.target_2``; one that drives past target_3
+on its way to target_1 is not punished; one that visits 2, 1, 3, 4 fails ``explorer.target_2``.
+"Home" counts only after the robot has left it and after its last in-order item.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+
+from usar_replay.core import contract, msgs
+from usar_replay.core.settings import Thresholds
+from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
+from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.world.scenario import Scenario
+
+__all__ = [
+    "RUBRIC",
+    "DETECTION_MEMORY_NS",
+    "GRADE_TOPICS",
+    "MAX_VISITS",
+    "REQUIRED_TOPICS",
+    "Disc",
+    "Grader",
+    "explorer_home_before_follower",
+    "explorer_targets",
+    "follower_home",
+    "follower_markers",
+    "in_order",
+    "judge",
+    "marker_broadcast",
+    "marker_detected",
+    "one_cmd_vel_publisher",
+    "only_on_detection",
+    "time_limit",
+]
+
+EXPLORER_TRUTH = contract.truth_pose("explorer")
+FOLLOWER_TRUTH = contract.truth_pose("follower")
+GRADE_TOPICS = (
+    contract.TF_STATIC,
+    contract.TF,
+    contract.FIDUCIALS,
+    EXPLORER_TRUTH,
+    FOLLOWER_TRUTH,
+    *(contract.cmd_vel(r) for r in contract.ROBOTS),
+)
+"""The topics the rubric reads; everything else in a log is skipped without decoding."""
+REQUIRED_TOPICS = (EXPLORER_TRUTH, FOLLOWER_TRUTH, contract.TF, contract.FIDUCIALS)
+"""Without these a log cannot be graded at all (``/tf_static`` may be absent: a world whose
+chain is all dynamic is still gradable)."""
+MAX_VISITS = 256
+"""Entry times kept per disc; past this the newest replaces the last kept (the bound only keeps
+memory flat on a pathological log)."""
+DETECTION_MEMORY_NS = 30 * 1_000_000_000
+"""How long a detection is remembered for matching ``marker_frame`` stamps: the tf cache time
+(a broadcast older than that could not be looked up in ``map`` anyway)."""
+
+
+# --- observations -----------------------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class Disc:
+    """One robot's visits to one place: the times it entered a disc around it.
+
+    ``count_start``: whether being inside at the first sample counts as an arrival (a target
+    yes; home no: a robot is home only once it has left it and come back).
+    """
+
+    centre: tuple[float, float]
+    radius: float
+    leave: float
+    count_start: bool
+    inside: bool | None = None
+    entries: list[int] = field(default_factory=list)
+    stay_closest: list[float] = field(default_factory=list)
+    """Closest distance during each stay, parallel to :attr:`entries`."""
+    closest_m: float = math.inf
+    closest_ns: int | None = None
+    first_ns: int | None = None
+    last_m: float = math.inf
+    """Distance at the latest sample (where the robot ended, at the end of the log)."""
+
+    def update(self, xy: tuple[float, float], t_ns: int) -> None:
+        d = math.dist(xy, self.centre)
+        self.last_m = d
+        if self.first_ns is None:
+            self.first_ns = t_ns
+        if d < self.closest_m:
+            self.closest_m, self.closest_ns = d, t_ns
+        if d <= self.radius:
+            if self.inside is False or (self.inside is None and self.count_start):
+                if len(self.entries) < MAX_VISITS:
+                    self.entries.append(t_ns)
+                    self.stay_closest.append(d)
+                else:
+                    self.entries[-1], self.stay_closest[-1] = t_ns, d
+            elif self.inside and self.stay_closest:
+                self.stay_closest[-1] = min(self.stay_closest[-1], d)
+            self.inside = True
+        elif self.inside is None or d > self.leave:
+            self.inside = False
+
+    def first_after(self, t_ns: int) -> int | None:
+        """The first arrival strictly after ``t_ns`` (entries are in time order)."""
+        i = bisect.bisect_right(self.entries, t_ns)
+        return self.entries[i] if i < len(self.entries) else None
+
+    def stay_at(self, t_ns: int) -> float:
+        """The closest distance during the stay that began at ``t_ns``."""
+        return self.stay_closest[bisect.bisect_left(self.entries, t_ns)]
+
+    def closest_evidence(self) -> int | None:
+        """When the robot came closest, unless that was where it started (nothing happened)."""
+        return None if self.closest_ns == self.first_ns else self.closest_ns
+
+
+@dataclass(slots=True)
+class Broadcasts:
+    """The ``marker_frame`` broadcasts attributed to one marker."""
+
+    count: int = 0
+    worst_m: float = -1.0
+    worst_ns: int = 0
+    first_ns: int | None = None
+    failed_lookups: int = 0
+
+
+class Grader:
+    """Observes a log's messages in log order; :meth:`report` gives the rubric."""
+
+    def __init__(self, scenario: Scenario, thresholds: Thresholds | None = None) -> None:
+        self.scenario = scenario
+        self.th = th = thresholds or Thresholds()
+        self.targets = [(float(t[0]), float(t[1])) for t in scenario.targets]
+        self.markers = {m.id: (m.x, m.y, m.z) for m in sorted(scenario.markers, key=lambda m: m.id)}
+        self.explorer_home = (scenario.explorer.x, scenario.explorer.y)
+        self.follower_home = (scenario.follower.x, scenario.follower.y)
+        self.buffer = Buffer(cache_time=DETECTION_MEMORY_NS / 1e9)
+        self.listener = TransformListener(self.buffer)
+
+        def disc(c: tuple[float, float], r: float, count_start: bool) -> Disc:
+            return Disc(c, r, r + th.reentry_m, count_start)
+
+        self.target_discs = [disc(t, th.target_reached_m, True) for t in self.targets]
+        self.explorer_home_disc = disc(self.explorer_home, th.home_m, False)
+        self.marker_discs = {
+            k: disc(v[:2], th.follower_visit_m, True) for k, v in self.markers.items()
+        }
+        self.follower_home_disc = disc(self.follower_home, th.home_m, False)
+        self.follower_start: tuple[float, float] | None = None
+        self.follower_moved_ns: int | None = None
+        self.detected_ns: dict[int, int] = {}
+        self.detected_frames: dict[int, int] = {}
+        self._recent: dict[int, tuple[msgs.FiducialTransform, ...]] = {}
+        """Detections by image stamp, the last :data:`DETECTION_MEMORY_NS` only."""
+        self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
+        self.broadcast_count = 0
+        self.without_detection = 0
+        self.without_detection_ns: int | None = None
+        self.wrong_parent = 0
+        self.wrong_parent_ns: int | None = None
+        self.bad_broadcasts = 0
+        """Broadcasts without a detection *or* with another parent (each counted once)."""
+        self.start_ns: int | None = None
+        self.end_ns = 0
+        self._cmd_tick: dict[str, tuple[int, set[tuple[float, ...]]]] = {}
+        self.cmd_conflicts: dict[str, int] = {r: 0 for r in contract.ROBOTS}
+        self.cmd_conflict_ns: dict[str, int | None] = {r: None for r in contract.ROBOTS}
+
+    def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None:
+        """One message of the log (``msg`` None for types the grader does not read)."""
+        if self.start_ns is None:
+            self.start_ns = t_ns
+        self.end_ns = max(self.end_ns, t_ns)
+        if msg is None:
+            return
+        if topic == contract.TF and isinstance(msg, msgs.TFMessage):
+            self.listener.on_tf(msg)
+            for tf in msg.transforms:
+                if tf.child_frame_id == contract.MARKER_FRAME:
+                    self._on_marker_frame(tf, t_ns)
+        elif topic == EXPLORER_TRUTH and isinstance(msg, msgs.PoseStamped):
+            xy = (msg.pose.position.x, msg.pose.position.y)
+            for d in self.target_discs:
+                d.update(xy, t_ns)
+            self.explorer_home_disc.update(xy, t_ns)
+        elif topic == FOLLOWER_TRUTH and isinstance(msg, msgs.PoseStamped):
+            self._on_follower((msg.pose.position.x, msg.pose.position.y), t_ns)
+        elif topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
+            self._on_fiducials(msg, t_ns)
+        elif topic == contract.TF_STATIC and isinstance(msg, msgs.TFMessage):
+            self.listener.on_tf_static(msg)
+        elif isinstance(msg, msgs.Twist):
+            robot = contract.robot_of_topic(topic)
+            if robot is not None and topic == contract.cmd_vel(robot):
+                self._on_cmd_vel(robot, msg, t_ns)
+
+    def _on_cmd_vel(self, robot: str, msg: msgs.Twist, t_ns: int) -> None:
+        """Two different moving commands for one robot in one tick: two publishers fight (a
+        spin timer and the navigator, say); the robot obeys whichever came last. A stop after
+        a command is a node ending its goal, not a fight."""
+        lin, ang = msg.linear, msg.angular
+        cmd = (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+        if not any(cmd):
+            return
+        t, seen = self._cmd_tick.get(robot, (-1, set()))
+        if t != t_ns:
+            self._cmd_tick[robot] = (t_ns, {cmd})
+            return
+        if cmd not in seen and len(seen) == 1:
+            self.cmd_conflicts[robot] += 1
+            if self.cmd_conflict_ns[robot] is None:
+                self.cmd_conflict_ns[robot] = t_ns
+        seen.add(cmd)
+
+    def feed_all(self, items: Iterable[tuple[str, msgs.Message | None, int]]) -> None:
+        for topic, msg, t in items:
+            self.feed(topic, msg, t)
+
+    def _on_fiducials(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
+        for f in msg.transforms:
+            self.detected_ns.setdefault(f.fiducial_id, t_ns)
+            self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
+        if msg.transforms:
+            stamp = msg.header.stamp.ns
+            self._recent[stamp] = self._recent.get(stamp, ()) + msg.transforms
+        # forget detections older than the tf cache (dicts keep insertion order: oldest first)
+        horizon = t_ns - DETECTION_MEMORY_NS
+        while self._recent:
+            oldest = next(iter(self._recent))
+            if oldest >= horizon:
+                break
+            del self._recent[oldest]
+
+    def _on_follower(self, xy: tuple[float, float], t_ns: int) -> None:
+        if self.follower_start is None:
+            self.follower_start = xy
+        if (
+            self.follower_moved_ns is None
+            and math.dist(xy, self.follower_start) > self.th.follower_moved_m
+        ):
+            self.follower_moved_ns = t_ns
+        for d in self.marker_discs.values():
+            d.update(xy, t_ns)
+        self.follower_home_disc.update(xy, t_ns)
+
+    def _on_marker_frame(self, tf: msgs.TransformStamped, t_ns: int) -> None:
+        self.broadcast_count += 1
+        if tf.header.frame_id != contract.OPTICAL_FRAME:
+            self.wrong_parent += 1
+            if self.wrong_parent_ns is None:
+                self.wrong_parent_ns = t_ns
+        detections = self._recent.get(tf.header.stamp.ns, ())
+        if not detections:
+            self.without_detection += 1
+            if self.without_detection_ns is None:
+                self.without_detection_ns = t_ns
+        if not detections or tf.header.frame_id != contract.OPTICAL_FRAME:
+            self.bad_broadcasts += 1
+        try:
+            in_map = self.buffer.lookup_transform(
+                contract.MAP, contract.MARKER_FRAME, tf.header.stamp
+            )
+        except TransformException:
+            in_map = None
+        mid = _detected_id(tf.transform, detections)
+        if mid not in self.markers:
+            if in_map is None or not self.markers:
+                return  # neither an ID nor a place: only the only_on_detection line can tell
+            p = in_map.transform.translation
+            mid = min(self.markers, key=lambda k: math.dist((p.x, p.y, p.z), self.markers[k]))
+        b = self.broadcasts[mid]
+        b.count += 1
+        if b.first_ns is None:
+            b.first_ns = t_ns
+        if in_map is None:
+            b.failed_lookups += 1
+            err = math.inf
+        else:
+            p = in_map.transform.translation
+            err = math.dist((p.x, p.y, p.z), self.markers[mid])
+        if err > b.worst_m:
+            b.worst_m, b.worst_ns = err, t_ns
+
+    def resolved_thresholds(self) -> Thresholds:
+        """The thresholds judged by, with the scenario's time limit filled in."""
+        if self.th.time_limit_s is not None:
+            return self.th
+        return replace(self.th, time_limit_s=float(self.scenario.time_limit_s))
+
+    def report(
+        self, source: str, *, log_complete: bool = True, log_problem: str = ""
+    ) -> GradeReport:
+        """The rubric as judged from what was fed so far (a truncated log: as far as it goes)."""
+        return GradeReport(
+            source,
+            judge(self),
+            self.start_ns or 0,
+            log_complete,
+            log_problem,
+            thresholds=self.resolved_thresholds(),
+            scenario=self.scenario.name,
+        )
+
+
+def _detected_id(
+    transform: msgs.Transform, detections: tuple[msgs.FiducialTransform, ...]
+) -> int | None:
+    """Which detection a broadcast is: the identical transform (the mission copies it), else
+    the detection nearest in the camera frame; None without detections."""
+    if not detections:
+        return None
+    for f in detections:
+        if f.transform == transform:
+            return f.fiducial_id
+    p = transform.translation
+    return min(
+        detections,
+        key=lambda f: math.dist(
+            (p.x, p.y, p.z),
+            (f.transform.translation.x, f.transform.translation.y, f.transform.translation.z),
+        ),
+    ).fiducial_id
+
+
+# --- the rubric lines -------------------------------------------------------------------------
+
+
+def _s(t_ns: int) -> str:
+    """A sim time as the log, ``usar info`` and the ``usar view`` timeline show it."""
+    return f"{t_ns / 1e9:.1f} s"
+
+
+def _n(count: int, word: str) -> str:
+    """``1 frame``, ``2 frames``."""
+    return f"{count} {word}" + ("" if count == 1 else "s")
+
+
+def _xy(p: tuple[float, float]) -> str:
+    return f"({p[0]:.2f}, {p[1]:.2f})"
+
+
+def in_order(discs: Sequence[Disc]) -> list[int | None]:
+    """The arrival time at each disc, taken in order as a subsequence of the robot's arrivals.
+
+    Greedy: each item's arrival is its first entry after the previous *reached* item's arrival;
+    None for an item not reached in order (never, or only before). The one place order is
+    judged, for the explorer's targets and the follower's markers alike.
+    """
+    out: list[int | None] = []
+    prev = -1
+    for d in discs:
+        t = d.first_after(prev)
+        out.append(t)
+        if t is not None:
+            prev = t
+    return out
+
+
+def _last_reached(names: Sequence[str], arrivals: Sequence[int | None]) -> tuple[int, str]:
+    """(time, name) of the last item reached in order; (-1, "") when none was."""
+    last = (-1, "")
+    for name, t in zip(names, arrivals, strict=True):
+        if t is not None:
+            last = (t, name)
+    return last
+
+
+def _visit_checks(
+    *,
+    ids: Sequence[str],
+    descriptions: Sequence[str],
+    names: Sequence[str],
+    discs: Sequence[Disc],
+    radius: float,
+    points_total: float,
+    verb: str,
+    order: str,
+) -> list[Check]:
+    """The lines "robot reached item k, in order": one wording for targets and markers."""
+    arrivals = in_order(discs)
+    each = points_total / max(len(discs), 1)
+    checks: list[Check] = []
+    prev_name = ""
+    for i, d in enumerate(discs):
+        t = arrivals[i]
+        after = f", after {prev_name}" if prev_name else ""
+        value: float | None
+        evidence_ns: int | None
+        if t is not None:
+            stay = d.stay_at(t)
+            measured = f"{verb} at {_s(t)} (closest {stay:.3f} m)"
+            value, evidence_ns, evidence = stay, t, verb
+        else:
+            where = d.closest_evidence()
+            closest = f"closest {d.closest_m:.2f} m" + (
+                f" at {_s(where)}" if where is not None else ", where it started"
+            )
+            if d.entries:
+                measured = f"{verb} only before {prev_name} (out of {order}; {closest})"
+            else:
+                measured = f"never {verb} ({closest})"
+            value = d.closest_m if math.isfinite(d.closest_m) else None
+            evidence_ns, evidence = where, ("closest approach" if where is not None else "")
+        checks.append(
+            Check(
+                id=ids[i],
+                description=descriptions[i],
+                passed=t is not None,
+                points=each if t is not None else 0.0,
+                max_points=each,
+                measured=measured,
+                threshold=f"<= {radius:g} m{after}",
+                evidence_ns=evidence_ns,
+                value=value,
+                unit="m",
+                limit=radius,
+                op="<=",
+                evidence=evidence,
+            )
+        )
+        if t is not None:
+            prev_name = names[i]
+    return checks
+
+
+def explorer_targets(g: Grader) -> list[Check]:
+    """``explorer.target_k``: the explorer's true position reached each target, in order."""
+    n = len(g.targets)
+    return _visit_checks(
+        ids=[f"explorer.target_{k + 1}" for k in range(n)],
+        descriptions=[
+            f"explorer reached target_{k + 1} {_xy(t)}" + (" in order" if k else "")
+            for k, t in enumerate(g.targets)
+        ],
+        names=[f"target_{k + 1}" for k in range(n)],
+        discs=g.target_discs,
+        radius=g.th.target_reached_m,
+        points_total=12.0,
+        verb="reached",
+        order="order",
+    )
+
+
+def marker_detected(g: Grader, mid: int) -> Check:
+    """``marker_k.detected``: the detector reported ID k at least once."""
+    t = g.detected_ns.get(mid)
+    frames = g.detected_frames.get(mid, 0)
+    each = 12.0 / max(len(g.markers), 1)
+    return Check(
+        id=f"marker_{mid}.detected",
+        description=f"explorer detected marker {mid}",
+        passed=t is not None,
+        points=each if t is not None else 0.0,
+        max_points=each,
+        measured="never detected" if t is None else f"in {_n(frames, 'frame')}, first at {_s(t)}",
+        threshold=f"at least 1 frame on {contract.FIDUCIALS}",
+        evidence_ns=t,
+        value=float(frames),
+        unit="frames",
+        limit=1.0,
+        op=">=",
+        evidence="" if t is None else "first detection",
+    )
+
+
+def marker_broadcast(g: Grader, mid: int) -> Check:
+    """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
+    b = g.broadcasts[mid]
+    limit = g.th.marker_map_error_m
+    ok = b.count > 0 and b.worst_m <= limit
+    if b.count == 0:
+        measured = "no broadcast"
+    elif b.failed_lookups:
+        measured = f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
+    else:
+        measured = f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+    each = 8.0 / max(len(g.markers), 1)
+    evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
+    return Check(
+        id=f"marker_{mid}.broadcast",
+        description=f"marker {mid} broadcast as {contract.MARKER_FRAME}, near the truth",
+        passed=ok,
+        points=each if ok else 0.0,
+        max_points=each,
+        measured=measured,
+        threshold=f"every broadcast <= {limit * 100:g} cm",
+        evidence_ns=evidence_ns,
+        value=b.worst_m if b.count and math.isfinite(b.worst_m) else None,
+        unit="m",
+        limit=limit,
+        op="<=",
+        evidence=("first broadcast" if ok else "worst broadcast") if b.count else "",
+    )
+
+
+def only_on_detection(g: Grader) -> Check:
+    """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera."""
+    bad = g.bad_broadcasts
+    first_bad = min(
+        (t for t in (g.without_detection_ns, g.wrong_parent_ns) if t is not None), default=None
+    )
+    return Check(
+        id="marker_frame.only_on_detection",
+        description=f"{contract.MARKER_FRAME} broadcast only with a detection, child of the camera",
+        passed=bad == 0,
+        points=4.0 if bad == 0 else 0.0,
+        max_points=4.0,
+        measured=f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
+        f"detection, {g.wrong_parent} with another parent",
+        threshold=f"0 without a detection; parent {contract.OPTICAL_FRAME}",
+        evidence_ns=first_bad,
+        value=float(bad),
+        unit="broadcasts",
+        limit=0.0,
+        op="<=",
+        evidence="" if first_bad is None else "first bad broadcast",
+    )
+
+
+def explorer_home_before_follower(g: Grader, last_target_ns: int, last_target: str) -> Check:
+    """``explorer.home_before_follower``: home after its last target, before the follower moved."""
+    th = g.th
+    moved = g.follower_moved_ns
+    home = g.explorer_home_disc.first_after(last_target_ns)
+    ok = home is not None and (moved is None or moved >= home)
+    follower = "the follower never moved" if moved is None else f"follower moved at {_s(moved)}"
+    after = f" after {last_target}" if last_target else ""
+    if home is None:
+        measured = f"never home{after} (ended {g.explorer_home_disc.last_m:.2f} m away); {follower}"
+    else:
+        measured = f"home at {_s(home)}; {follower}"
+    if ok:
+        evidence_ns, evidence = home, "explorer home"
+    elif moved is not None:
+        evidence_ns, evidence = moved, "follower moved"
+    else:
+        evidence_ns, evidence = None, ""
+    return Check(
+        id="explorer.home_before_follower",
+        description="explorer returned home before the follower moved",
+        passed=ok,
+        points=4.0 if ok else 0.0,
+        max_points=4.0,
+        measured=measured,
+        threshold=f"home within {th.home_m:g} m after the last target, before the follower "
+        f"moves {th.follower_moved_m:g} m",
+        evidence_ns=evidence_ns,
+        value=None if home is None else home / 1e9,
+        unit="s",
+        limit=None if moved is None else moved / 1e9,
+        op="<=",
+        evidence=evidence,
+    )
+
+
+def follower_markers(g: Grader) -> list[Check]:
+    """``follower.marker_k``: the follower visited each marker, in ID order."""
+    ids = list(g.marker_discs)
+    return _visit_checks(
+        ids=[f"follower.marker_{k}" for k in ids],
+        descriptions=[f"follower visited marker {k} in ID order" for k in ids],
+        names=[f"marker {k}" for k in ids],
+        discs=list(g.marker_discs.values()),
+        radius=g.th.follower_visit_m,
+        points_total=12.0,
+        verb="visited",
+        order="ID order",
+    )
+
+
+def follower_home(g: Grader, last_marker_ns: int, last_marker: str) -> Check:
+    """``follower.home``: the follower came home after its last in-order marker."""
+    d = g.follower_home_disc
+    fh = d.first_after(last_marker_ns) if last_marker else None
+    if not last_marker:
+        measured, value = "visited no marker", None
+    elif fh is None:
+        measured = f"never home after {last_marker} (ended {d.last_m:.2f} m away)"
+        value = d.last_m if math.isfinite(d.last_m) else None
+    else:
+        value = d.stay_at(fh)
+        measured = f"home at {_s(fh)} (closest {value:.3f} m)"
+    return Check(
+        id="follower.home",
+        description="follower returned home after the markers",
+        passed=fh is not None,
+        points=4.0 if fh is not None else 0.0,
+        max_points=4.0,
+        measured=measured,
+        threshold=f"within {g.th.home_m:g} m of {_xy(g.follower_home)}"
+        + (f", after {last_marker}" if last_marker else ""),
+        evidence_ns=fh,
+        value=value,
+        unit="m",
+        limit=g.th.home_m,
+        op="<=",
+        evidence="" if fh is None else "follower home",
+    )
+
+
+def time_limit(g: Grader, follower_home_ns: int | None) -> Check:
+    """``time_limit``: the follower was home within the limit, counted from the log start."""
+    limit = g.resolved_thresholds().time_limit_s or 0.0
+    t0 = g.start_ns or 0
+    took = None if follower_home_ns is None else (follower_home_ns - t0) / 1e9
+    ok = took is not None and took <= limit
+    return Check(
+        id="time_limit",
+        description="whole task completed within the time limit",
+        passed=ok,
+        points=4.0 if ok else 0.0,
+        max_points=4.0,
+        measured=f"{took:.1f} s" if took is not None else "not completed (follower never home)",
+        threshold=f"<= {limit:g} s",
+        evidence_ns=follower_home_ns,
+        value=took,
+        unit="s",
+        limit=limit,
+        op="<=",
+        evidence="" if follower_home_ns is None else "follower home",
+    )
+
+
+def one_cmd_vel_publisher(g: Grader, robot: str) -> Check:
+    """``<robot>.cmd_vel_one_publisher``: never two different moving commands in one tick (no
+    points of its own: the course's rubric loses them elsewhere on a robot that does not spin)."""
+    n = g.cmd_conflicts[robot]
+    first = g.cmd_conflict_ns[robot]
+    return Check(
+        id=f"{robot}.cmd_vel_one_publisher",
+        description=f"{robot}'s cmd_vel has one publisher at a time",
+        passed=n == 0,
+        points=0.0,
+        max_points=0.0,
+        measured="no conflicting commands"
+        if n == 0
+        else f"{_n(n, 'tick')} with two different commands, first at {_s(first or 0)}",
+        threshold="one moving command per tick",
+        evidence_ns=first,
+        value=float(n),
+        unit="ticks",
+        limit=0.0,
+        op="<=",
+        evidence="" if first is None else "first tick with two commands",
+    )
+
+
+def judge(g: Grader) -> tuple[Check, ...]:
+    """Every rubric line, in rubric order, from what ``g`` observed."""
+    targets = explorer_targets(g)
+    last_target = _last_reached(
+        [f"target_{k + 1}" for k in range(len(g.targets))], in_order(g.target_discs)
+    )
+    markers = follower_markers(g)
+    last_marker = _last_reached(
+        [f"marker {k}" for k in g.marker_discs], in_order(list(g.marker_discs.values()))
+    )
+    home = follower_home(g, *last_marker)
+    lines: list[Check] = [
+        *targets,
+        *(marker_detected(g, mid) for mid in g.markers),
+        *(marker_broadcast(g, mid) for mid in g.markers),
+        only_on_detection(g),
+        explorer_home_before_follower(g, *last_target),
+        *markers,
+        home,
+        time_limit(g, home.evidence_ns),
+        *(one_cmd_vel_publisher(g, r) for r in contract.ROBOTS),
+    ]
+    return tuple(lines)
+
+
+RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)
+"""The US&R rubric, as its assignment carries it."""

@@ -1,0 +1,110 @@
+"""A rubric line's verdict and a recording's grade: the shapes every rubric returns.
+
+Why a module of its own: the US&R and the ROS 2 rubrics, the reports (table, JSON, JUnit, CSV,
+HTML) and the viewer all speak these two types; neither rubric should have to import the other
+to share them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from usar_replay.core import msgs
+from usar_replay.core.settings import Thresholds
+from usar_replay.world.scenario import Scenario
+
+__all__ = ["Check", "GradeReport", "Rubric", "RubricGrader"]
+
+
+@dataclass(frozen=True, slots=True)
+class Check:
+    """One rubric line's verdict.
+
+    ``measured`` and ``threshold`` are the words for a person; ``value``/``limit`` (in ``unit``,
+    compared with ``op``) are the same facts as numbers for a machine. ``evidence_ns`` is the sim
+    time to look at and ``evidence`` what happened then; both are empty when nothing did.
+    """
+
+    id: str
+    description: str
+    passed: bool
+    points: float
+    max_points: float
+    measured: str
+    threshold: str
+    evidence_ns: int | None
+    detail: str = ""
+    value: float | None = None
+    unit: str = ""
+    limit: float | None = None
+    op: str = ""
+    evidence: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class GradeReport:
+    """All rubric lines of one recording, plus whether the log itself was complete."""
+
+    source: str
+    checks: tuple[Check, ...]
+    start_ns: int
+    log_complete: bool = True
+    log_problem: str = ""
+    thresholds: Thresholds | None = None
+    """The thresholds judged by, ``time_limit_s`` resolved from the scenario."""
+    scenario: str = ""
+    """The scenario's name."""
+    seconds: float = 0.0
+    """Wall time spent grading (JUnit's ``time``); never part of the verdict."""
+
+    @property
+    def points(self) -> float:
+        return sum(c.points for c in self.checks)
+
+    @property
+    def max_points(self) -> float:
+        return sum(c.max_points for c in self.checks)
+
+    @property
+    def passed(self) -> bool:
+        return all(c.passed for c in self.checks)
+
+    def check(self, check_id: str) -> Check:
+        """The line with this id (KeyError when the scenario has no such line)."""
+        for c in self.checks:
+            if c.id == check_id:
+                return c
+        raise KeyError(check_id)
+
+    def failed_ids(self) -> list[str]:
+        """Ids of the lines that failed, in rubric order."""
+        return [c.id for c in self.checks if not c.passed]
+
+
+class RubricGrader(Protocol):
+    """A streaming grader: fed one message at a time, then asked for the report."""
+
+    start_ns: int | None
+
+    def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None: ...
+
+    def report(
+        self, source: str, *, log_complete: bool = True, log_problem: str = ""
+    ) -> GradeReport: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Rubric:
+    """One assignment's rubric: how to make its grader and which topics it reads.
+
+    Why a value and not a module: an :class:`~usar_replay.grading.assignment.Assignment`
+    carries a factory for it, so grade, replay and the CLI ask the run's assignment for its
+    rubric and never look a module up by name."""
+
+    grader: Callable[[Scenario, Thresholds | None], RubricGrader]
+    grade_topics: tuple[str, ...]
+    """The topics the rubric reads; everything else in a log is skipped without decoding."""
+    required_topics: tuple[str, ...]
+    """Without these a log cannot be graded at all."""

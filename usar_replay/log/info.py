@@ -1,0 +1,130 @@
+"""`usar info`: what a recording holds, in the spirit of ``ros2 bag info``, and whether it is whole.
+
+A workflow over :func:`usar_replay.log.run.open_run`: it never fails on a damaged file, it says what
+is damaged, how much is still readable and what to do; the CLI turns "not whole" into exit code 3.
+By default the whole file is checked (every chunk decompressed, every CRC compared): a summary
+can say ``complete`` over damaged data. ``quick=True`` trusts the summary.
+
+The file's state (is the *file* whole?) and the mission's outcome (how did the *run* end?) are
+two lines, because they answer different questions: a complete file can hold a mission that hit
+its time limit.
+"""
+
+from __future__ import annotations
+
+import os
+import textwrap
+
+from usar_replay.core import settings
+
+# Re-exported for record.py, which still imports it from here (contract.py is its home).
+from usar_replay.core.contract import SCENARIO_ATTACHMENT
+from usar_replay.log.run import Run, open_run
+
+__all__ = ["SCENARIO_ATTACHMENT", "describe", "is_whole", "open_checked"]
+
+WIDTH = 100
+_LABEL = 15
+
+_STATES = {
+    "complete": "complete (closed and indexed)",
+    "interrupted": "interrupted (closed and indexed, but the recording was stopped early)",
+    "truncated": "INCOMPLETE (no usable summary or index: never closed, or damaged)",
+    "corrupt": "CORRUPT (closed, but its data is damaged)",
+    "unknown": "unknown (closed and indexed, but no usar status record)",
+}
+
+_OUTCOMES = {
+    "done": "done (the mission finished)",
+    "time_limit": "stopped at the time limit",
+    "crashed": "the mission's code crashed",
+    "hung": "the mission's code stopped responding",
+    "interrupted": "interrupted before the mission finished",
+    "unknown": "not recorded in this log",
+}
+
+
+def open_checked(path: str | os.PathLike[str], *, quick: bool = False) -> Run:
+    """Open ``path`` for ``usar info``: every chunk checked, or only the summary (``quick``)."""
+    return open_run(path, check="summary" if quick else "full")
+
+
+def is_whole(run: Run) -> bool:
+    """A complete, undamaged file (``usar info`` exits 0 for it, 3 otherwise)."""
+    return run.damage is None and run.file_state == "complete" and not run.problems
+
+
+def _size(n: int) -> str:
+    if n < 1024:
+        return f"{n} B"
+    value, unit = float(n), "B"
+    for name in ("KiB", "MiB", "GiB"):
+        value, unit = value / 1024, name
+        if value < 1024:
+            break
+    return f"{value:.1f} {unit}"
+
+
+def _field(label: str, text: str) -> list[str]:
+    """``Label:  text``, wrapped to :data:`WIDTH` with the label's indent."""
+    head = f"{label + ':':<{_LABEL}}"
+    return textwrap.wrap(
+        text, WIDTH, initial_indent=head, subsequent_indent=" " * _LABEL, break_on_hyphens=False
+    ) or [head.rstrip()]
+
+
+def _advice(run: Run) -> str:
+    name = str(run.path)
+    if run.file_state == "truncated":
+        return f"`usar recover {name}` writes what it holds to an indexed log, marked interrupted"
+    if run.damage is not None:
+        return f"`usar recover {name} -o OUT.mcap` copies the readable messages to a new log"
+    return ""
+
+
+def describe(run: Run, *, quick: bool = False) -> str:
+    """The human-readable report printed by ``usar info`` (every line within 100 columns)."""
+    reader = run.reader
+    state = _STATES.get(run.file_state, run.file_state)
+    if run.file_state == "complete" and run.damage is None:
+        state += "; summary trusted, data not checked" if quick else "; every CRC checked"
+        if not quick and not reader.data_crc_recorded:
+            state += " (chunks only: this log has no data CRC)"
+    lines = _field("File", str(run.path))
+    lines += _field("Size", f"{_size(reader.size_bytes)} in {reader.chunk_count} chunks")
+    lines += _field("File state", state)
+    if run.damage is not None:
+        lines += _field("Damage", run.damage.describe())
+    for problem in run.problems:
+        lines += _field("Problem", problem)
+    advice = _advice(run)
+    if advice:
+        lines += _field("What to do", advice)
+    outcome = _OUTCOMES.get(run.outcome, run.outcome)
+    if run.outcome_reason and run.outcome != "done":
+        outcome += f": {run.outcome_reason.splitlines()[0]}"
+    lines += _field("Mission", outcome)
+    lines += _field("Duration", f"{run.duration_s:.3f} s (sim time)")
+    lines += _field("Start", f"{run.start_ns / 1e9:.3f} s")
+    lines += _field("End", f"{run.end_ns / 1e9:.3f} s")
+    lines += _field("Messages", str(reader.message_count))
+    lines.append("Topics:")
+    topics = list(run.topics.values())
+    width = max((len(t.topic) for t in topics), default=0)
+    twidth = max((len(t.msgtype) for t in topics), default=0)
+    for t in topics:
+        lines.append(f"  {t.topic:<{width}}  {t.msgtype:<{twidth}}  {t.count:>7}"[:WIDTH])
+    if not topics:
+        lines.append("  (none)")
+    lines.append("Scenario:")
+    if run.scenario is not None:
+        lines += [f"  {line}"[:WIDTH] for line in run.scenario.summary().splitlines()]
+    else:
+        lines.append("  (no scenario attached)")
+    lines.append("Settings:" if run.settings_recorded else "Settings (not recorded; defaults):")
+    lines += [f"  {k} = {v}"[:WIDTH] for k, v in settings.describe(run.settings)]
+    if run.run_metadata:
+        lines.append("Recorded with:")
+        meta = sorted((k, v) for k, v in run.run_metadata.items() if k != "mission_settings")
+        lines += [f"  {k} = {v}"[:WIDTH] for k, v in meta]  # mission_settings: under Settings
+    return "\n".join(lines)

@@ -1,0 +1,400 @@
+"""`usar record`: run a mission live in pybullet and write everything to one MCAP file.
+
+The loop is the design's data flow, sim -> messages -> mission -> messages -> sim, on the sim
+clock only. At each control tick (``record.control_hz``) the simulator's messages (``/tf``, a
+camera frame when one is due, odometry; ``/tf_static`` and ``/map`` at the first tick) are
+written to the log as the ``sim`` publisher and handed, as the same CDR bytes, to the mission
+process (:mod:`usar_replay.node.worker`) as one tick; whatever the mission publishes is written at
+the same sim time as the ``mission`` publisher, and its ``cmd_vel``s go to the simulator before the
+next physics step. Ground truth is written as the ``recorder`` publisher and never reaches the
+mission. Because the mission sees exactly the logged bytes, a replay from the log reproduces its
+outputs bit for bit.
+
+The log is self-contained: the scenario (``scenario.toml``), every setting (``settings.toml``),
+which mission code ran (``mission.toml``: target, module, sha256) and, on close, how the run
+ended (``usar.status``: the file's state and the mission's outcome).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO
+
+from usar_replay import __version__
+from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.settings import RunSettings
+from usar_replay.core.settings import to_toml as settings_to_toml
+from usar_replay.grading.assignment import Assignment
+from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.log import bag
+from usar_replay.log.run import MissionInfo
+from usar_replay.node.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
+from usar_replay.sim.camera import encode_image
+from usar_replay.sim.simulator import SimRobot, Simulator
+from usar_replay.world.detect import image_codecs
+from usar_replay.world.nav import OccupancyGrid, grid_to_msg
+from usar_replay.world.scenario import Scenario, to_toml
+
+__all__ = [
+    "OUTCOMES",
+    "Progress",
+    "RecordResult",
+    "default_output",
+    "mission_parameters",
+    "print_summary",
+    "record",
+]
+
+OUTCOMES = {
+    "done": "the mission said it was done",
+    "time_limit": "stopped at the hard limit (1.5 x the scenario's time limit)",
+    "max_sim_time": "stopped at --max-sim-time",
+    "interrupted": "interrupted",
+    "crashed": "the mission's code raised an exception",
+    "hung": "a mission callback did not return in time",
+    "out_of_memory": "the mission ran out of memory",
+    "refused": "the mission published something it may not",
+}
+"""How a run can end (``usar.status`` ``outcome``), with the words people read."""
+
+
+@dataclass(frozen=True, slots=True)
+class Progress:
+    """What the progress display shows after each control tick."""
+
+    sim_time_s: float
+    markers_found: int
+    markers_total: int
+    frames: int
+    last_log: str
+
+
+@dataclass(frozen=True, slots=True)
+class RecordResult:
+    """What a recording produced, for the end-of-run summary."""
+
+    path: Path
+    status: str
+    outcome: str
+    outcome_reason: str
+    sim_duration_s: float
+    wall_time_s: float
+    frames: int
+    messages: int
+    markers_found: dict[int, tuple[float, float, float]]
+    marker_errors_m: dict[int, float]
+    renderer: str
+    mission: str
+
+    @property
+    def mission_done(self) -> bool:
+        return self.outcome == "done"
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.sim_duration_s / self.wall_time_s if self.wall_time_s > 0 else math.inf
+
+    @property
+    def size_bytes(self) -> int:
+        return self.path.stat().st_size if self.path.exists() else 0
+
+
+def default_output(scenario: Scenario, directory: str | os.PathLike[str] = "recordings") -> Path:
+    """``recordings/<scenario>[-seed<N>].mcap``: a name that says what was run, not when."""
+    stem = scenario.name + (f"-seed{scenario.seed}" if scenario.seed is not None else "")
+    return Path(directory) / f"{stem}.mcap"
+
+
+def mission_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
+    """The parameters a mission's nodes read, as the course's launch and parameter files give
+    them (the scenario's assignment says which: :mod:`usar_replay.grading.assignment`; for US&R
+    ``aruco_lookup_locations.target_k``, ``<robot>.home``, ``mission.*``, ``detector.*``).
+    Never a marker position."""
+    return assignment_of(scenario).parameters(scenario, settings)
+
+
+def _run_metadata(renderer: str) -> dict[str, str]:
+    """Facts about the machine that recorded (the settings are in ``settings.toml``)."""
+    import cv2
+
+    from usar_replay.sim.simulator import pybullet_api_version
+
+    return {
+        "software": f"usar-replay {__version__}",
+        "python": platform.python_version(),
+        "opencv": cv2.__version__,
+        "pybullet_api": str(pybullet_api_version()),
+        "renderer": renderer,
+        "image_codecs": image_codecs(),
+        "log_format": "2",
+    }
+
+
+def _truth_markers(scenario: Scenario, t_ns: int) -> msgs.FiducialTransformArray:
+    items = []
+    for m in sorted(scenario.markers, key=lambda m: m.id):
+        items.append(
+            msgs.FiducialTransform(
+                fiducial_id=m.id,
+                transform=msgs.Transform(
+                    translation=msgs.Vector3(x=m.x, y=m.y, z=m.z),
+                    rotation=msgs.Quaternion(z=math.sin(m.yaw / 2), w=math.cos(m.yaw / 2)),
+                ),
+            )
+        )
+    return msgs.FiducialTransformArray(
+        header=msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id=contract.MAP),
+        transforms=tuple(items),
+    )
+
+
+@dataclass(slots=True)
+class _Observed:
+    """One tick of the simulator's messages, encoded once for the log and the mission."""
+
+    t: int
+    wire: list[tuple[str, str, bytes]]
+    truth: list[tuple[str, msgs.Message]]
+    frame: int
+
+
+def _observe(
+    sim: Simulator,
+    scenario: Scenario,
+    asg: Assignment,
+    first: list[tuple[str, msgs.Message]],
+) -> _Observed:
+    """What the simulator publishes now: ``first`` (``/tf_static``, ``/map`` at the start),
+    ``/tf`` (where the assignment's simulator publishes the robots' odom links), a camera frame
+    when one is due, odometry; and the ground truth of the moment."""
+    t = sim.now_ns
+    batch = list(first)
+    if asg.sim_base_tf:
+        batch.append((contract.TF, sim.tf()))
+    frame = 0
+    if sim.camera_due():
+        cam = sim.camera_info()
+        data = encode_image(sim.render_camera(), scenario.camera.encoding)
+        image = msgs.CompressedImage(header=cam.header, format=scenario.camera.encoding, data=data)
+        batch += [(asg.camera_info_topic, cam), (asg.image_topic, image)]
+        frame = 1
+    batch += [(contract.odom(r), sim.odometry(r)) for r in asg.robot_names]
+    wire = [(topic, msg.__msgtype__, cdr.encode(msg)) for topic, msg in batch]
+    stamp = msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP)
+    truth: list[tuple[str, msgs.Message]] = [
+        (contract.truth_pose(r), msgs.PoseStamped(header=stamp, pose=sim.true_pose(r)))
+        for r in asg.robot_names
+    ]
+    return _Observed(t, wire, truth, frame)
+
+
+def _step(sim: Simulator, commands: list[tuple[str, msgs.Twist]], steps: int) -> None:
+    for robot, twist in commands:
+        sim.set_cmd_vel(robot, twist)
+    sim.step(steps)
+
+
+def record(
+    scenario: Scenario,
+    out: str | os.PathLike[str],
+    settings: RunSettings | None = None,
+    progress: Callable[[Progress], None] | None = None,
+    *,
+    mission: str | None = None,
+    limits: MissionLimits | None = None,
+) -> RecordResult:
+    """Run ``mission`` (default: the built-in one) on ``scenario`` and write the log to ``out``.
+
+    Ctrl-C (KeyboardInterrupt) stops the run: the file is closed, indexed and marked
+    ``interrupted``, and the interrupt propagates to the caller after the file is safe. A
+    mission that crashes, hangs or is refused ends the run with that outcome in the log (the
+    file itself is complete); the result says so.
+    """
+    settings = settings or RunSettings()
+    rs = settings.record
+    asg = assignment_of(scenario)
+    target = resolve_target(mission or asg.builtin_mission)
+    wall_start = time.perf_counter()  # only for the real-time factor shown to people
+    limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
+    limit_outcome = "max_sim_time" if rs.max_sim_time_s else "time_limit"
+    grid = OccupancyGrid.from_scenario(scenario)
+    params = mission_parameters(scenario, settings)
+    frames = 0
+    markers: dict[int, tuple[float, float, float]] = {}
+    last_log = ""
+    outcome, reason = limit_outcome, f"stopped at {limit_s:g} s of sim time"
+    with (
+        Simulator(
+            scenario,
+            physics_hz=rs.physics_hz,
+            start_time_ns=contract.START_TIME_NS,
+            renderer=rs.renderer,
+            robots=tuple(
+                SimRobot(f, *start)
+                for f, start in zip(asg.robots, asg.starts(scenario), strict=True)
+            ),
+            camera_robot=asg.camera_robot,
+            base_tf=asg.sim_base_tf,
+            static_frames=asg.static_links(scenario),
+        ) as sim,
+        bag.BagWriter(out) as writer,
+    ):
+        renderer = sim.renderer_name
+        stored = dataclasses.replace(settings, record=dataclasses.replace(rs, renderer=renderer))
+        t0 = sim.now_ns
+        writer.add_attachment(
+            contract.SCENARIO_ATTACHMENT, "application/toml", to_toml(scenario).encode(), t0
+        )
+        writer.add_attachment(
+            contract.SETTINGS_ATTACHMENT,
+            "application/toml",
+            settings_to_toml(stored).encode(),
+            t0,
+        )
+        info = MissionInfo(target.spec, target.module, target.sha256, __version__)
+        writer.add_attachment(
+            contract.MISSION_ATTACHMENT, "application/toml", info.to_toml().encode(), t0
+        )
+        shown = f"{renderer}+shadowmap" if sim.egl_shadow_map else renderer
+        writer.add_metadata(contract.RUN_METADATA, _run_metadata(shown))
+        writer.write(contract.TRUTH_MARKERS, _truth_markers(scenario, t0), t0, publisher="recorder")
+        first: list[tuple[str, msgs.Message]] = [
+            (contract.TF_STATIC, sim.tf_static()),
+            (contract.MAP_TOPIC, grid_to_msg(grid, msgs.Time.from_ns(t0))),
+        ]
+        steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
+        end_ns = t0 + int(limit_s * 1e9)
+        last_t = t0
+        try:
+            with MissionProcess(
+                target,
+                params,
+                sim_topics=asg.sim_topics,
+                sim_frames=asg.sim_frames,
+                limits=limits,
+            ) as proc:
+                latency = rs.actuation_latency_ticks
+                tick: _Observed | None = _observe(sim, scenario, asg, first)
+                commands: list[tuple[str, msgs.Twist]] = []
+                while tick is not None:
+                    for topic, msgtype, raw in tick.wire:
+                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="sim")
+                    for topic, msg in tick.truth:
+                        writer.write(topic, msg, tick.t, publisher="recorder")
+                    frames += tick.frame
+                    last_t = tick.t
+                    proc.send(tick.t, tick.wire)
+                    nxt: _Observed | None = None
+                    if latency:
+                        # the mission thinks about this tick while the simulator steps with the
+                        # previous tick's commands and renders the next frame (two cores busy);
+                        # each cmd_vel acts one tick later, always: recorded, deterministic
+                        _step(sim, commands, steps_per_tick)
+                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                    commands = []
+                    for topic, msgtype, raw, value in proc.receive():
+                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="mission")
+                        robot = contract.robot_of_topic(topic)
+                        if robot is not None and topic == contract.cmd_vel(robot):
+                            assert isinstance(value, msgs.Twist)
+                            commands.append((robot, value))
+                        elif topic == contract.MARKER_POSES and isinstance(
+                            value, msgs.FiducialTransformArray
+                        ):
+                            markers = {
+                                f.fiducial_id: (
+                                    f.transform.translation.x,
+                                    f.transform.translation.y,
+                                    f.transform.translation.z,
+                                )
+                                for f in value.transforms
+                            }
+                        elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
+                            last_log = value.msg
+                    if progress is not None:
+                        progress(
+                            Progress(
+                                (tick.t - t0) / 1e9,
+                                len(markers),
+                                len(scenario.markers),
+                                frames,
+                                last_log,
+                            )
+                        )
+                    if proc.shutdown_requested:
+                        outcome, reason = "done", "the mission said it was done"
+                        break
+                    if not latency:
+                        _step(sim, commands, steps_per_tick)
+                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                    tick = nxt
+        except MissionEnded as ended:
+            outcome, reason = ended.verdict, ended.detail
+        except KeyboardInterrupt:
+            writer.outcome, writer.outcome_reason = "interrupted", "interrupted by the user"
+            raise
+        writer.outcome, writer.outcome_reason = outcome, reason
+        if outcome != "done":
+            writer.write(
+                contract.ROSOUT,
+                msgs.Log(
+                    stamp=msgs.Time.from_ns(last_t),
+                    level=msgs.Log.ERROR,
+                    name="record",
+                    msg=f"run ended: {OUTCOMES.get(outcome, outcome)}",
+                ),
+                last_t,
+                publisher="recorder",
+            )
+        sim_duration = (last_t - t0) / 1e9
+        message_count = writer.message_count
+    true_markers = {m.id: m for m in scenario.markers}
+    errors = {
+        mid: math.dist(p, (true_markers[mid].x, true_markers[mid].y, true_markers[mid].z))
+        for mid, p in markers.items()
+        if mid in true_markers
+    }
+    return RecordResult(
+        path=Path(out),
+        status="complete",
+        outcome=outcome,
+        outcome_reason=reason,
+        sim_duration_s=sim_duration,
+        wall_time_s=time.perf_counter() - wall_start,
+        frames=frames,
+        messages=message_count,
+        markers_found=dict(sorted(markers.items())),
+        marker_errors_m=errors,
+        renderer=renderer,
+        mission=target.spec,
+    )
+
+
+def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
+    """The end-of-run summary for people (fits 100 columns; a crash's traceback is shown as
+    the user's own)."""
+    lines = [
+        f"Recorded {result.path} ({result.size_bytes / 1e6:.1f} MB, {result.messages} messages,"
+        f" {result.frames} camera frames)",
+        f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
+        f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
+        f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
+        f"Markers found: {len(result.markers_found)}",
+    ]
+    for mid, pos in result.markers_found.items():
+        err = result.marker_errors_m.get(mid)
+        err_s = f", error {err * 100:.1f} cm" if err is not None else ""
+        lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
+    out = file or sys.stdout
+    print("\n".join(lines), file=out)
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+        print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
+        print(result.outcome_reason.rstrip(), file=out)
