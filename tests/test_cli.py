@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from clitools import usar
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.log import bag
 

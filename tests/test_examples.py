@@ -24,7 +24,7 @@ import pytest
 from conftest import one_room
 from example_worlds import CORRIDOR_SETTINGS, corridor, quick_room
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import RecordSettings, RunSettings
 from usar_replay.grading.grade import GRADE_TOPICS, Grader, GradeReport, grade_file

@@ -20,7 +20,7 @@ import pytest
 from clitools import one_error_line, usar
 from logtools import SyntheticRun, rewrite, synthetic_mission, truncate_at
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissingTopic, UsageError
 from usar_replay.grading.grade import (

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from clitools import one_error_line, usar
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.grading.grade import grade_file
 from usar_replay.log import bag

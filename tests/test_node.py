@@ -22,7 +22,7 @@ from usar_replay.api import (
     TFMessage,
     TransformStamped,
 )
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import contract
 from usar_replay.log.run import open_run
 from usar_replay.node.executor import Executor, PublishPolicy

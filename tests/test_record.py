@@ -10,7 +10,7 @@ from clitools import default_signals
 from conftest import one_room
 from logtools import digest
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.log import bag
 from usar_replay.log.run import open_run

@@ -11,7 +11,7 @@ import pytest
 from clitools import one_error_line, usar
 from logtools import rewrite, truncate_at
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.contract import CAMERA_INFO, FIDUCIALS, IMAGE
 from usar_replay.core.errors import UsageError

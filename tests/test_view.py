@@ -27,7 +27,7 @@ import pytest
 import rerun as rr
 from clitools import default_signals, one_error_line, usar
 
-from usar_replay.cli import main
+from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.contract import IMAGE as CAMERA_TOPIC
 from usar_replay.core.contract import SCENARIO_ATTACHMENT
