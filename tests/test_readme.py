@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.cli.main import _parser
+from usar_replay.cli.parser import build_parser as _parser
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 

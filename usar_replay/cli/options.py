@@ -1,0 +1,201 @@
+"""What several commands read from their arguments: the world, the settings, the mission's
+limits, the thresholds, the recordings named, and the grade outputs (checked before any work).
+
+Why one module: ``record``, ``replay``, ``scenario`` and ``batch`` take the same world and
+settings options and must read them the same way; each command module keeps only its own.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from usar_replay.core.errors import UsageError
+
+if TYPE_CHECKING:
+    from usar_replay.core.settings import RunSettings, Thresholds
+    from usar_replay.grading.verdict import GradeReport
+    from usar_replay.node.worker import MissionLimits
+    from usar_replay.world.scenario import Scenario
+
+__all__ = [
+    "parse_camera",
+    "load_scenario",
+    "overrides",
+    "run_settings",
+    "limits",
+    "OUTPUT_OPTIONS",
+    "output_inputs",
+    "check_outputs",
+    "identity",
+    "reports_out",
+    "thresholds",
+    "find_recordings",
+]
+
+
+def parse_camera(text: str) -> tuple[int, int, float]:
+    """``640x480@10`` -> (640, 480, 10.0)."""
+    import re
+
+    m = re.fullmatch(r"(\d+)x(\d+)(?:@(\d+(?:\.\d+)?))?", text.strip())
+    if not m:
+        raise UsageError(f"--camera {text!r}: expected WIDTHxHEIGHT[@RATE], e.g. 640x480@10")
+    w, h, rate = int(m.group(1)), int(m.group(2)), float(m.group(3) or 10)
+    if not (16 <= w <= 4096 and 16 <= h <= 4096 and 0 < rate <= 60):
+        raise UsageError(f"--camera {text!r}: size 16..4096 pixels and rate 0..60 Hz")
+    return w, h, rate
+
+
+def load_scenario(args: argparse.Namespace) -> Scenario:
+    from usar_replay.grading import assignment
+    from usar_replay.world import scenario as scn
+
+    kind = getattr(args, "assignment", None)
+    base = scn.load(args.scenario) if args.scenario else assignment.by_name(kind or "usar").world()
+    if kind and base.assignment != kind:
+        raise UsageError(
+            f"{args.scenario} is a {base.assignment!r} world, not {kind!r}; drop --assignment"
+        )
+    if args.seed is not None:
+        base = assignment.of(base).variant(base, args.seed)
+    if args.camera:
+        w, h, rate = parse_camera(args.camera)
+        base = dataclasses.replace(
+            base, camera=dataclasses.replace(base.camera, width=w, height=h, rate_hz=rate)
+        )
+    if args.encoding:
+        base = dataclasses.replace(
+            base, camera=dataclasses.replace(base.camera, encoding=args.encoding)
+        )
+    return base
+
+
+def overrides(items: Sequence[str] | None) -> dict[str, str]:
+    overrides: dict[str, str] = {}
+    for item in items or []:
+        k, eq, v = item.partition("=")
+        if not eq or not k.strip():
+            raise UsageError(
+                f"--set {item!r}: expected NAME=VALUE, e.g. detector.dictionary=DICT_5X5_50"
+            )
+        overrides[k.strip()] = v.strip()
+    return overrides
+
+
+def run_settings(args: argparse.Namespace, base: RunSettings) -> RunSettings:
+    """``--settings FILE`` then ``--set NAME=VALUE`` on top of ``base`` (one codec for all)."""
+    from usar_replay.core import settings as settings_mod
+
+    out = base
+    if getattr(args, "settings", None):
+        data = settings_mod.load(settings_mod.RunSettings, args.settings)
+        # only the tables the file has replace the base's
+        import tomllib
+
+        given = tomllib.loads(Path(args.settings).read_text(encoding="utf-8"))
+        out = dataclasses.replace(
+            out, **{k: getattr(data, k) for k in ("record", "mission", "detector") if k in given}
+        )
+    return settings_mod.apply_overrides(out, overrides(args.set), default_group="mission")
+
+
+def limits(args: argparse.Namespace) -> MissionLimits:
+    from usar_replay.node.worker import MissionLimits
+
+    if not (args.tick_timeout > 0):
+        raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
+    if args.mission_memory < 0:
+        raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
+    return MissionLimits(tick_timeout_s=args.tick_timeout, memory_mb=args.mission_memory)
+
+
+OUTPUT_OPTIONS = (("--json", "json"), ("--junit", "junit"), ("--csv", "csv"))
+
+
+def output_inputs(args: argparse.Namespace, inputs: Sequence[str]) -> list[str]:
+    """The files a grade output may never replace: the recordings read (and a replayed one)."""
+    return [*inputs, *([args.file] if getattr(args, "file", None) else [])]
+
+
+def check_outputs(args: argparse.Namespace, inputs: Sequence[str]) -> None:
+    """Refuse bad outputs before any work: an input, a directory, an existing file without
+    ``--overwrite``, or one path given to two options."""
+    from usar_replay.core.outfiles import check_output
+
+    seen: dict[Path, str] = {}
+    for opt, name in OUTPUT_OPTIONS:
+        path = getattr(args, name, None)
+        if not path:
+            continue
+        p = check_output(
+            path, overwrite=args.overwrite, inputs=output_inputs(args, inputs), option=opt
+        )
+        key = p.resolve()
+        if key in seen:
+            raise UsageError(f"{opt} {p}: also given to {seen[key]}; choose another path")
+        seen[key] = opt
+
+
+def identity(p: Path) -> tuple[int, int] | None:
+    try:
+        st = p.stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_mtime_ns)
+
+
+def reports_out(
+    args: argparse.Namespace,
+    reports: Sequence[GradeReport],
+    errors: Sequence[tuple[str, str]] = (),
+    inputs: Sequence[str] = (),
+) -> None:
+    """Write the machine-readable reports asked for, each atomically; a recording that could
+    not be graded at all is in them too (``errors``: (path, message)), so a CI run never loses
+    one silently."""
+    from usar_replay.core.outfiles import write_text
+    from usar_replay.grading import reports as rep
+
+    for opt, path, fmt in (
+        ("--json", args.json, rep.to_json),
+        ("--junit", args.junit, rep.to_junit),
+        ("--csv", args.csv, rep.to_csv),
+    ):
+        if path:
+            write_text(
+                path,
+                fmt(reports, errors),
+                overwrite=args.overwrite,
+                inputs=output_inputs(args, inputs),
+                option=opt,
+            )
+
+
+def thresholds(args: argparse.Namespace) -> Thresholds | None:
+    from usar_replay.grading.grade import load_thresholds
+
+    return load_thresholds(args.thresholds) if args.thresholds else None
+
+
+def find_recordings(names: Sequence[str]) -> list[str]:
+    """Files as given; a folder is searched with its sub-folders for ``*.mcap`` (sorted; hidden
+    files and folders and unfinished ``.part`` files are skipped)."""
+    files: list[str] = []
+    for name in names:
+        p = Path(name)
+        if p.is_dir():
+            found = sorted(
+                str(f)
+                for f in p.rglob("*.mcap")
+                if f.is_file() and not any(s.startswith(".") for s in f.relative_to(p).parts)
+            )
+            if not found:
+                raise UsageError(f"{p}: no .mcap files in this folder or its sub-folders")
+            files += found
+        else:
+            files.append(name)
+    return files

@@ -1,0 +1,117 @@
+"""`usar record`: run a mission live and record it; a status line while it runs."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from usar_replay.cli import arguments, options
+from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
+from usar_replay.core.errors import UsageError
+
+if TYPE_CHECKING:
+    from usar_replay.pipeline.record import Progress
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
+    p = sub.add_parser("record", help="run the mission in pybullet and record it to MCAP")
+    p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
+    p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
+    p.add_argument("--out", metavar="PATH", help="output .mcap (default: recordings/NAME.mcap)")
+    p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
+    p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
+    p.add_argument(
+        "--renderer", choices=["auto", "tiny", "egl"], default="auto", help="pybullet renderer"
+    )
+    p.add_argument(
+        "--max-sim-time",
+        type=arguments.positive_seconds,
+        metavar="S",
+        help="hard stop in sim seconds (>0)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    arguments.mission_options(p, replay=False)
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    p.set_defaults(func=run)
+
+
+class _StatusLine:
+    """One self-rewriting progress line on stderr (a plain line every 30 sim-s when not a tty)."""
+
+    def __init__(self) -> None:
+        import shutil
+
+        self.tty = sys.stderr.isatty()
+        self.width = min(shutil.get_terminal_size((100, 24)).columns, 100) - 1
+        self.last_print = -1e9
+
+    def __call__(self, p: Progress) -> None:
+        text = (
+            f"sim {p.sim_time_s:7.1f} s | markers {p.markers_found}/{p.markers_total} | "
+            f"frames {p.frames} | {p.last_log}"
+        )[: self.width]
+        if self.tty:
+            if p.sim_time_s - self.last_print >= 0.5:
+                print("\r" + text.ljust(self.width), end="", file=sys.stderr, flush=True)
+                self.last_print = p.sim_time_s
+        elif p.sim_time_s - self.last_print >= 30.0:
+            print(text, file=sys.stderr, flush=True)
+            self.last_print = p.sim_time_s
+
+    def close(self) -> None:
+        if self.tty:
+            print(file=sys.stderr)
+
+
+def run(args: argparse.Namespace) -> int:
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.pipeline.record import default_output, print_summary, record
+
+    scenario = options.load_scenario(args)
+    out = Path(args.out) if args.out else default_output(scenario)
+    if out.exists() and not args.overwrite:
+        raise UsageError(f"{out} exists; pass --overwrite to replace it, or --out another path")
+    base = RunSettings()
+    base = dataclasses.replace(
+        base,
+        record=dataclasses.replace(
+            base.record, renderer=args.renderer, max_sim_time_s=args.max_sim_time
+        ),
+    )
+    settings = options.run_settings(args, base)
+    status = _StatusLine()
+    before = options.identity(out)
+    try:
+        result = record(
+            scenario,
+            out,
+            settings,
+            progress=None if args.quiet else status,
+            mission=args.mission,
+            limits=options.limits(args),
+        )
+    except KeyboardInterrupt as err:
+        from usar_replay.core.signals import exit_code
+
+        status.close()
+        if options.identity(out) not in (None, before):
+            print(f"usar: {err}; {out} is closed and readable, marked interrupted", file=sys.stderr)
+        else:
+            print(f"usar: {err} before anything was recorded; no log was written", file=sys.stderr)
+        return exit_code(err)
+    status.close()
+    print_summary(result)
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+        return EXIT_MISSION
+    return EXIT_OK if result.mission_done else EXIT_FAIL

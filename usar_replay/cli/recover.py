@@ -1,0 +1,36 @@
+"""`usar recover`: a readable, indexed log from a killed recording's ``.part``."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from usar_replay.cli.exits import EXIT_OK
+
+if TYPE_CHECKING:
+    pass
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
+    p = sub.add_parser(
+        "recover", help="turn a killed recording's .part (or a damaged log) into a whole log"
+    )
+    p.add_argument("file", metavar="FILE", help="the .part or damaged .mcap")
+    p.add_argument(
+        "-o", "--out", metavar="OUT", help="output (default: FILE without .part, or X.recovered)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from usar_replay.log.recover import recover
+
+    result = recover(args.file, args.out, overwrite=args.overwrite)
+    print(result.describe())
+    if result.damage:
+        print(f"what was damaged: {result.damage}")
+    return EXIT_OK

@@ -1,0 +1,109 @@
+"""`usar replay`: re-run a mission from a log, compare its outputs, grade with ``--grade``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
+
+from usar_replay.cli import arguments, options
+from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_MISSION, EXIT_OK
+
+if TYPE_CHECKING:
+    from usar_replay.grading.verdict import GradeReport
+    from usar_replay.pipeline.replay import ReplayReport
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
+    p = sub.add_parser("replay", help="re-run the mission from a log and compare its outputs")
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("--grade", action="store_true", help="then grade the replayed outputs")
+    p.add_argument(
+        "--expect-changes",
+        action="store_true",
+        help="report differences without failing (regression runs of changed code or settings)",
+    )
+    arguments.mission_options(p, replay=True)
+    arguments.grade_outputs(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from usar_replay.grading.grade import rubric_for
+    from usar_replay.grading.reports import to_table
+    from usar_replay.grading.verdict import RubricGrader
+    from usar_replay.log.run import open_run
+    from usar_replay.pipeline.replay import check_not_damaged, replay
+
+    options.check_outputs(args, [args.file])  # before minutes of work, not after
+    run = open_run(args.file)
+    changed = bool(args.set or args.settings)
+    settings = options.run_settings(args, run.settings) if changed else None
+    thresholds = options.thresholds(args)  # a bad thresholds file is a usage error before any work
+    grader: RubricGrader | None = None
+    rubric = rubric_for(run.require_scenario())
+    if args.grade:
+        grader = rubric.grader(run.require_scenario(), thresholds)
+    report = replay(
+        run,
+        settings,
+        mission=args.mission,
+        grade_sink=None if grader is None else grader.feed,
+        grade_topics=rubric.grade_topics,
+        required_topics=rubric.required_topics if grader is not None else (),
+        limits=options.limits(args),
+    )
+    check_not_damaged(report)
+    print("\n".join(report.lines()))
+    code = EXIT_OK if report.identical or args.expect_changes else EXIT_FAIL
+    if report.mission_failure is not None:
+        code = EXIT_MISSION
+    grades = []
+    if grader is not None:
+        g = grader.report(
+            f"{args.file} (replayed)",
+            log_complete=not report.log_problem,
+            log_problem=report.log_problem,
+        )
+        grades.append(g)
+        print()
+        print(to_table(g))
+        if not g.passed and code == EXIT_OK:
+            code = EXIT_FAIL
+    _replay_reports_out(args, report, grades)
+    if report.log_problem:
+        print(
+            f"usar: {args.file}: the log is incomplete ({report.log_problem}); "
+            "replayed as far as it goes",
+            file=sys.stderr,
+        )
+        return EXIT_INCOMPLETE
+    return code
+
+
+def _replay_reports_out(
+    args: argparse.Namespace, report: ReplayReport, grades: Sequence[GradeReport]
+) -> None:
+    """``usar replay --json/--junit/--csv``: the comparison (and the grade with ``--grade``)."""
+    from usar_replay.core.outfiles import write_text
+    from usar_replay.grading import reports as rep
+    from usar_replay.pipeline import replay_report as rr
+
+    outputs: tuple[tuple[str, str | None, Callable[[], str]], ...] = (
+        ("--json", args.json, lambda: rr.replay_to_json(report, grades)),
+        ("--junit", args.junit, lambda: rr.replay_to_junit(report, grades)),
+        ("--csv", args.csv, lambda: rep.to_csv(grades) if grades else rr.replay_to_csv(report)),
+    )
+    for opt, path, make in outputs:
+        if path:
+            write_text(
+                path,
+                make(),
+                overwrite=args.overwrite,
+                inputs=options.output_inputs(args, ()),
+                option=opt,
+            )
