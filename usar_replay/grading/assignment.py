@@ -76,6 +76,9 @@ class Assignment:
     """The built-in world."""
     variant: Callable[[Scenario, int], Scenario]
     """A seeded variant of a world."""
+    course_detections: str = ""
+    """The topic of the course's detector, run by the recorder (trusted, a mission input;
+    :mod:`usar_replay.pipeline.course_detector`); empty when the world has none."""
 
     @property
     def robot_names(self) -> tuple[str, ...]:
@@ -212,6 +215,7 @@ USAR = Assignment(
     rubric=_usar_rubric,
     world=course_world,
     variant=_make_variant,
+    course_detections=contract.FIDUCIALS,
 )
 
 ROS2_FINAL = Assignment(

@@ -72,7 +72,9 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
                 + (f" (also missing: {', '.join(missing[1:])})" if missing[1:] else "")
             )
     feed = grader.feed
-    for topic, msg, t in run.reader.decoded(rubric.grade_topics):
+    # the course's detections count as the world published them ("sim"), never a mission's
+    trusted = {topic: ("sim",) for topic in rubric.trusted_topics}
+    for topic, msg, t in run.reader.decoded(rubric.grade_topics, only_from=trusted):
         feed(topic, msg, t)
     problem = run.problem()
     report: GradeReport = grader.report(

@@ -720,5 +720,5 @@ def judge(g: Grader) -> tuple[Check, ...]:
     return tuple(lines)
 
 
-RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)
+RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS, trusted_topics=(contract.FIDUCIALS,))
 """The US&R rubric, as its assignment carries it."""

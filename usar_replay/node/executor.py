@@ -31,6 +31,8 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 from usar_replay.core import contract, msgs
+from usar_replay.core.finite import check_finite
+from usar_replay.node.boundary_check import MAX_TICK_MESSAGES, OutputRefused
 from usar_replay.node.node import (
     Node,
     Subscription,
@@ -68,6 +70,11 @@ class PublishPolicy:
         """Why ``topic`` may not be published (empty when it may)."""
         if contract.is_ground_truth(topic):
             return f"{topic} is ground truth: a mission can neither read nor publish it"
+        if topic == contract.FIDUCIALS and topic in self.sim_topics:
+            return (
+                f"{topic} is the course's detector's output (trusted, run by usar); a mission "
+                "may not publish it: publish your own detector's results on a topic of your own"
+            )
         if topic in self.sim_topics:
             return f"{topic} is published by the simulator; a mission may not publish it"
         if not topic.startswith("/"):
@@ -146,6 +153,11 @@ class Executor:
     def subscription_count(self, topic: str) -> int:
         return len(self._subs.get(topic, ()))
 
+    def provided_by_world(self, topic: str) -> bool:
+        """Whether the world publishes ``topic`` to this mission (the simulator's topics, the
+        course's trusted ``/fiducial_transforms``): a node that would publish it stays idle."""
+        return topic in self.policy.sim_topics
+
     def check_publish_topic(self, topic: str) -> None:
         problem = self.policy.topic_problem(topic)
         if problem:
@@ -154,10 +166,22 @@ class Executor:
     # -- publishing ----------------------------------------------------------------------------
 
     def publish(self, topic: str, msg: msgs.Message) -> None:
-        """Queue ``msg`` as an output of this tick, and for local subscribers."""
+        """Queue ``msg`` as an output of this tick, and for local subscribers.
+
+        Refused at the call, with the error where the user published: a topic the mission may
+        not publish (``PermissionError``), NaN or infinity in any field
+        (:class:`~usar_replay.core.finite.NonFiniteValue`, a ``ValueError`` naming the field),
+        more than :data:`~usar_replay.node.boundary_check.MAX_TICK_MESSAGES` messages in one
+        tick (:class:`~usar_replay.node.boundary_check.OutputRefused`). The recorder checks
+        all of it again on its side."""
         problem = self.policy.message_problem(topic, msg)
         if problem:
             raise PermissionError(problem)
+        check_finite(topic, msg)
+        if len(self._outputs) >= MAX_TICK_MESSAGES:
+            raise OutputRefused(
+                f"{topic}: more than {MAX_TICK_MESSAGES} messages published in one tick"
+            )
         self._outputs.append((topic, msg))
         if topic in self._subs:
             self._queue.append((topic, msg))

@@ -44,6 +44,7 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.node.worker import (
     MissionEnded,
     MissionLimits,
@@ -398,6 +399,8 @@ class _Tick:
     recorded: list[_Pending] = field(default_factory=list)
     truth: list[bag.BagMessage] = field(default_factory=list)
     sent: bool = False
+    course: list[_Pending] = field(default_factory=list)
+    """The course detector's re-run on this tick's frame, compared with the recorded one."""
 
 
 def _ticks(run: Run) -> Iterator[_Tick]:
@@ -456,17 +459,25 @@ def replay(
     use = settings or run.settings
     same_code = bool(run.mission.sha256) and target.sha256 == run.mission.sha256
     replayer = _Replayer(grade_sink, frozenset(grade_topics) if grade_sink else frozenset())
+    # the course's detections are recorded inputs, re-run and compared (a log from before the
+    # trusted detector has the mission's own as outputs: those replay as they ran); a
+    # mission's detections on that topic are never graded
+    world_detects = bool(asg.course_detections) and SIM in run.reader.publishers(
+        asg.course_detections
+    )
+    redetect = CourseDetector(use.detector, asg) if world_detects else None
+    replayer.never_graded = frozenset({asg.course_detections} - {""})
     crashed: MissionEnded | None = None
     last: _Tick | None = None
     with MissionProcess(
         target,
         asg.parameters(scenario, use),
-        sim_topics=asg.sim_topics,
+        sim_topics=mission_inputs(asg, world_detects),
         sim_frames=asg.sim_frames,
         limits=limits,
     ) as proc:
         try:
-            last = _drive(run, proc, replayer, window)
+            last = _drive(run, proc, replayer, window, redetect)
         except MissionEnded as ended:
             crashed, last = ended, replayer.last
     uncompared = len(last.recorded) if (last is not None and run.problem()) else 0
@@ -517,6 +528,8 @@ class _Replayer:
         self.inputs = 0
         self.ticks = 0
         self.last: _Tick | None = None
+        self.never_graded: frozenset[str] = frozenset()
+        """Output topics the grader never sees from a mission (the course's detections)."""
 
     def feed(
         self, topic: str, msgtype: str, data: bytes, value: msgs.Message | None, t: int
@@ -540,7 +553,7 @@ class _Replayer:
         self._feed_recorded(tick)
         for p in tick.recorded:
             self.changes.note(p.topic, p.msg, recorded=True)
-        self.comparison.tick(tick.recorded, ())
+        self.comparison.tick(tick.recorded, tick.course)
 
     def finish(self, tick: _Tick, proc: MissionProcess) -> None:
         """The mission's outputs for a sent tick: digested, compared with the recorded ones,
@@ -548,7 +561,7 @@ class _Replayer:
         outputs = proc.receive()
         self.ticks += 1
         self.inputs += len(tick.inputs)
-        replayed = []
+        replayed = list(tick.course)
         for topic, msgtype, data, value in outputs:
             self.digest.update(_digest_record(topic, tick.t, data))
             self.changes.note(topic, value, recorded=False)
@@ -558,16 +571,25 @@ class _Replayer:
         self.comparison.tick(tick.recorded, replayed)
         self._feed_recorded(tick)
         for topic, msgtype, data, value in outputs:
-            self.feed(topic, msgtype, data, value, tick.t)
+            if topic not in self.never_graded:
+                self.feed(topic, msgtype, data, value, tick.t)
 
 
-def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> _Tick | None:
+def _drive(
+    run: Run,
+    proc: MissionProcess,
+    replayer: _Replayer,
+    window: int,
+    redetect: CourseDetector | None = None,
+) -> _Tick | None:
     """Send every recorded tick to the mission process, keeping up to ``window`` ticks in
     flight (the mission thinks while the log is read), and finish each in order. Returns the
     log's last tick."""
     in_flight: deque[_Tick] = deque()
     for tick in _ticks(run):
         replayer.last = tick
+        if redetect is not None:
+            _redetect(redetect, tick)
         if not tick.inputs or proc.shutdown_requested:
             replayer.skip(tick)
             continue
@@ -584,6 +606,17 @@ def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> 
             break
         replayer.finish(tick, proc)
     return replayer.last
+
+
+def _redetect(detector: CourseDetector, tick: _Tick) -> None:
+    """Re-run the course's detector on the tick's recorded frame: the mission receives the
+    re-run's detections (with the recorded settings, the recorded bytes; with ``--set
+    detector.*``, the changed detector's), and the recorded ones are compared with them."""
+    recorded_outputs = [(p.topic, p.msgtype, p.data) for p in tick.recorded]
+    tick.inputs, recorded, redone = detector.replay_tick(tick.inputs, recorded_outputs)
+    for side, items in ((tick.recorded, recorded), (tick.course, redone)):
+        for topic, msgtype, data in items:
+            side.append(_Pending(topic, tick.t, data, msgtype, _try_decode(data, msgtype)))
 
 
 def _digest_record(topic: str, t_ns: int, data: bytes) -> bytes:
