@@ -56,6 +56,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
 from usar_replay.core import contract, msgs
+from usar_replay.core.finite import nonfinite_field
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
 from usar_replay.grading.verdict import Check, GradeReport, Rubric
@@ -267,6 +268,13 @@ class Grader:
             self.feed(topic, msg, t)
 
     def _on_fiducials(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
+        if any(nonfinite_field(f) for f in msg.transforms):
+            # a detection at NaN or infinity is no detection (the course's detector never
+            # publishes one; the recorder refuses it from a mission)
+            msg = msgs.FiducialTransformArray(
+                header=msg.header,
+                transforms=tuple(f for f in msg.transforms if not nonfinite_field(f)),
+            )
         for f in msg.transforms:
             self.detected_ns.setdefault(f.fiducial_id, t_ns)
             self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
@@ -328,6 +336,9 @@ class Grader:
         else:
             p = in_map.transform.translation
             err = math.dist((p.x, p.y, p.z), self.markers[mid])
+            if not math.isfinite(err):  # NaN is never "worse than" anything: make it the worst
+                b.failed_lookups += 1
+                err = math.inf
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
 
@@ -521,7 +532,10 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
     if b.count == 0:
         measured = "no broadcast"
     elif b.failed_lookups:
-        measured = f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
+        measured = (
+            f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP} or not "
+            "finite"
+        )
     else:
         measured = f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
     each = 8.0 / max(len(g.markers), 1)

@@ -126,6 +126,9 @@ class Scenario:
     camera: CameraSettings = field(default_factory=CameraSettings)
     time_limit_s: float = 600.0
     seed: int | None = None
+    world_key: str = ""
+    """The digest of the world key a keyed variant was made with
+    (:mod:`usar_replay.world.world_key`): with one, ``seed`` alone does not give this world."""
     assignment: str = "usar"
     """Which assignment this world is for: ``usar`` (the two-robot US&R mission) or
     ``ros2-final`` (the ROS 2 final project; :mod:`usar_replay.grading.assignment`)."""
@@ -250,6 +253,7 @@ def course_world() -> Scenario:
 #   name = "course"
 #   time_limit_s = 600.0
 #   seed = 3                      # optional: the variant seed this world came from
+#   world_key = "0123abcd..."     # optional: digest of the world key of a keyed variant
 #   [camera]        width, height, rate_hz, hfov, encoding ("png" | "jpeg")
 #   [robots.explorer] / [robots.follower]   x, y, yaw
 #   [aruco_lookup_locations]      target_1 = [x, y], target_2 = [x, y], ... (as the course's
@@ -457,6 +461,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         "name",
         "time_limit_s",
         "seed",
+        "world_key",
         "camera",
         "robots",
         "aruco_lookup_locations",
@@ -558,6 +563,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         camera=camera,
         time_limit_s=_num(src, "time_limit_s", data.get("time_limit_s", 600.0), positive=True),
         seed=None if data.get("seed") is None else _int(src, "seed", data["seed"]),
+        world_key=_str(src, "world_key", data.get("world_key", "")),
         assignment=_str(src, "assignment", data.get("assignment", "usar")),
         task=_parse_task(src, data.get("task", {})),
     )
@@ -750,6 +756,8 @@ def to_toml(scn: Scenario) -> str:
     }
     if scn.seed is not None:
         data["seed"] = scn.seed
+    if scn.world_key:
+        data["world_key"] = scn.world_key
     if scn.assignment != "usar":
         data["assignment"] = scn.assignment
     cam = scn.camera
@@ -834,6 +842,8 @@ _LINE_COMMENTS: dict[tuple[str, str], str] = {
     ("", "name"): "names the default output recordings/NAME.mcap: letters, digits, _ . -",
     ("", "time_limit_s"): "s, the mission's time limit (1..3600)",
     ("", "seed"): "the variant seed this world came from",
+    ("", "world_key"): "digest of the secret world key of a keyed variant (the seed alone does "
+    "not give it)",
     ("", "walls"): "x, y: centre (m); yaw (rad); length (m, 0.01..50); thickness (m, 0.15); "
     "height (m, 1)",
     ("", "boxes"): "x, y, z: centre (m); size_x, size_y, size_z (m, 0.01..50); yaw (rad)",
