@@ -44,7 +44,6 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
-from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.node.worker import (
     MissionEnded,
     MissionLimits,
@@ -52,6 +51,7 @@ from usar_replay.node.worker import (
     MissionTarget,
     resolve_target,
 )
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 
 __all__ = [
     "MISSION_TF_KEY",

@@ -563,7 +563,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         camera=camera,
         time_limit_s=_num(src, "time_limit_s", data.get("time_limit_s", 600.0), positive=True),
         seed=None if data.get("seed") is None else _int(src, "seed", data["seed"]),
-        world_key=_str(src, "world_key", data.get("world_key", "")),
+        world_key=_str(src, "world_key", data["world_key"]) if "world_key" in data else "",
         assignment=_str(src, "assignment", data.get("assignment", "usar")),
         task=_parse_task(src, data.get("task", {})),
     )
