@@ -24,10 +24,13 @@ line (``Check.id``)                  points  passes when
 ===================================  ======  ===================================================
 ``explorer.target_k``                12      the explorer came within ``target_reached_m`` of
                                              target_k after the earlier targets it reached
-``marker_k.detected``                12      ``/fiducial_transforms`` holds ID k at least once
-``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k and
-                                             every such broadcast, looked up in ``map``, lies
-                                             within ``marker_map_error_m`` of the true marker
+``marker_k.detected``                12      the course's detector's ``/fiducial_transforms``
+                                             (trusted; never a mission's) holds ID k once
+``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k on a
+                                             frame where it was detected, and every such
+                                             broadcast, looked up in ``map``, lies within
+                                             ``marker_map_error_m`` of the true marker (a
+                                             non-finite one is the worst)
 ``marker_frame.only_on_detection``   4       every ``marker_frame`` is a child of the camera's
                                              optical frame, stamped with a detected frame
 ``explorer.home_before_follower``    4       after its last target the explorer came within
@@ -169,6 +172,9 @@ class Broadcasts:
     """The ``marker_frame`` broadcasts attributed to one marker."""
 
     count: int = 0
+    detected: int = 0
+    """Broadcasts stamped with a frame in which the course's detector saw this marker: only
+    those count (a ``marker_frame`` without a detection is not evidence of one)."""
     worst_m: float = -1.0
     worst_ns: int = 0
     first_ns: int | None = None
@@ -328,6 +334,8 @@ class Grader:
             mid = min(self.markers, key=lambda k: math.dist((p.x, p.y, p.z), self.markers[k]))
         b = self.broadcasts[mid]
         b.count += 1
+        if any(f.fiducial_id == mid for f in detections):
+            b.detected += 1
         if b.first_ns is None:
             b.first_ns = t_ns
         if in_map is None:
@@ -528,9 +536,11 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
     """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
-    ok = b.count > 0 and b.worst_m <= limit
+    ok = b.detected > 0 and b.worst_m <= limit
     if b.count == 0:
         measured = "no broadcast"
+    elif b.detected == 0:
+        measured = f"{_n(b.count, 'broadcast')}, none on a frame where marker {mid} was detected"
     elif b.failed_lookups:
         measured = (
             f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP} or not "

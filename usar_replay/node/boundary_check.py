@@ -27,13 +27,10 @@ where it published (a ``ValueError`` with its own traceback) and the same ``refu
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.finite import nonfinite_field
-
-if TYPE_CHECKING:
-    from usar_replay.node.executor import PublishPolicy
 
 __all__ = [
     "FIXED_TYPES",
@@ -44,6 +41,7 @@ __all__ = [
     "MAX_TOPIC_CHARS",
     "BoundaryCheck",
     "OutputRefused",
+    "PublishRefused",
 ]
 
 MAX_MESSAGE_BYTES = 8 * 1024 * 1024
@@ -77,8 +75,21 @@ Wire = tuple[str, str, bytes]
 Checked = tuple[str, str, bytes, msgs.Message]
 
 
+class PublishPolicy(Protocol):
+    """What :class:`usar_replay.node.executor.PublishPolicy` answers (a protocol: the executor
+    imports this module's limits)."""
+
+    def message_problem(self, topic: str, msg: msgs.Message) -> str: ...
+
+
 class OutputRefused(ValueError):
     """What a mission sent may not be accepted; ``str()`` says what and where (one line)."""
+
+
+class PublishRefused(PermissionError):
+    """A mission published (or subscribed to) what the course forbids it: ground truth, the
+    simulator's topics and tf links, the course's trusted detections. The run's verdict is
+    ``refused``."""
 
 
 class BoundaryCheck:

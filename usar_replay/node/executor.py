@@ -32,7 +32,7 @@ from typing import Any
 
 from usar_replay.core import contract, msgs
 from usar_replay.core.finite import check_finite
-from usar_replay.node.boundary_check import MAX_TICK_MESSAGES, OutputRefused
+from usar_replay.node.boundary_check import MAX_TICK_MESSAGES, OutputRefused, PublishRefused
 from usar_replay.node.node import (
     Node,
     Subscription,
@@ -142,7 +142,7 @@ class Executor:
 
     def add_subscription(self, sub: Subscription) -> None:
         if contract.is_ground_truth(sub.topic_name):
-            raise PermissionError(
+            raise PublishRefused(
                 f"{sub.topic_name} is ground truth: it is for the grader, never for a mission"
             )
         self._subs.setdefault(sub.topic_name, []).append(sub)
@@ -161,7 +161,7 @@ class Executor:
     def check_publish_topic(self, topic: str) -> None:
         problem = self.policy.topic_problem(topic)
         if problem:
-            raise PermissionError(problem)
+            raise PublishRefused(problem)
 
     # -- publishing ----------------------------------------------------------------------------
 
@@ -176,7 +176,7 @@ class Executor:
         all of it again on its side."""
         problem = self.policy.message_problem(topic, msg)
         if problem:
-            raise PermissionError(problem)
+            raise PublishRefused(problem)
         check_finite(topic, msg)
         if len(self._outputs) >= MAX_TICK_MESSAGES:
             raise OutputRefused(

@@ -47,6 +47,7 @@ from usar_replay.node.boundary_check import (
     MAX_MESSAGE_BYTES,
     BoundaryCheck,
     OutputRefused,
+    PublishRefused,
 )
 from usar_replay.node.executor import Executor, PublishPolicy
 from usar_replay.node.sandbox import SandboxPolicy
@@ -277,7 +278,7 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
             _serve(conn, executor)
     except MemoryError as err:
         _report(conn, b"M", _user_traceback(err))
-    except (NonFiniteValue, OutputRefused) as err:  # refused at the call: the same verdict
+    except (NonFiniteValue, OutputRefused, PublishRefused) as err:  # refused at the call
         _report(conn, _REFUSED, _user_traceback(err))
     except BaseException as err:  # noqa: BLE001 - the user's error is the verdict, not ours
         _report(conn, _CRASH, _user_traceback(err))
@@ -420,7 +421,7 @@ class MissionProcess:
         try:
             frame = self._conn.recv_bytes(MAX_FRAME_BYTES)
         except (EOFError, OSError):
-            if self._conn.closed:  # multiprocessing closes it on a frame over the length
+            if self._conn.closed or not self._conn.readable:  # a frame over the length
                 raise self._refuse(
                     f"the mission process sent more than {MAX_FRAME_BYTES} bytes in one frame"
                 ) from None
@@ -455,12 +456,12 @@ class MissionProcess:
         """The outputs of the oldest tick in flight: (topic, type, CDR, decoded), checked."""
         frame = self._wait(self.limits.tick_timeout_s, "handling a tick")
         self._in_flight -= 1
+        if frame[:1] != _OUT:
+            raise self._refuse(f"the mission process sent a frame of unknown kind {frame[:1]!r}")
         try:
-            kind, _t, items, flag = _unpack(frame)
+            _kind, _t, items, flag = _unpack(frame)
         except (ValueError, IndexError, struct.error) as err:  # UnicodeDecodeError included
             raise self._refuse(f"the mission process sent a malformed frame ({err})") from None
-        if kind != _OUT:
-            raise self._refuse(f"the mission process sent a frame of unknown kind {kind!r}")
         try:
             out = self.boundary.check(items)
         except OutputRefused as err:
