@@ -553,6 +553,8 @@ class _Replayer:
         self._feed_recorded(tick)
         for p in tick.recorded:
             self.changes.note(p.topic, p.msg, recorded=True)
+        for p in tick.course:
+            self.changes.note(p.topic, p.msg, recorded=False)
         self.comparison.tick(tick.recorded, tick.course)
 
     def finish(self, tick: _Tick, proc: MissionProcess) -> None:
@@ -562,6 +564,8 @@ class _Replayer:
         self.ticks += 1
         self.inputs += len(tick.inputs)
         replayed = list(tick.course)
+        for p in tick.course:
+            self.changes.note(p.topic, p.msg, recorded=False)
         for topic, msgtype, data, value in outputs:
             self.digest.update(_digest_record(topic, tick.t, data))
             self.changes.note(topic, value, recorded=False)
@@ -614,9 +618,12 @@ def _redetect(detector: CourseDetector, tick: _Tick) -> None:
     detector.*``, the changed detector's), and the recorded ones are compared with them."""
     recorded_outputs = [(p.topic, p.msgtype, p.data) for p in tick.recorded]
     tick.inputs, recorded, redone = detector.replay_tick(tick.inputs, recorded_outputs)
-    for side, items in ((tick.recorded, recorded), (tick.course, redone)):
-        for topic, msgtype, data in items:
-            side.append(_Pending(topic, tick.t, data, msgtype, _try_decode(data, msgtype)))
+    def pending(items: list[tuple[str, str, bytes]]) -> list[_Pending]:
+        return [_Pending(tp, tick.t, data, mt, _try_decode(data, mt)) for tp, mt, data in items]
+
+    # first in the tick, as they were delivered: a changed frame diverges here first
+    tick.recorded[:0] = pending(recorded)
+    tick.course = pending(redone)
 
 
 def _digest_record(topic: str, t_ns: int, data: bytes) -> bytes:
