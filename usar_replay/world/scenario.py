@@ -842,8 +842,7 @@ _LINE_COMMENTS: dict[tuple[str, str], str] = {
     ("", "name"): "names the default output recordings/NAME.mcap: letters, digits, _ . -",
     ("", "time_limit_s"): "s, the mission's time limit (1..3600)",
     ("", "seed"): "the variant seed this world came from",
-    ("", "world_key"): "digest of the secret world key of a keyed variant (the seed alone does "
-    "not give it)",
+    ("", "world_key"): "digest of the secret key of a hidden variant (see docs/batch.md)",
     ("", "walls"): "x, y: centre (m); yaw (rad); length (m, 0.01..50); thickness (m, 0.15); "
     "height (m, 1)",
     ("", "boxes"): "x, y, z: centre (m); size_x, size_y, size_z (m, 0.01..50); yaw (rad)",
