@@ -1,0 +1,321 @@
+"""The kernel sandbox a mission process runs in: bubblewrap (``bwrap``) namespaces and limits.
+
+Why: a mission is untrusted code (a team's, graded against a world it must not see). The
+in-process guard (:mod:`usar_replay.node.sandbox`) sees only what Python code does; a C
+extension, ``_posixsubprocess`` or ``/proc/<pid>/mem`` walk past it. In its own user, PID,
+IPC, UTS, mount, network and cgroup namespaces, as uid 65534 with no capabilities, the process
+sees only what is mounted for it: the Python install, the packages, its own submission (all
+read-only), a private work dir and a private ``/tmp``. It cannot see, signal or trace any usar
+process (its own PID namespace), reach the network (its own network namespace, whose loopback
+reaches only itself), or outlive its run (``--die-with-parent``, and the PID namespace ends with
+its first process, so a ``setsid`` daemon dies with it).
+
+What bwrap does not do, this module does outside it: resource limits. rlimits (address space,
+CPU time, file size, open files) are set on bwrap in the pre-exec hook and inherited by all it
+starts; the process count is a ``pids`` cgroup where one can be made (root, a writable cgroup
+file system), else RLIMIT_NPROC set by the worker inside (a per-run count in the run's user
+namespace; the kernel does not apply it to processes that are root outside, which is why the
+cgroup comes first).
+
+Reusable: :func:`jail_argv` builds the command for any program (the ROS 1 bridge runs its graph
+with ``network="loopback"``), :class:`Jail` holds one run's cgroup and limits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+__all__ = [
+    "INSTALL_HINT",
+    "Jail",
+    "JailLimits",
+    "bwrap_available",
+    "jail_argv",
+    "python_binds",
+    "signal_of_exit",
+]
+
+INSTALL_HINT = "apt-get install bubblewrap"
+"""How to get bwrap on Debian and Ubuntu (the package ships /usr/bin/bwrap)."""
+
+SANDBOX_UID = 65534
+"""``nobody`` inside the sandbox (root outside maps to it; it has no capabilities anywhere)."""
+
+# the operating system's shared libraries and tools a Python process loads; all read-only
+_SYSTEM_BINDS = ("/usr", "/bin", "/lib", "/lib32", "/lib64", "/libx32", "/sbin")
+_SYSTEM_FILES = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/alternatives")
+
+Network = Literal["none", "loopback"]
+
+
+@dataclass(frozen=True, slots=True)
+class JailLimits:
+    """What one sandboxed run may use (0: no limit). Past a limit the kernel refuses (a failed
+    ``fork``, ``open`` or ``write``: the mission's own error) or kills (memory, CPU time)."""
+
+    memory_mb: int = 4096
+    """Address space per process (RLIMIT_AS), MiB."""
+    cpu_s: int = 0
+    """CPU seconds per process (RLIMIT_CPU; SIGXCPU past it)."""
+    processes: int = 256
+    """Processes and threads of the run together (a pids cgroup, else RLIMIT_NPROC)."""
+    file_mb: int = 1024
+    """Largest file a process may write (RLIMIT_FSIZE), MiB."""
+    open_files: int = 1024
+    """Open file descriptors per process (RLIMIT_NOFILE)."""
+    tmp_mb: int = 512
+    """Size of the private ``/tmp`` and ``/dev/shm`` (memory-backed file systems), MiB."""
+
+
+def _bwrap() -> str | None:
+    return shutil.which("bwrap")
+
+
+@functools.lru_cache(maxsize=4)
+def _probe(bwrap: str) -> tuple[bool, str, bool]:
+    """Can ``bwrap`` make the namespaces here? (ok, why not, knows --disable-userns)"""
+    argv = [
+        bwrap, "--unshare-all", "--unshare-user", "--uid", str(SANDBOX_UID),
+        "--gid", str(SANDBOX_UID), "--cap-drop", "ALL", "--die-with-parent", "--new-session",
+        "--ro-bind", "/", "/", "--proc", "/proc", "--dev", "/dev", "--", "true",
+    ]  # fmt: skip
+    try:
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=30, check=False)
+        helped = subprocess.run(
+            [bwrap, "--help"], capture_output=True, text=True, timeout=30, check=False
+        )
+    except (OSError, subprocess.TimeoutExpired) as err:
+        return False, f"{bwrap} could not be run ({err})", False
+    if done.returncode != 0:
+        said = (done.stderr.strip().splitlines() or [f"exit {done.returncode}"])[-1]
+        return False, f"{bwrap} cannot create namespaces here ({said})", False
+    return True, "", "--disable-userns" in helped.stdout
+
+
+def bwrap_available() -> tuple[bool, str]:
+    """(True, '') when bwrap is on PATH and can create the sandbox here; else (False, why)."""
+    bwrap = _bwrap()
+    if bwrap is None:
+        return False, "bubblewrap (bwrap) is not installed"
+    ok, why, _ = _probe(bwrap)
+    return ok, why
+
+
+def python_binds() -> list[str]:
+    """The folders this Python needs, read-only: its install, the venv and usar's package.
+
+    Only ``site``-style folders of ``sys.path`` (under a prefix, or named site-packages /
+    dist-packages) are bound, never a development checkout as a whole: a checkout may hold
+    recordings and worlds. usar's own package folder is bound by itself."""
+    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
+    out = {os.path.realpath(p) for p in prefixes}
+    out.add(os.path.dirname(os.path.realpath(sys.executable)))
+    for entry in sys.path:
+        if not entry or not os.path.isabs(entry) or not os.path.isdir(entry):
+            continue
+        name = os.path.basename(entry.rstrip(os.sep))
+        if name in ("site-packages", "dist-packages"):
+            out.add(os.path.realpath(entry))
+    out.add(package_dir())
+    return sorted(out)
+
+
+def package_dir() -> str:
+    """usar_replay's own folder (bound alone; its parent goes on the jail's PYTHONPATH)."""
+    return str(Path(__file__).resolve().parents[1])
+
+
+def _covered(path: str, roots: Iterable[str]) -> bool:
+    return any(path == r or path.startswith(r.rstrip("/") + "/") for r in roots)
+
+
+def jail_argv(
+    argv: Sequence[str],
+    *,
+    ro_binds: Sequence[str],
+    work_dir: str,
+    env: Mapping[str, str],
+    limits: JailLimits | None = None,
+    network: Network = "none",
+    hidden: Sequence[str] = (),
+) -> list[str]:
+    """The bwrap command line that runs ``argv`` in the sandbox.
+
+    ``ro_binds``: host paths mounted read-only at the same path (the system's libraries are
+    added); ``work_dir``: mounted writable at its own path and the working directory; ``env``:
+    the whole environment (bwrap starts from an empty one); ``hidden``: existing files under a
+    bound folder that must read as empty (the log being written, when it lies next to the
+    mission's file); ``network``: ``none`` and ``loopback`` both give a network namespace of
+    its own, whose loopback reaches only processes in the same sandbox (a ROS graph started in
+    it); nothing outside is reachable either way.
+    """
+    bwrap = _bwrap()
+    if bwrap is None:
+        raise FileNotFoundError("bwrap")
+    _, _, disable_userns = _probe(bwrap)
+    lim = limits or JailLimits()
+    out = [
+        bwrap, "--unshare-all", "--unshare-user", "--uid", str(SANDBOX_UID),
+        "--gid", str(SANDBOX_UID), "--cap-drop", "ALL", "--die-with-parent", "--new-session",
+        "--hostname", "mission", "--clearenv",
+    ]  # fmt: skip
+    if network not in ("none", "loopback"):
+        raise ValueError(f"network={network!r}: expected 'none' or 'loopback'")
+    if disable_userns:
+        out.append("--disable-userns")  # no nested namespace to regain capabilities in
+    for path in _SYSTEM_BINDS:
+        out += ["--ro-bind-try", path, path]
+    for path in _SYSTEM_FILES:
+        out += ["--ro-bind-try", path, path]
+    bound: list[str] = []
+    for path in sorted(set(ro_binds)):
+        if _covered(path, bound) or not os.path.exists(path):
+            continue
+        out += ["--ro-bind", path, path]
+        bound.append(path)
+    for path in hidden:
+        real = os.path.realpath(path)
+        if os.path.isfile(real) and _covered(real, bound):
+            out += ["--ro-bind", "/dev/null", real]
+    out += ["--proc", "/proc", "--dev", "/dev"]
+    if lim.tmp_mb > 0:
+        size = str(lim.tmp_mb * 1024 * 1024)
+        out += ["--size", size, "--tmpfs", "/tmp", "--size", size, "--tmpfs", "/dev/shm"]
+    else:
+        out += ["--tmpfs", "/tmp", "--tmpfs", "/dev/shm"]
+    out += ["--bind", work_dir, work_dir, "--chdir", work_dir]
+    for key, value in sorted(env.items()):
+        out += ["--setenv", key, value]
+    return [*out, "--", *argv]
+
+
+def signal_of_exit(code: int | None) -> int | None:
+    """The signal that ended a sandboxed process, from bwrap's exit status: bwrap itself
+    killed gives a negative code; the process inside killed makes bwrap exit 128 + signal."""
+    if code is None:
+        return None
+    if code < 0:
+        return -code
+    if 128 < code < 128 + 65:
+        return code - 128
+    return None
+
+
+class Jail:
+    """One sandboxed run's limits outside bwrap: its rlimits and its pids cgroup.
+
+    Use :meth:`preexec` as ``subprocess.Popen(preexec_fn=...)`` (it runs in the child between
+    fork and exec) and :meth:`close` once the process has ended (the cgroup is removed)."""
+
+    def __init__(self, limits: JailLimits | None = None) -> None:
+        self.limits = limits or JailLimits()
+        self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
+
+    @property
+    def nproc_inside(self) -> int:
+        """RLIMIT_NPROC for the worker to set inside (0 when the cgroup counts processes)."""
+        return 0 if self.cgroup else self.limits.processes
+
+    def preexec(self) -> None:
+        lim = self.limits
+        mib = 1024 * 1024
+        for which, value in (
+            (resource.RLIMIT_AS, lim.memory_mb * mib),
+            (resource.RLIMIT_FSIZE, lim.file_mb * mib),
+            (resource.RLIMIT_NOFILE, lim.open_files),
+            (resource.RLIMIT_CORE, 0),
+        ):
+            if value or which == resource.RLIMIT_CORE:
+                with contextlib.suppress(ValueError, OSError):
+                    resource.setrlimit(which, (value, value))
+        if lim.cpu_s:
+            with contextlib.suppress(ValueError, OSError):
+                resource.setrlimit(resource.RLIMIT_CPU, (lim.cpu_s, lim.cpu_s + 5))
+        if self.cgroup:
+            with contextlib.suppress(OSError):
+                Path(self.cgroup, "cgroup.procs").write_text("0")
+
+    def close(self) -> None:
+        """Kill whatever of the run is left in its cgroup (nothing, normally: the PID namespace
+        ended with bwrap) and remove the cgroup."""
+        if not self.cgroup:
+            return
+        for _ in range(200):
+            try:
+                os.rmdir(self.cgroup)
+                break
+            except FileNotFoundError:
+                break
+            except OSError:
+                _kill_members(self.cgroup)
+                time.sleep(0.01)  # the kernel reaps the killed processes
+        self.cgroup = None
+
+    def __enter__(self) -> Jail:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _kill_members(cgroup: str) -> None:
+    """SIGKILL the processes left in one run's cgroup (all of them the run's own)."""
+    with contextlib.suppress(OSError):
+        for pid in Path(cgroup, "cgroup.procs").read_text().split():
+            with contextlib.suppress(OSError):
+                os.kill(int(pid), signal.SIGKILL)
+
+
+_counter = 0
+
+
+def _pids_root() -> str | None:
+    """The folder of this process's pids cgroup (v1 ``pids`` hierarchy, or v2 with the pids
+    controller delegated), or None."""
+    try:
+        lines = Path("/proc/self/cgroup").read_text().splitlines()
+    except OSError:
+        return None
+    for line in lines:
+        _, controllers, path = line.split(":", 2)
+        if "pids" in controllers.split(","):
+            return os.path.join("/sys/fs/cgroup/pids", path.lstrip("/"))
+    for line in lines:
+        if line.startswith("0::"):
+            base = os.path.join("/sys/fs/cgroup", line[3:].lstrip("/"))
+            try:
+                enabled = Path(base, "cgroup.subtree_control").read_text().split()
+            except OSError:
+                return None
+            return base if "pids" in enabled else None
+    return None
+
+
+def _make_pids_cgroup(limit: int) -> str | None:
+    """A fresh pids cgroup with ``pids.max = limit`` (None when this machine gives none)."""
+    global _counter
+    root = _pids_root()
+    if root is None or not os.access(root, os.W_OK):
+        return None
+    _counter += 1
+    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
+    try:
+        os.mkdir(path)
+        Path(path, "pids.max").write_text(str(limit))
+    except OSError:
+        with contextlib.suppress(OSError):
+            os.rmdir(path)
+        return None
+    return path
