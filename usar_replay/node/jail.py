@@ -179,6 +179,14 @@ def jail_argv(
         out += ["--ro-bind-try", path, path]
     for path in _SYSTEM_FILES:
         out += ["--ro-bind-try", path, path]
+    # the private file systems first: a bound folder under /tmp (a submission, the work dir)
+    # is mounted on top of the private /tmp, not hidden by it
+    out += ["--proc", "/proc", "--dev", "/dev"]
+    if lim.tmp_mb > 0:
+        size = str(lim.tmp_mb * 1024 * 1024)
+        out += ["--size", size, "--tmpfs", "/tmp", "--size", size, "--tmpfs", "/dev/shm"]
+    else:
+        out += ["--tmpfs", "/tmp", "--tmpfs", "/dev/shm"]
     bound: list[str] = []
     for path in sorted(set(ro_binds)):
         if _covered(path, bound) or not os.path.exists(path):
@@ -189,12 +197,6 @@ def jail_argv(
         real = os.path.realpath(path)
         if os.path.isfile(real) and _covered(real, bound):
             out += ["--ro-bind", "/dev/null", real]
-    out += ["--proc", "/proc", "--dev", "/dev"]
-    if lim.tmp_mb > 0:
-        size = str(lim.tmp_mb * 1024 * 1024)
-        out += ["--size", size, "--tmpfs", "/tmp", "--size", size, "--tmpfs", "/dev/shm"]
-    else:
-        out += ["--tmpfs", "/tmp", "--tmpfs", "/dev/shm"]
     out += ["--bind", work_dir, work_dir, "--chdir", work_dir]
     for key, value in sorted(env.items()):
         out += ["--setenv", key, value]

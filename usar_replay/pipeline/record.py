@@ -36,7 +36,13 @@ from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
-from usar_replay.node.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
+from usar_replay.node.worker import (
+    MissionEnded,
+    MissionLimits,
+    MissionProcess,
+    hide_from_mission,
+    resolve_target,
+)
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
@@ -279,7 +285,8 @@ def record(
                 params,
                 sim_topics=asg.sim_topics,
                 sim_frames=asg.sim_frames,
-                limits=limits,
+                # the log being written holds the truth: unreadable even next to the mission
+                limits=hide_from_mission(limits, str(writer.part_path)),
             ) as proc:
                 latency = rs.actuation_latency_ticks
                 tick: _Observed | None = _observe(sim, scenario, asg, first)

@@ -44,7 +44,13 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
-from usar_replay.node.worker import MissionEnded, MissionLimits, MissionProcess, resolve_target
+from usar_replay.node.worker import (
+    MissionEnded,
+    MissionLimits,
+    MissionProcess,
+    hide_from_mission,
+    resolve_target,
+)
 
 __all__ = [
     "MISSION_TF_KEY",
@@ -497,7 +503,7 @@ def replay(
         asg.parameters(scenario, use),
         sim_topics=asg.sim_topics,
         sim_frames=asg.sim_frames,
-        limits=limits,
+        limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
             for tick in _ticks(run):
