@@ -156,8 +156,8 @@ def jail_argv(
     ``ro_binds``: host paths mounted read-only at the same path (the system's libraries are
     added); ``work_dir``: mounted writable at its own path and the working directory; ``env``:
     the whole environment (bwrap starts from an empty one); ``hidden``: existing files under a
-    bound folder that must read as empty (the log being written, when it lies next to the
-    mission's file); ``network``: ``none`` and ``loopback`` both give a network namespace of
+    bound folder that the process must not read (the log being written, when it lies next to
+    the mission's file: /dev/null is mounted over it, which a sandbox may not open); ``network``: ``none`` and ``loopback`` both give a network namespace of
     its own, whose loopback reaches only processes in the same sandbox (a ROS graph started in
     it); nothing outside is reachable either way.
     """

@@ -462,13 +462,17 @@ class MissionProcess:
             # open log), no re-import of the caller's __main__ (multiprocessing's spawn does);
             # the socket keeps its number through bwrap, which passes inherited descriptors on
             argv.append(str(child_sock.fileno()))
+            env: dict[str, str] | None = None
             if self._jail is not None and self._work is not None:
                 roots = self.limits.read_roots or _submission_roots(target)
+                # bwrap gets the mission's environment too: its init process stays in the
+                # sandbox, where /proc/1/environ would show the caller's variables
+                env = _mission_env(target)
                 argv = jail.jail_argv(
                     argv,
                     ro_binds=[*jail.python_binds(), *roots],
                     work_dir=self._work,
-                    env=_mission_env(target),
+                    env=env,
                     limits=self._jail.limits,
                     hidden=self.limits.hidden,
                 )
@@ -477,6 +481,7 @@ class MissionProcess:
                     argv,
                     pass_fds=(child_sock.fileno(),),
                     stdin=subprocess.DEVNULL,
+                    env=env,
                     preexec_fn=self._jail.preexec if self._jail else None,
                 )
             except BaseException:
