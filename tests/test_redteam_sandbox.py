@@ -410,10 +410,11 @@ def test_attackers_get_verdicts_and_honest_grades_do_not_move(
     assert code == 0, text  # every run graded: no attacker made the batch fail
     a, z = _grade(out, "honest_a"), _grade(out, "honest_z")
     assert a["outcome"] == z["outcome"] == "max_sim_time"
-    # the same code on the same world: the same log bytes and the same grade, whoever ran next
-    assert a["log_sha256"] == z["log_sha256"]
-    assert {k: v for k, v in a.items() if k != "team"} == {
-        k: v for k, v in z.items() if k != "team"
+    # the same code on the same world: the same grade, line by line, whoever ran next to them
+    # (the logs differ only in the mission's file name they record)
+    mine = ("team", "log_sha256")
+    assert {k: v for k, v in a.items() if k not in mine} == {
+        k: v for k, v in z.items() if k not in mine
     }
     for team in ("honest_a", "honest_z"):
         results = json.loads((out / team / "results.json").read_text())
