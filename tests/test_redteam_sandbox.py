@@ -447,3 +447,23 @@ def test_snooping_is_refused(attacked_class: tuple[Path, int, str]) -> None:
     said = _said(out, "snooper")
     for name in ("dir_fd", "subs", "proc", "tamper"):
         assert said[name].startswith("failed SandboxViolation"), said
+
+
+# -- the sandbox changes nothing an honest mission does ------------------------------------------
+
+
+def test_the_sandbox_changes_no_message_byte(tmp_path: Path) -> None:
+    from logtools import digest
+
+    from usar_replay.pipeline.replay import replay
+
+    settings = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_s=4.0))
+    bare, jailed = tmp_path / "bare.mcap", tmp_path / "jailed.mcap"
+    a = record(one_room(), bare, settings, limits=MissionLimits(jail="off"))
+    b = record(one_room(), jailed, settings, limits=MissionLimits(jail="required"))
+    assert a.outcome == b.outcome == "max_sim_time"
+    assert a.messages == b.messages > 50
+    assert digest(bare) == digest(jailed)
+    # and the jailed replay of the bare recording reproduces it bit for bit
+    report = replay(bare, limits=MissionLimits(jail="required"))
+    assert report.identical, report
