@@ -157,9 +157,10 @@ def jail_argv(
     added); ``work_dir``: mounted writable at its own path and the working directory; ``env``:
     the whole environment (bwrap starts from an empty one); ``hidden``: existing files under a
     bound folder that the process must not read (the log being written, when it lies next to
-    the mission's file: /dev/null is mounted over it, which a sandbox may not open); ``network``: ``none`` and ``loopback`` both give a network namespace of
-    its own, whose loopback reaches only processes in the same sandbox (a ROS graph started in
-    it); nothing outside is reachable either way.
+    the mission's file: /dev/null is mounted over it, which a sandbox may not open);
+    ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
+    loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
+    outside is reachable either way.
     """
     bwrap = _bwrap()
     if bwrap is None:
