@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import json
 import os
 import resource
+import select
 import shutil
 import signal
 import subprocess
@@ -150,6 +152,7 @@ def jail_argv(
     limits: JailLimits | None = None,
     network: Network = "none",
     hidden: Sequence[str] = (),
+    info_fd: int | None = None,
 ) -> list[str]:
     """The bwrap command line that runs ``argv`` in the sandbox.
 
@@ -160,7 +163,8 @@ def jail_argv(
     the mission's file: /dev/null is mounted over it, which a sandbox may not open);
     ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
     loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
-    outside is reachable either way.
+    outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
+    process's host PID (:attr:`Jail.info_fd`).
     """
     bwrap = _bwrap()
     if bwrap is None:
@@ -176,6 +180,8 @@ def jail_argv(
         raise ValueError(f"network={network!r}: expected 'none' or 'loopback'")
     if disable_userns:
         out.append("--disable-userns")  # no nested namespace to regain capabilities in
+    if info_fd is not None:
+        out += ["--info-fd", str(info_fd)]
     for path in _SYSTEM_BINDS:
         out += ["--ro-bind-try", path, path]
     for path in _SYSTEM_FILES:
@@ -225,6 +231,25 @@ class Jail:
     def __init__(self, limits: JailLimits | None = None) -> None:
         self.limits = limits or JailLimits()
         self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
+        self._info_r, self.info_fd = os.pipe()
+        """Pass to :func:`jail_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
+        self._pidfd: int | None = None
+
+    def started(self) -> None:
+        """After bwrap was started: hold a pidfd of the sandbox's first process, so that
+        :meth:`close` can wait for the PID namespace to end (bwrap's own process exits as soon
+        as the program does, while the kernel is still ending the rest of the namespace)."""
+        self._close_info(write_end_only=True)
+        data = b""
+        with contextlib.suppress(OSError):
+            while not data.rstrip().endswith(b"}"):
+                block = os.read(self._info_r, 4096)
+                if not block:
+                    break
+                data += block
+        self._close_info()
+        with contextlib.suppress(ValueError, KeyError, TypeError, OSError, AttributeError):
+            self._pidfd = os.pidfd_open(int(json.loads(data)["child-pid"]))
 
     @property
     def nproc_inside(self) -> int:
@@ -250,9 +275,24 @@ class Jail:
             with contextlib.suppress(OSError):
                 Path(self.cgroup, "cgroup.procs").write_text("0")
 
+    def _close_info(self, write_end_only: bool = False) -> None:
+        ends = ("info_fd",) if write_end_only else ("info_fd", "_info_r")
+        for name in ends:
+            fd = getattr(self, name)
+            if fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+                setattr(self, name, -1)
+
     def close(self) -> None:
-        """Kill whatever of the run is left in its cgroup (nothing, normally: the PID namespace
-        ended with bwrap) and remove the cgroup."""
+        """Wait for the PID namespace to end, kill whatever of the run is left in its cgroup
+        (nothing, normally) and remove the cgroup. Call once the bwrap process has ended."""
+        self._close_info()
+        if self._pidfd is not None:
+            # the namespace's first process ends last: the kernel ends the others first
+            select.select([self._pidfd], [], [], 10.0)
+            os.close(self._pidfd)
+            self._pidfd = None
         if not self.cgroup:
             return
         for _ in range(200):

@@ -475,11 +475,13 @@ class MissionProcess:
                     env=env,
                     limits=self._jail.limits,
                     hidden=self.limits.hidden,
+                    info_fd=self._jail.info_fd,
                 )
             try:
+                fds = (child_sock.fileno(), *((self._jail.info_fd,) if self._jail else ()))
                 self._proc = subprocess.Popen(
                     argv,
-                    pass_fds=(child_sock.fileno(),),
+                    pass_fds=fds,
                     stdin=subprocess.DEVNULL,
                     env=env,
                     preexec_fn=self._jail.preexec if self._jail else None,
@@ -487,6 +489,8 @@ class MissionProcess:
             except BaseException:
                 self._cleanup()
                 raise
+            if self._jail is not None:
+                self._jail.started()
         self._conn = multiprocessing.connection.Connection(parent_sock.detach())
         self._conn.send_bytes(pickle.dumps(self._setup))
         self._in_flight = 0
