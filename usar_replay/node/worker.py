@@ -14,6 +14,11 @@ with usar's own schemas and checks against the :class:`PublishPolicy` again: not
 mission process is ever unpickled. Parent -> child setup data (parameters, the target) is
 pickled, which is safe in that direction.
 
+Where: in the kernel sandbox of :mod:`usar_replay.node.jail` (bubblewrap) by default, with the
+mission's file's folder read-only, a private work dir as its working directory, no network, no
+view of any usar process and a handful of environment variables; the socket to the parent is the
+one thing it shares with usar. See :attr:`MissionLimits.jail`.
+
 A crash's traceback is the user's own: the frames of their code are shown, usar's plumbing in
 between is left out.
 """
