@@ -10,12 +10,12 @@ process (its own PID namespace), reach the network (its own network namespace, w
 reaches only itself), or outlive its run (``--die-with-parent``, and the PID namespace ends with
 its first process, so a ``setsid`` daemon dies with it).
 
-What bwrap does not do, this module does outside it: resource limits. rlimits (address space,
-CPU time, file size, open files) are set on bwrap in the pre-exec hook and inherited by all it
-starts; the process count is a ``pids`` cgroup where one can be made (root, a writable cgroup
-file system), else RLIMIT_NPROC set by the worker inside (a per-run count in the run's user
-namespace; the kernel does not apply it to processes that are root outside, which is why the
-cgroup comes first).
+What bwrap does not do: resource limits. rlimits (address space, CPU time, file size, open
+files, no core files) are set by the sandboxed program on itself before any untrusted code runs
+(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count is a
+``pids`` cgroup where one can be made (root, a writable cgroup file system), else RLIMIT_NPROC
+(a per-run count in the run's user namespace; the kernel does not apply it to processes that
+are root outside, which is why the cgroup comes first).
 
 Reusable: :func:`jail_argv` builds the command for any program (the ROS 1 bridge runs its graph
 with ``network="loopback"``), :class:`Jail` holds one run's cgroup and limits.
@@ -43,6 +43,7 @@ __all__ = [
     "INSTALL_HINT",
     "Jail",
     "JailLimits",
+    "apply_rlimits",
     "bwrap_available",
     "jail_argv",
     "python_binds",
@@ -222,11 +223,23 @@ def signal_of_exit(code: int | None) -> int | None:
     return None
 
 
-class Jail:
-    """One sandboxed run's limits outside bwrap: its rlimits and its pids cgroup.
+def apply_rlimits(limits: Mapping[str, int]) -> None:
+    """Set :meth:`Jail.rlimits` on this process (0: leave that one as it is, except CORE).
+    CPU gets a hard limit 5 s above the soft one: SIGXCPU first (a verdict), then SIGKILL."""
+    for name, value in limits.items():
+        if value <= 0 and name != "CORE":
+            continue
+        hard = value + 5 if name == "CPU" else value
+        with contextlib.suppress(ValueError, OSError, AttributeError):
+            resource.setrlimit(getattr(resource, f"RLIMIT_{name}"), (value, hard))
 
-    Use :meth:`preexec` as ``subprocess.Popen(preexec_fn=...)`` (it runs in the child between
-    fork and exec) and :meth:`close` once the process has ended (the cgroup is removed)."""
+
+class Jail:
+    """One sandboxed run's pids cgroup, rlimits and first process.
+
+    Start bwrap with :meth:`launch` (``jail_argv(..., info_fd=jail.info_fd)``, the info fd in
+    ``pass_fds``), call :meth:`started` right after, have the program inside call
+    :func:`apply_rlimits` with :meth:`rlimits`, and :meth:`close` once bwrap has ended."""
 
     def __init__(self, limits: JailLimits | None = None) -> None:
         self.limits = limits or JailLimits()
@@ -251,29 +264,30 @@ class Jail:
         with contextlib.suppress(ValueError, KeyError, TypeError, OSError, AttributeError):
             self._pidfd = os.pidfd_open(int(json.loads(data)["child-pid"]))
 
-    @property
-    def nproc_inside(self) -> int:
-        """RLIMIT_NPROC for the worker to set inside (0 when the cgroup counts processes)."""
-        return 0 if self.cgroup else self.limits.processes
+    def launch(self, argv: Sequence[str]) -> list[str]:
+        """``argv`` (the bwrap command) started inside the run's pids cgroup: a shell moves
+        itself into the cgroup and becomes bwrap, so every process of the run is counted from
+        the first. (No ``preexec_fn``: Python code between fork and exec can deadlock a
+        recorder whose renderer runs threads.)"""
+        if not self.cgroup:
+            return list(argv)
+        procs = os.path.join(self.cgroup, "cgroup.procs")
+        return ["/bin/sh", "-c", 'echo 0 > "$0" 2>/dev/null; exec "$@"', procs, *argv]
 
-    def preexec(self) -> None:
+    def rlimits(self) -> dict[str, int]:
+        """The rlimits the sandboxed program sets on itself before it runs untrusted code
+        (:func:`apply_rlimits`); inherited by all it starts, and no process in the sandbox
+        may raise them (that needs a capability in the host's namespace)."""
         lim = self.limits
         mib = 1024 * 1024
-        for which, value in (
-            (resource.RLIMIT_AS, lim.memory_mb * mib),
-            (resource.RLIMIT_FSIZE, lim.file_mb * mib),
-            (resource.RLIMIT_NOFILE, lim.open_files),
-            (resource.RLIMIT_CORE, 0),
-        ):
-            if value or which == resource.RLIMIT_CORE:
-                with contextlib.suppress(ValueError, OSError):
-                    resource.setrlimit(which, (value, value))
-        if lim.cpu_s:
-            with contextlib.suppress(ValueError, OSError):
-                resource.setrlimit(resource.RLIMIT_CPU, (lim.cpu_s, lim.cpu_s + 5))
-        if self.cgroup:
-            with contextlib.suppress(OSError):
-                Path(self.cgroup, "cgroup.procs").write_text("0")
+        return {
+            "AS": lim.memory_mb * mib,
+            "CPU": lim.cpu_s,
+            "FSIZE": lim.file_mb * mib,
+            "NOFILE": lim.open_files,
+            "NPROC": 0 if self.cgroup else lim.processes,
+            "CORE": 0,
+        }
 
     def _close_info(self, write_end_only: bool = False) -> None:
         ends = ("info_fd",) if write_end_only else ("info_fd", "_info_r")

@@ -246,17 +246,6 @@ def _limit_cpu(seconds: int) -> None:
         resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 5))
 
 
-def _limit_processes(count: int) -> None:
-    """RLIMIT_NPROC inside the jail, where no pids cgroup counts the run's processes: in the
-    run's own user namespace it counts this run's processes only."""
-    if count <= 0:
-        return
-    with contextlib.suppress(ImportError, ValueError, OSError):
-        import resource
-
-        resource.setrlimit(resource.RLIMIT_NPROC, (count, count))
-
-
 def _preload() -> None:
     """Import what the node API and usar's own decoding load lazily, before the sandbox is on:
     numpy's import calls ``ctypes.dlopen``, which the sandbox refuses to a mission, and the
@@ -279,7 +268,7 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
     os.environ.setdefault("OPENCV_FOR_THREADS_NUM", "1")
     _limit_memory(int(setup["memory_mb"]))
     _limit_cpu(int(setup.get("cpu_s", 0)))
-    _limit_processes(int(setup.get("nproc", 0)))
+    jail.apply_rlimits(setup.get("rlimits", {}))  # in the sandbox: all of its limits
     target: MissionTarget = setup["target"]
     policy = PublishPolicy(sim_topics=setup["sim_topics"], sim_frames=setup["sim_frames"])
     executor = Executor(setup["parameters"], policy)
@@ -457,7 +446,7 @@ class MissionProcess:
             "sim_frames": tuple(sim_frames),
             "memory_mb": self.limits.memory_mb,
             "cpu_s": self.limits.cpu_s,
-            "nproc": self._jail.nproc_inside if self._jail else 0,
+            "rlimits": self._jail.rlimits() if self._jail else {},
             "sandbox": policy,
             "usar_version": __version__,
         }
@@ -485,11 +474,10 @@ class MissionProcess:
             try:
                 fds = (child_sock.fileno(), *((self._jail.info_fd,) if self._jail else ()))
                 self._proc = subprocess.Popen(
-                    argv,
+                    self._jail.launch(argv) if self._jail else argv,
                     pass_fds=fds,
                     stdin=subprocess.DEVNULL,
                     env=env,
-                    preexec_fn=self._jail.preexec if self._jail else None,
                 )
             except BaseException:
                 self._cleanup()
