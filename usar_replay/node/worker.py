@@ -148,8 +148,8 @@ class MissionLimits:
     """What the jailed mission may read besides Python (default: its file's folder, or the
     folder its module was found in); a batch gives the team's submission."""
     hidden: tuple[str, ...] = ()
-    """Files that read as empty in the jail even when they lie in a readable folder (the log
-    being written next to the mission's file)."""
+    """Files the jailed mission may not read even when they lie in a readable folder (the log
+    being written, or replayed, next to the mission's file)."""
 
 
 class MissionEnded(UsarError):
@@ -369,6 +369,8 @@ def _submission_roots(target: MissionTarget) -> list[str]:
     the folder its module was found in; nothing for usar's own missions."""
     if target.module == "usar_user_mission":
         return [str(Path(target.path).parent)]
+    if target.module.startswith("usar_replay."):
+        return []  # bound with usar's package (its parent may be a whole checkout)
     root = _module_root(target)
     return [root] if root else []
 
