@@ -47,7 +47,8 @@ from usar_replay.grading.verdict import Check, GradeReport, Rubric
 from usar_replay.world.ros2_world import task_of
 from usar_replay.world.scenario import Scenario
 
-__all__ = ["RUBRIC", "GRADE_TOPICS", "POINTS", "REQUIRED_TOPICS", "Grader"]
+__all__ = [
+    "RUBRIC","GRADE_TOPICS", "POINTS", "REQUIRED_TOPICS", "Grader"]
 
 TRUTH = contract.truth_pose(contract.ROS2_ROBOT)
 ODOM = contract.odom(contract.ROS2_ROBOT)
