@@ -326,7 +326,7 @@ def test_a_long_string_is_continued_and_reads_back_unchanged(text: str) -> None:
 def test_a_long_array_is_elided_with_its_count() -> None:
     info = msgs.CameraInfo(d=tuple(float(i) for i in range(1000)))
     lines = msg_text.message_lines(info)
-    d = [line for line in lines if line.startswith("d: ")][0]
+    d = next(line for line in lines if line.startswith("d: "))
     assert d.startswith("d: [0.0, 1.0, 2.0,")
     assert any(line.endswith(f"... {1000 - msg_text.MAX_ITEMS} more]") for line in lines)
     assert max(map(len, lines)) <= 100
@@ -335,9 +335,7 @@ def test_a_long_array_is_elided_with_its_count() -> None:
 
 def test_a_field_path_is_checked_against_the_type() -> None:
     path = msg_text.field_path(msgs.Odometry, "pose.pose.position.x")
-    odom = msgs.Odometry(
-        pose=msgs.PoseWithCovariance(pose=msgs.Pose(position=msgs.Point(x=1.5)))
-    )
+    odom = msgs.Odometry(pose=msgs.PoseWithCovariance(pose=msgs.Pose(position=msgs.Point(x=1.5))))
     assert msg_text.path_lines(path, odom) == ["pose.pose.position.x: 1.5"]
     with pytest.raises(msg_text.FieldPathError, match="its fields: pose, covariance"):
         msg_text.field_path(msgs.Odometry, "pose.position")
