@@ -14,7 +14,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
     p = sub.add_parser(
         "echo",
-        help="print a topic's messages from a recording, like `ros2 topic echo`",
+        help="print a topic's messages, like `ros2 topic echo`",
         description=(
             "Print the messages of TOPIC in FILE, one YAML-like block per message (its sim "
             "time first, `---` after), within 100 columns. Long arrays are elided and byte "

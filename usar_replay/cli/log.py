@@ -22,7 +22,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
     p = sub.add_parser(
         "log",
-        help="print the mission's log lines (/rosout) with sim time, level and node",
+        help="print the mission's log lines (/rosout): sim time, level, node",
         description=(
             "Print every /rosout entry of FILE as `[LEVEL] [sim time] [node]: text`, the way "
             "ROS 2 prints its console, one entry per line (long ones go on indented)."

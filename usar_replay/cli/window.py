@@ -19,7 +19,7 @@ from usar_replay.core.errors import UsageError
 
 __all__ = ["add_window", "finish", "window_ns", "write_lines"]
 
-HELP = "sim time in s, as `usar grade` ('at') and `usar view` show it; the log starts at 1.000"
+HELP = "sim time (s), the clock of `usar grade`'s 'at' and `usar view`; a run starts at 1.000"
 
 
 def _seconds(text: str) -> float:
