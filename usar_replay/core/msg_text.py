@@ -236,23 +236,24 @@ def _string(head: str, text: str, indent: int, width: int) -> list[str]:
         return [head + text]
     if text.isprintable() and len(head) + len(text) + 2 <= width:
         return [head + "'" + text.replace("'", "''") + "'"]
-    tokens = [_escape(ch) for ch in text]
     lines: list[str] = []
     prefix = head + '"'
     line: list[str] = []
     used = len(prefix)
     room = width - 1  # each line ends with a backslash or the closing quote
-    for token in tokens:
+    for ch in text:
+        token = _escape(ch)
         if line and used + len(token) > room:
             cut = _word_break(line)
             lines.append(prefix + "".join(line[:cut]) + "\\")
-            line = line[cut:]
-            if line and line[0] == " ":  # a leading space would be dropped as indent
+            prefix, line = " " * indent, line[cut:]
+            if line and line[0] == " ":
                 line[0] = "\\ "
-            prefix = " " * indent
             used = len(prefix) + sum(map(len, line))
-        line.append(token if line or prefix == head + '"' or token != " " else "\\ ")
-        used += len(line[-1])
+        if lines and not line and token == " ":
+            token = "\\ "  # a continuation line's leading space would be read as indent
+        line.append(token)
+        used += len(token)
     lines.append(prefix + "".join(line) + '"')
     return lines
 
