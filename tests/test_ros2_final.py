@@ -27,7 +27,7 @@ from usar_replay.log.run import open_run
 from usar_replay.node.executor import PublishPolicy
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import outputs_digest, replay
-from usar_replay.world import scenario
+from usar_replay.world import scenario, scenario_toml
 from usar_replay.world.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "ros2_final"
@@ -52,7 +52,7 @@ def small_camera(scn: scenario.Scenario) -> scenario.Scenario:
 def test_world_round_trips_through_toml_and_is_playable() -> None:
     world = ros2_final_world()
     assert world.assignment == "ros2-final"
-    assert scenario.from_toml(scenario.to_toml(world)) == world
+    assert scenario_toml.from_toml(scenario_toml.to_toml(world)) == world
     assert check_ros2(world) is None
     task = task_of(world)
     assert task.frame_id == "origin1" and task.marker_id == 1
@@ -65,14 +65,14 @@ def test_world_round_trips_through_toml_and_is_playable() -> None:
 
 def test_usar_scenarios_are_unchanged_in_toml() -> None:
     """The new fields stay out of a US&R file, so existing scenarios and logs read the same."""
-    text = scenario.to_toml(scenario.course_world())
+    text = scenario_toml.to_toml(scenario.course_world())
     assert "assignment" not in text and "[task" not in text
 
 
 def test_unknown_assignment_and_missing_task_fields_are_named() -> None:
-    text = scenario.to_toml(ros2_final_world())
+    text = scenario_toml.to_toml(ros2_final_world())
     with pytest.raises(InvalidScenario, match=r"ros2-finale.*did you mean 'ros2-final'"):
-        scenario.from_toml(text.replace('"ros2-final"', '"ros2-finale"'))
+        scenario_toml.from_toml(text.replace('"ros2-final"', '"ros2-finale"'))
     broken = dataclasses.replace(
         ros2_final_world(), task=tuple(kv for kv in ros2_final_world().task if kv[0] != "origin3.x")
     )

@@ -314,7 +314,8 @@ def parse_seeds(text: str) -> list[int]:
 def make_worlds(seeds: Sequence[int], scenario_files: Sequence[str]) -> list[World]:
     """The worlds: each seed as a variant of the course world, then each scenario file (the
     course world alone when neither is given)."""
-    from usar_replay.world.scenario import course_world, load, to_toml
+    from usar_replay.world.scenario import course_world
+    from usar_replay.world.scenario_toml import load, to_toml
 
     worlds: list[World] = []
     if seeds:
