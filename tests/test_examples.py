@@ -31,7 +31,7 @@ from usar_replay.grading.grade import GRADE_TOPICS, Grader, GradeReport, grade_f
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import ReplayReport, replay
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 FAULTY = EXAMPLES / "faulty"

@@ -26,7 +26,7 @@ from usar_replay.cli.main import main
 from usar_replay.core import contract
 from usar_replay.log.run import open_run
 from usar_replay.node.executor import Executor, PublishPolicy
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 S = 1_000_000_000
 T0 = 100 * S

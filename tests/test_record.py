@@ -15,7 +15,7 @@ from usar_replay.core import msgs
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult, record
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 CONTRACT = {
     "/explorer/camera/rgb/image_raw/compressed": "sensor_msgs/msg/CompressedImage",

@@ -24,7 +24,7 @@ from usar_replay.core import msgs
 from usar_replay.core.errors import UsageError
 from usar_replay.log import bag
 from usar_replay.pipeline.record import RecordResult
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 ROOT = os.geteuid() == 0
 

@@ -95,6 +95,30 @@ class _Worst:
                 self.problem = problem
 
 
+def _line(
+    cid: str,
+    description: str,
+    passed: bool,
+    measured: str,
+    threshold: str,
+    evidence_ns: int | None,
+    detail: str = "",
+) -> Check:
+    """A rubric line worth :data:`POINTS` ``[cid]``: all of them when it passed, none otherwise."""
+    pts = POINTS[cid]
+    return Check(
+        cid,
+        description,
+        passed,
+        pts if passed else 0.0,
+        pts,
+        measured,
+        threshold,
+        evidence_ns,
+        detail,
+    )
+
+
 class Grader:
     """Feeds on a ``ros2-final`` log's messages in log order; :meth:`report` gives the rubric."""
 
@@ -214,36 +238,21 @@ class Grader:
     def report(
         self, source: str, *, log_complete: bool = True, log_problem: str = ""
     ) -> GradeReport:
-        """The rubric as judged from what was fed so far (a truncated log: as far as it goes)."""
-        th = self.th
-        t0 = self.start_ns or 0
-        task = self.task
-        checks: list[Check] = []
+        """The rubric as judged from what was fed so far (a truncated log: as far as it goes):
+        one line per phase of the project, in the table's order."""
+        checks = (
+            self._odom_to_base(),
+            self._aruco_target_reached(),
+            self._marker_detected(),
+            self._destination_chosen(),
+            self._final_destination_broadcast(),
+            self._destination_reached(),
+            self._time_limit(),
+        )
+        return GradeReport(source, checks, self.start_ns or 0, log_complete, log_problem)
 
-        def add(
-            cid: str,
-            description: str,
-            passed: bool,
-            measured: str,
-            threshold: str,
-            evidence_ns: int | None,
-            detail: str = "",
-        ) -> None:
-            pts = POINTS[cid]
-            checks.append(
-                Check(
-                    cid,
-                    description,
-                    passed,
-                    pts if passed else 0.0,
-                    pts,
-                    measured,
-                    threshold,
-                    evidence_ns,
-                    detail,
-                )
-            )
-
+    def _odom_to_base(self) -> Check:
+        """``tf.odom_to_base``: the odometry broadcaster connected the tree, matching odometry."""
         o = self.odom_tf
         if o.count == 0:
             measured, detail = "never broadcast", "nothing connects robot1/odom to base_footprint"
@@ -251,7 +260,7 @@ class Grader:
             measured, detail = f"{o.count} broadcasts", f"worst: {o.problem}"
         else:
             measured, detail = f"worst {o.worst * 100:.2f} cm off odometry", ""
-        add(
+        return _line(
             "tf.odom_to_base",
             f"{contract.ROS2_ODOM_FRAME} -> {contract.ROS2_BASE_FRAME} broadcast from odometry",
             o.count > 0 and o.worst <= ODOM_MATCH_M,
@@ -260,16 +269,23 @@ class Grader:
             o.worst_ns if o.count and o.worst > ODOM_MATCH_M else o.first_ns,
             detail,
         )
-        tx, ty = task.aruco_target
-        add(
+
+    def _aruco_target_reached(self) -> Check:
+        """``aruco_target.reached``: the robot's true pose came near the first goal."""
+        tx, ty = self.task.aruco_target
+        return _line(
             "aruco_target.reached",
             f"reach aruco_target ({tx:.3f}, {ty:.3f})",
             self.target_ns is not None,
             "reached" if self.target_ns is not None else f"closest {self.target_closest:.3f} m",
-            f"<= {th.target_reached_m:g} m",
+            f"<= {self.th.target_reached_m:g} m",
             self.target_ns,
         )
-        add(
+
+    def _marker_detected(self) -> Check:
+        """``marker.detected``: the world's marker ID on ``/aruco_markers`` after the goal."""
+        task = self.task
+        return _line(
             "marker.detected",
             f"detect marker {task.marker_id} on /aruco_markers at aruco_target",
             self.detected_ns is not None,
@@ -283,6 +299,10 @@ class Grader:
             f"ID {task.marker_id} after reaching aruco_target",
             self.detected_ns,
         )
+
+    def _destination_chosen(self) -> Check:
+        """``destination.chosen``: the first broadcast carries the detected ID's parameters."""
+        task = self.task
         want = task.destinations[task.marker_id]
         first = self.first_destination
         if first is None:
@@ -295,7 +315,7 @@ class Grader:
             measured_c = f"({first[0]:.3f}, {first[1]:.3f})" + (
                 f" = aruco_{which[0]}" if which else ""
             )
-        add(
+        return _line(
             "destination.chosen",
             f"final_destination.aruco_{task.marker_id} chosen for marker {task.marker_id}",
             chosen,
@@ -303,6 +323,11 @@ class Grader:
             f"({want[0]:g}, {want[1]:g})",
             None if first is None else first[3],
         )
+
+    def _final_destination_broadcast(self) -> Check:
+        """``final_destination.broadcast``: every broadcast, looked up in ``map``, is near the
+        true destination and a child of the parameter's frame."""
+        th, task = self.th, self.task
         d = self.destination_tf
         dx, dy = self.truth_destination
         if d.count == 0:
@@ -311,7 +336,7 @@ class Grader:
             measured_b = f"worst: {d.problem}"
         else:
             measured_b = f"worst {d.worst:.3f} m from the truth"
-        add(
+        return _line(
             "final_destination.broadcast",
             f"final_destination in {task.frame_id}, at ({dx:.3f}, {dy:.3f}) in map",
             d.count > 0 and d.worst <= th.marker_map_error_m,
@@ -319,8 +344,12 @@ class Grader:
             f"<= {th.marker_map_error_m:g} m, parent {task.frame_id}",
             d.worst_ns if d.count else None,
         )
+
+    def _destination_reached(self) -> Check:
+        """``destination.reached``: after the detection, the robot came near the destination."""
+        dx, dy = self.truth_destination
         reached = self.reached_ns
-        add(
+        return _line(
             "destination.reached",
             f"reach the final destination ({dx:.3f}, {dy:.3f})",
             reached is not None,
@@ -331,12 +360,17 @@ class Grader:
                 if self.destination_closest_ns is not None
                 else "never went for it"
             ),
-            f"<= {th.target_reached_m:g} m",
+            f"<= {self.th.target_reached_m:g} m",
             reached if reached is not None else self.destination_closest_ns,
         )
+
+    def _time_limit(self) -> Check:
+        """``time_limit``: the destination was reached within the scenario's time limit."""
+        t0 = self.start_ns or 0
+        reached = self.reached_ns
         limit_ns = t0 + int(self.scenario.time_limit_s * 1e9)
         in_time = reached is not None and reached <= limit_ns
-        add(
+        return _line(
             "time_limit",
             f"final destination reached within {self.scenario.time_limit_s:g} s",
             in_time,
@@ -344,7 +378,6 @@ class Grader:
             f"<= {self.scenario.time_limit_s:g} s",
             reached,
         )
-        return GradeReport(source, tuple(checks), t0, log_complete, log_problem)
 
 
 RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)

@@ -47,7 +47,8 @@ from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
 from usar_replay.world.nav import OccupancyGrid, grid_to_msg
-from usar_replay.world.scenario import Scenario, to_toml
+from usar_replay.world.scenario import Scenario
+from usar_replay.world.scenario_toml import to_toml
 
 __all__ = [
     "OUTCOMES",
