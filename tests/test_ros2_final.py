@@ -246,6 +246,20 @@ def _record_example(tmp_path: Path, name: str, max_sim_time_s: float | None = No
     return grade_file(path)
 
 
+def test_without_aruco_markers_the_detection_line_says_why() -> None:
+    """Nothing ever on /aruco_markers: the run is graded and marker.detected asks about the
+    detector node; one message with another ID is "IDs seen"."""
+    from usar_replay.grading.rubric_ros2 import NO_DETECTOR, Grader
+
+    world = ros2_final_world()
+    g = Grader(world)
+    g.feed(contract.truth_pose(contract.ROS2_ROBOT), msgs.PoseStamped(), 1_000_000_000)
+    assert g.report("x").check("marker.detected").measured == NO_DETECTOR
+    other = (task_of(world).marker_id + 1) % 4
+    g.feed(contract.ARUCO_MARKERS, msgs.ArucoMarkers(marker_ids=(other,)), 2_000_000_000)
+    assert g.report("x").check("marker.detected").measured == f"IDs seen: {other}"
+
+
 def test_no_odom_broadcaster_never_localises(tmp_path: Path) -> None:
     report = _record_example(tmp_path, "no_odom_broadcaster", max_sim_time_s=15.0)
     assert set(report.failed_ids()) == ALL_LINES

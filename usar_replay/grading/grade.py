@@ -57,8 +57,10 @@ def rubric_for(scenario: Scenario) -> Rubric:
 
 def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
     """Grade an opened recording as recorded (no replay). A damaged log is graded as far as it
-    goes and says so; a complete log that lacks a topic the rubric needs raises
-    :class:`MissingTopic`."""
+    goes and says so. A complete log without a topic the mission publishes (no detector node:
+    no ``/fiducial_transforms``) is a graded run whose lines that need it fail and say why; one
+    without a topic the simulator always writes (the rubric's ``required_topics``: ground
+    truth) is not the log of a run and raises :class:`MissingTopic`."""
     began = time.perf_counter()  # only for JUnit's `time`: never part of the verdict
     scenario = run.require_scenario()
     rubric = rubric_for(scenario)
