@@ -226,7 +226,7 @@ def test_only_on_detection_gives_no_credit_when_nothing_was_broadcast() -> None:
     line = only_on_detection(g)
     assert not line.passed and line.points == 0 and line.max_points == 4
     assert line.measured == "nothing broadcast as marker_frame"
-    assert line.value == 0 and line.evidence_ns is None
+    assert line.value is None and line.evidence_ns is None  # nothing measured
     assert "marker_frame.only_on_detection" in judge_failed(g)
 
 

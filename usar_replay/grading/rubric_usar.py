@@ -591,7 +591,7 @@ def only_on_detection(g: Grader) -> Check:
         measured=measured,
         threshold=f"0 without a detection; parent {contract.OPTICAL_FRAME}",
         evidence_ns=first_bad,
-        value=float(bad),
+        value=float(bad) if g.broadcast_count else None,  # nothing broadcast: nothing measured
         unit="broadcasts",
         limit=0.0,
         op="<=",
