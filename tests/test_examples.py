@@ -105,6 +105,49 @@ def test_the_starter_runs_and_fails_the_rubric_cleanly(tmp_path: Path) -> None:
     _expect(report, [c.id for c in report.checks if c.id not in passing])
 
 
+# --- the first mission of docs/node-api.md --------------------------------------------------
+
+
+def test_the_first_mission_is_graded_whatever_it_leaves_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """docs/node-api.md's 40-line first mission, recorded and graded as a student would: the
+    explorer's lines pass, the follower's (it has none) fail, exit 1, never 3. Its constructor's
+    log line reaches the log at the first tick; the record summary counts the marker as the
+    rubric does, though it never publishes /explorer/marker_poses. Without its detector node
+    it is still graded, and the detection line says why."""
+    world = tmp_path / "room.toml"
+    save(quick_room(), world)  # the one-room world, the explorer starting near the target
+    first = EXAMPLES / "first_mission.py"
+    code_lines = [ln for ln in first.read_text().splitlines() if ln.strip()]
+    assert len(code_lines) <= 45, "the first mission must stay short"
+    out = tmp_path / "first.mcap"
+    base = ["record", "--scenario", str(world), "--quiet"]
+    assert main([*base, "--mission", str(first), "--out", str(out)]) == 0
+    summary = capsys.readouterr().out
+    assert "Markers found: 1/1 (as `usar grade` counts them)" in summary, summary
+    assert "  marker 0: " in summary and " broadcasts, worst error " in summary, summary
+    run = open_run(out)
+    assert contract.MARKER_POSES not in run.topics
+    rosout = next(iter(run.messages([contract.ROSOUT])))
+    assert isinstance(rosout.msg, msgs.Log) and rosout.msg.msg == "1 targets"
+    assert rosout.log_time_ns == run.start_ns  # made in __init__, written at the first tick
+    report = grade_file(out)
+    _expect(report, ["follower.marker_0", "follower.home", "time_limit"])
+    assert main(["grade", str(out)]) == 1
+
+    # without its detector node: a graded run (exit 1), not a refused one (exit 3)
+    blind = tmp_path / "no_detector.py"
+    blind.write_text(first.read_text().replace("    ArucoDetect()\n", ""))
+    out = tmp_path / "blind.mcap"
+    main([*base, "--mission", str(blind), "--out", str(out), "--max-sim-time", "3"])
+    assert contract.FIDUCIALS not in open_run(out).topics
+    capsys.readouterr()
+    assert main(["grade", str(out)]) == 1
+    table = " ".join(capsys.readouterr().out.split())
+    assert "marker_0.detected no /fiducial_transforms in the log: did the mission start" in table
+
+
 # --- detection / broadcast / storing bugs: replay on the one-room log --------------------------
 
 

@@ -43,7 +43,7 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import wrap_angle, yaw_from_quat
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.ros2_world import task_of
 from usar_replay.world.scenario import Scenario
 
@@ -219,6 +219,16 @@ class Grader:
         self.destination_tf.add(math.dist((p.x, p.y), self.truth_destination), t_ns)
 
     # -- verdict ------------------------------------------------------------------------------
+
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The project's one marker, once ``marker.detected`` holds (its ID on
+        ``/aruco_markers`` after reaching ``aruco_target``); the project never says where it
+        is, so no error."""
+        if self.detected_ns is None:
+            return ()
+        when = f"{self.detected_ns / 1e9:.1f} s"  # sim time, as the rubric lines say it
+        text = f"detected on {contract.ARUCO_MARKERS} at aruco_target, at {when}"
+        return (FoundMarker(self.task.marker_id, text),)
 
     def report(
         self, source: str, *, log_complete: bool = True, log_problem: str = ""

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field, replace
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.scenario import Scenario
 
 __all__ = [
@@ -346,6 +346,19 @@ class Grader:
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
 
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The markers broadcast as ``marker_frame`` (attributed as :func:`marker_broadcast`
+        does), with the worst error of their broadcasts looked up in ``map``."""
+        return tuple(
+            FoundMarker(
+                mid,
+                _broadcast_text(b),
+                b.worst_m if math.isfinite(b.worst_m) else None,
+            )
+            for mid, b in self.broadcasts.items()
+            if b.count
+        )
+
     def resolved_thresholds(self) -> Thresholds:
         """The thresholds judged by, with the scenario's time limit filled in."""
         if self.th.time_limit_s is not None:
@@ -534,17 +547,21 @@ def marker_detected(g: Grader, mid: int) -> Check:
     )
 
 
+def _broadcast_text(b: Broadcasts) -> str:
+    """What a marker's broadcasts measured, in words (the line's and the record summary's)."""
+    if b.count == 0:
+        return "no broadcast"
+    if b.failed_lookups:
+        return f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
+    return f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+
+
 def marker_broadcast(g: Grader, mid: int) -> Check:
     """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
     ok = b.count > 0 and b.worst_m <= limit
-    if b.count == 0:
-        measured = "no broadcast"
-    elif b.failed_lookups:
-        measured = f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
-    else:
-        measured = f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+    measured = _broadcast_text(b)
     each = 8.0 / max(len(g.markers), 1)
     evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
     return Check(
