@@ -176,6 +176,10 @@ def test_builtin_mission_gets_60_of_60(builtin_log: tuple[Path, RecordResult]) -
     reached = report.check("aruco_target.reached").evidence_ns
     detected = report.check("marker.detected").evidence_ns
     assert reached is not None and detected is not None and detected > reached
+    # `usar record`'s summary counts the project's marker as its rubric does (it has no
+    # /explorer/marker_poses)
+    assert [f.marker_id for f in result.found] == [task_of(ros2_final_world()).marker_id]
+    assert result.markers_found == {} and result.markers_total == 1
 
 
 def test_builtin_log_has_the_projects_topics(builtin_log: tuple[Path, RecordResult]) -> None:
