@@ -108,6 +108,12 @@ def test_the_starter_runs_and_fails_the_rubric_cleanly(tmp_path: Path) -> None:
 # --- the first mission of docs/node-api.md --------------------------------------------------
 
 
+def test_docs_show_the_first_mission_as_shipped() -> None:
+    """docs/node-api.md prints examples/first_mission.py whole: the two cannot drift apart."""
+    docs = (EXAMPLES.parent / "docs" / "node-api.md").read_text()
+    assert (EXAMPLES / "first_mission.py").read_text().rstrip() + "\n```" in docs
+
+
 def test_the_first_mission_is_graded_whatever_it_leaves_out(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
