@@ -86,10 +86,10 @@ def test_a_clean_synthetic_mission_passes_every_line(tmp_path: Path) -> None:
             {"follower_wiggle_after_stop": 2},
             ["explorer.home_before_follower"],
         ),
-        (
+        (  # and only_on_detection has nothing to judge: no credit without a broadcast
             "marker_frame never broadcast",
             {"broadcast": False},
-            [f"marker_{k}.broadcast" for k in range(4)],
+            [*(f"marker_{k}.broadcast" for k in range(4)), "marker_frame.only_on_detection"],
         ),
     ],
 )
