@@ -176,6 +176,10 @@ def test_builtin_mission_gets_60_of_60(builtin_log: tuple[Path, RecordResult]) -
     reached = report.check("aruco_target.reached").evidence_ns
     detected = report.check("marker.detected").evidence_ns
     assert reached is not None and detected is not None and detected > reached
+    # `usar record`'s summary counts the project's marker as its rubric does (it has no
+    # /explorer/marker_poses)
+    assert [f.marker_id for f in result.found] == [task_of(ros2_final_world()).marker_id]
+    assert result.markers_found == {} and result.markers_total == 1
 
 
 def test_builtin_log_has_the_projects_topics(builtin_log: tuple[Path, RecordResult]) -> None:
@@ -298,6 +302,20 @@ def _record_example(tmp_path: Path, name: str, max_sim_time_s: float | None = No
     )
     assert result.outcome in ("done", "max_sim_time"), result.outcome_reason
     return grade_file(path)
+
+
+def test_without_aruco_markers_the_detection_line_says_why() -> None:
+    """Nothing ever on /aruco_markers: the run is graded and marker.detected asks about the
+    detector node; one message with another ID is "IDs seen"."""
+    from usar_replay.grading.rubric_ros2 import NO_DETECTOR, Grader
+
+    world = ros2_final_world()
+    g = Grader(world)
+    g.feed(contract.truth_pose(contract.ROS2_ROBOT), msgs.PoseStamped(), 1_000_000_000)
+    assert g.report("x").check("marker.detected").measured == NO_DETECTOR
+    other = (task_of(world).marker_id + 1) % 4
+    g.feed(contract.ARUCO_MARKERS, msgs.ArucoMarkers(marker_ids=(other,)), 2_000_000_000)
+    assert g.report("x").check("marker.detected").measured == f"IDs seen: {other}"
 
 
 def test_no_odom_broadcaster_never_localises(tmp_path: Path) -> None:

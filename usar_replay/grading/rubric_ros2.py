@@ -43,20 +43,26 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import wrap_angle, yaw_from_quat
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.ros2_world import task_of
 from usar_replay.world.scenario import Scenario
 
-__all__ = [
-    "RUBRIC","GRADE_TOPICS", "POINTS", "REQUIRED_TOPICS", "Grader"]
+__all__ = ["GRADE_TOPICS", "NO_DETECTOR", "POINTS", "REQUIRED_TOPICS", "RUBRIC", "Grader"]
 
 TRUTH = contract.truth_pose(contract.ROS2_ROBOT)
 ODOM = contract.odom(contract.ROS2_ROBOT)
 GRADE_TOPICS = (contract.TF_STATIC, contract.TF, contract.ARUCO_MARKERS, ODOM, TRUTH)
 """The topics the grader reads; everything else is skipped without decoding."""
 REQUIRED_TOPICS = (TRUTH, ODOM)
-"""Without these a log cannot be graded (``/tf`` and ``/aruco_markers`` are the mission's: a
-mission that never publishes them fails the lines that need them)."""
+"""Without these a log cannot be graded: the simulator writes them from the first tick.
+``/tf`` and ``/aruco_markers`` are the mission's: a mission that never publishes them is graded,
+and fails the lines that need them (the detection line saying so: :data:`NO_DETECTOR`)."""
+NO_DETECTOR = (
+    f"no {contract.ARUCO_MARKERS} in the log: no marker seen, or did the mission start the "
+    "detector node (ArucoNode)?"
+)
+"""What ``marker.detected`` measures when nothing was ever published on ``/aruco_markers``
+(aruco_node publishes only frames with a marker, so this is also a detector that saw none)."""
 POINTS = {
     "tf.odom_to_base": 10.0,
     "aruco_target.reached": 10.0,
@@ -135,6 +141,8 @@ class Grader:
         self.target_closest = math.inf
         self.detected_ns: int | None = None
         self.detected_ids: list[int] = []
+        self.marker_messages = 0
+        """Messages on ``/aruco_markers`` (0: the detector never published)."""
         self.first_destination: tuple[float, float, str, int] | None = None
         self.destination_tf = _Worst()
         self.reached_ns: int | None = None
@@ -174,6 +182,7 @@ class Grader:
         elif topic == TRUTH and isinstance(msg, msgs.PoseStamped):
             self._on_truth((msg.pose.position.x, msg.pose.position.y), t_ns)
         elif topic == contract.ARUCO_MARKERS and isinstance(msg, msgs.ArucoMarkers):
+            self.marker_messages += 1
             for mid in msg.marker_ids:
                 if mid not in self.detected_ids:
                     self.detected_ids.append(int(mid))
@@ -235,6 +244,16 @@ class Grader:
 
     # -- verdict ------------------------------------------------------------------------------
 
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The project's one marker, once ``marker.detected`` holds (its ID on
+        ``/aruco_markers`` after reaching ``aruco_target``); the project never says where it
+        is, so no error."""
+        if self.detected_ns is None:
+            return ()
+        when = f"{self.detected_ns / 1e9:.1f} s"  # sim time, as the rubric lines say it
+        text = f"detected on {contract.ARUCO_MARKERS} at aruco_target, at {when}"
+        return (FoundMarker(self.task.marker_id, text),)
+
     def report(
         self, source: str, *, log_complete: bool = True, log_problem: str = ""
     ) -> GradeReport:
@@ -295,6 +314,8 @@ class Grader:
                 f"IDs seen: {', '.join(map(str, self.detected_ids))}"
                 if self.detected_ids
                 else "never detected"
+                if self.marker_messages
+                else NO_DETECTOR
             ),
             f"ID {task.marker_id} after reaching aruco_target",
             self.detected_ns,
