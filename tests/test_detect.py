@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from usar_replay.core import msgs
 from usar_replay.core.errors import UsageError
+from usar_replay.sim import camera
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import Simulator
 from usar_replay.world import detect as detect_module
@@ -127,7 +128,7 @@ def test_unknown_dictionary_is_a_usage_error() -> None:
 
 def _forget() -> None:
     """Empty the encoder's and detector's one-frame memories (as in a fresh process)."""
-    detect_module._ENCODED.last = None
+    camera._ENCODED.last = None
     detect_module._DETECTED.last = None
 
 

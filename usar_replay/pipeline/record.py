@@ -34,12 +34,14 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
 from usar_replay.node.worker import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
+    MissionTarget,
     hide_from_mission,
     resolve_target,
 )
@@ -47,7 +49,8 @@ from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
 from usar_replay.world.nav import OccupancyGrid, grid_to_msg
-from usar_replay.world.scenario import Scenario, to_toml
+from usar_replay.world.scenario import Scenario
+from usar_replay.world.scenario_toml import to_toml
 
 __all__ = [
     "OUTCOMES",
@@ -96,9 +99,15 @@ class RecordResult:
     frames: int
     messages: int
     markers_found: dict[int, tuple[float, float, float]]
+    """What the mission stored on ``/explorer/marker_poses`` (the built-in mission's topic;
+    empty for a mission that does not publish it), by ID."""
     marker_errors_m: dict[int, float]
+    """The stored poses' distances from the true markers, by ID."""
     renderer: str
     mission: str
+    found: tuple[FoundMarker, ...] = ()
+    """The markers found as the rubric counts them (``usar grade`` agrees), for any mission."""
+    markers_total: int = 0
 
     @property
     def mission_done(self) -> bool:
@@ -208,6 +217,19 @@ def _step(sim: Simulator, commands: list[tuple[str, msgs.Twist]], steps: int) ->
     sim.step(steps)
 
 
+@dataclass(slots=True)
+class _Run:
+    """What the tick loop learns as it goes (the outcome, the clock, what people are shown)."""
+
+    t0: int
+    last_t: int
+    outcome: str
+    reason: str
+    frames: int = 0
+    markers: dict[int, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
+    last_log: str = ""
+
+
 def record(
     scenario: Scenario,
     out: str | os.PathLike[str],
@@ -223,6 +245,10 @@ def record(
     ``interrupted``, and the interrupt propagates to the caller after the file is safe. A
     mission that crashes, hangs or is refused ends the run with that outcome in the log (the
     file itself is complete); the result says so.
+
+    The phases: open the simulator and the log, write what makes the log self-contained
+    (:func:`_write_header`), run the tick loop with the mission process (:func:`_tick_loop`),
+    close the log with the run's outcome (:func:`_close_run`), then sum up.
     """
     settings = settings or RunSettings()
     rs = settings.record
@@ -230,159 +256,223 @@ def record(
     target = resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
-    limit_outcome = "max_sim_time" if rs.max_sim_time_s else "time_limit"
-    grid = OccupancyGrid.from_scenario(scenario)
-    params = mission_parameters(scenario, settings)
-    frames = 0
-    markers: dict[int, tuple[float, float, float]] = {}
-    last_log = ""
-    outcome, reason = limit_outcome, f"stopped at {limit_s:g} s of sim time"
-    with (
-        Simulator(
-            scenario,
-            physics_hz=rs.physics_hz,
-            start_time_ns=contract.START_TIME_NS,
-            renderer=rs.renderer,
-            robots=tuple(
-                SimRobot(f, *start)
-                for f, start in zip(asg.robots, asg.starts(scenario), strict=True)
-            ),
-            camera_robot=asg.camera_robot,
-            base_tf=asg.sim_base_tf,
-            static_frames=asg.static_links(scenario),
-        ) as sim,
-        bag.BagWriter(out) as writer,
-    ):
-        renderer = sim.renderer_name
-        stored = dataclasses.replace(settings, record=dataclasses.replace(rs, renderer=renderer))
-        t0 = sim.now_ns
-        writer.add_attachment(
-            contract.SCENARIO_ATTACHMENT, "application/toml", to_toml(scenario).encode(), t0
+    with _simulator(scenario, settings, asg) as sim, bag.BagWriter(out) as writer:
+        renderer = _write_header(writer, sim, scenario, settings, target)
+        run = _Run(
+            t0=sim.now_ns,
+            last_t=sim.now_ns,
+            outcome="max_sim_time" if rs.max_sim_time_s else "time_limit",
+            reason=f"stopped at {limit_s:g} s of sim time",
         )
-        writer.add_attachment(
-            contract.SETTINGS_ATTACHMENT,
-            "application/toml",
-            settings_to_toml(stored).encode(),
-            t0,
-        )
-        info = MissionInfo(target.spec, target.module, target.sha256, __version__)
-        writer.add_attachment(
-            contract.MISSION_ATTACHMENT, "application/toml", info.to_toml().encode(), t0
-        )
-        shown = f"{renderer}+shadowmap" if sim.egl_shadow_map else renderer
-        writer.add_metadata(contract.RUN_METADATA, _run_metadata(shown))
-        writer.write(contract.TRUTH_MARKERS, _truth_markers(scenario, t0), t0, publisher="recorder")
-        first: list[tuple[str, msgs.Message]] = [
-            (contract.TF_STATIC, sim.tf_static()),
-            (contract.MAP_TOPIC, grid_to_msg(grid, msgs.Time.from_ns(t0))),
-        ]
-        steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
-        end_ns = t0 + int(limit_s * 1e9)
-        last_t = t0
         try:
-            with MissionProcess(
-                target,
-                params,
-                sim_topics=asg.sim_topics,
-                sim_frames=asg.sim_frames,
-                # the log being written holds the truth: unreadable even next to the mission
-                limits=hide_from_mission(limits, str(writer.part_path)),
-            ) as proc:
-                latency = rs.actuation_latency_ticks
-                tick: _Observed | None = _observe(sim, scenario, asg, first)
-                commands: list[tuple[str, msgs.Twist]] = []
-                while tick is not None:
-                    for topic, msgtype, raw in tick.wire:
-                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="sim")
-                    for topic, msg in tick.truth:
-                        writer.write(topic, msg, tick.t, publisher="recorder")
-                    frames += tick.frame
-                    last_t = tick.t
-                    proc.send(tick.t, tick.wire)
-                    nxt: _Observed | None = None
-                    if latency:
-                        # the mission thinks about this tick while the simulator steps with the
-                        # previous tick's commands and renders the next frame (two cores busy);
-                        # each cmd_vel acts one tick later, always: recorded, deterministic
-                        _step(sim, commands, steps_per_tick)
-                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-                    commands = []
-                    for topic, msgtype, raw, value in proc.receive():
-                        writer.write_raw(topic, msgtype, raw, tick.t, publisher="mission")
-                        robot = contract.robot_of_topic(topic)
-                        if robot is not None and topic == contract.cmd_vel(robot):
-                            assert isinstance(value, msgs.Twist)
-                            commands.append((robot, value))
-                        elif topic == contract.MARKER_POSES and isinstance(
-                            value, msgs.FiducialTransformArray
-                        ):
-                            markers = {
-                                f.fiducial_id: (
-                                    f.transform.translation.x,
-                                    f.transform.translation.y,
-                                    f.transform.translation.z,
-                                )
-                                for f in value.transforms
-                            }
-                        elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
-                            last_log = value.msg
-                    if progress is not None:
-                        progress(
-                            Progress(
-                                (tick.t - t0) / 1e9,
-                                len(markers),
-                                len(scenario.markers),
-                                frames,
-                                last_log,
-                            )
-                        )
-                    if proc.shutdown_requested:
-                        outcome, reason = "done", "the mission said it was done"
-                        break
-                    if not latency:
-                        _step(sim, commands, steps_per_tick)
-                        nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-                    tick = nxt
+            _tick_loop(sim, writer, scenario, settings, asg, target, run, limit_s, progress, limits)
         except MissionEnded as ended:
-            outcome, reason = ended.verdict, ended.detail
+            run.outcome, run.reason = ended.verdict, ended.detail
         except KeyboardInterrupt:
             writer.outcome, writer.outcome_reason = "interrupted", "interrupted by the user"
             raise
-        writer.outcome, writer.outcome_reason = outcome, reason
-        if outcome != "done":
-            writer.write(
-                contract.ROSOUT,
-                msgs.Log(
-                    stamp=msgs.Time.from_ns(last_t),
-                    level=msgs.Log.ERROR,
-                    name="record",
-                    msg=f"run ended: {OUTCOMES.get(outcome, outcome)}",
-                ),
-                last_t,
-                publisher="recorder",
-            )
-        sim_duration = (last_t - t0) / 1e9
+        _close_run(writer, run)
         message_count = writer.message_count
-    true_markers = {m.id: m for m in scenario.markers}
-    errors = {
-        mid: math.dist(p, (true_markers[mid].x, true_markers[mid].y, true_markers[mid].z))
-        for mid, p in markers.items()
-        if mid in true_markers
-    }
+    wall_time = time.perf_counter() - wall_start
+    found = _found_as_graded(Path(out))
     return RecordResult(
         path=Path(out),
         status="complete",
-        outcome=outcome,
-        outcome_reason=reason,
-        sim_duration_s=sim_duration,
-        wall_time_s=time.perf_counter() - wall_start,
-        frames=frames,
+        outcome=run.outcome,
+        outcome_reason=run.reason,
+        sim_duration_s=(run.last_t - run.t0) / 1e9,
+        wall_time_s=wall_time,
+        frames=run.frames,
         messages=message_count,
-        markers_found=dict(sorted(markers.items())),
-        marker_errors_m=errors,
+        markers_found=dict(sorted(run.markers.items())),
+        marker_errors_m=_marker_errors(scenario, run.markers),
         renderer=renderer,
         mission=target.spec,
+        found=found,
+        markers_total=len(scenario.markers),
     )
+
+
+def _simulator(scenario: Scenario, settings: RunSettings, asg: Assignment) -> Simulator:
+    """The assignment's robots at their starts, on the run's renderer and physics rate."""
+    rs = settings.record
+    return Simulator(
+        scenario,
+        physics_hz=rs.physics_hz,
+        start_time_ns=contract.START_TIME_NS,
+        renderer=rs.renderer,
+        robots=tuple(
+            SimRobot(f, *start) for f, start in zip(asg.robots, asg.starts(scenario), strict=True)
+        ),
+        camera_robot=asg.camera_robot,
+        base_tf=asg.sim_base_tf,
+        static_frames=asg.static_links(scenario),
+    )
+
+
+def _write_header(
+    writer: bag.BagWriter,
+    sim: Simulator,
+    scenario: Scenario,
+    settings: RunSettings,
+    target: MissionTarget,
+) -> str:
+    """What makes the log self-contained, at the first sim time: the world, every setting (with
+    the renderer that actually ran), which mission code ran, the machine's facts and the true
+    markers. Returns the renderer's name."""
+    renderer = sim.renderer_name
+    stored = dataclasses.replace(
+        settings, record=dataclasses.replace(settings.record, renderer=renderer)
+    )
+    t0 = sim.now_ns
+    toml = "application/toml"
+    writer.add_attachment(contract.SCENARIO_ATTACHMENT, toml, to_toml(scenario).encode(), t0)
+    writer.add_attachment(contract.SETTINGS_ATTACHMENT, toml, settings_to_toml(stored).encode(), t0)
+    info = MissionInfo(target.spec, target.module, target.sha256, __version__)
+    writer.add_attachment(contract.MISSION_ATTACHMENT, toml, info.to_toml().encode(), t0)
+    shown = f"{renderer}+shadowmap" if sim.egl_shadow_map else renderer
+    writer.add_metadata(contract.RUN_METADATA, _run_metadata(shown))
+    writer.write(contract.TRUTH_MARKERS, _truth_markers(scenario, t0), t0, publisher="recorder")
+    return renderer
+
+
+def _tick_loop(
+    sim: Simulator,
+    writer: bag.BagWriter,
+    scenario: Scenario,
+    settings: RunSettings,
+    asg: Assignment,
+    target: MissionTarget,
+    run: _Run,
+    limit_s: float,
+    progress: Callable[[Progress], None] | None,
+    limits: MissionLimits | None,
+) -> None:
+    """sim -> log and mission -> log and sim, one control tick at a time, until the mission
+    says it is done or the sim clock passes the limit (a :class:`MissionEnded` ends it early).
+
+    With ``record.actuation_latency_ticks`` the mission thinks about a tick while the simulator
+    steps with the previous tick's commands (two cores busy); each cmd_vel then acts one tick
+    later, always: recorded, deterministic."""
+    rs = settings.record
+    first: list[tuple[str, msgs.Message]] = [
+        (contract.TF_STATIC, sim.tf_static()),
+        (contract.MAP_TOPIC, grid_to_msg(OccupancyGrid.from_scenario(scenario), _time(run.t0))),
+    ]
+    steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
+    end_ns = run.t0 + int(limit_s * 1e9)
+    params = mission_parameters(scenario, settings)
+    # the log being written holds the truth: unreadable to the mission even next to its file
+    hidden = hide_from_mission(limits, str(writer.part_path))
+    with MissionProcess(
+        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=hidden
+    ) as proc:
+        latency = rs.actuation_latency_ticks
+        tick: _Observed | None = _observe(sim, scenario, asg, first)
+        commands: list[tuple[str, msgs.Twist]] = []
+        while tick is not None:
+            _write_inputs(writer, tick, run)
+            proc.send(tick.t, tick.wire)
+            nxt: _Observed | None = None
+            if latency:
+                _step(sim, commands, steps_per_tick)
+                nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+            commands = _take_outputs(proc, writer, tick.t, run)
+            if progress is not None:
+                progress(_progress(run, tick.t, scenario))
+            if proc.shutdown_requested:
+                run.outcome, run.reason = "done", "the mission said it was done"
+                return
+            if not latency:
+                _step(sim, commands, steps_per_tick)
+                nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+            tick = nxt
+
+
+def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:
+    """The simulator's messages of one tick (``sim``) and the ground truth (``recorder``)."""
+    for topic, msgtype, raw in tick.wire:
+        writer.write_raw(topic, msgtype, raw, tick.t, publisher="sim")
+    for topic, msg in tick.truth:
+        writer.write(topic, msg, tick.t, publisher="recorder")
+    run.frames += tick.frame
+    run.last_t = tick.t
+
+
+def _take_outputs(
+    proc: MissionProcess, writer: bag.BagWriter, t: int, run: _Run
+) -> list[tuple[str, msgs.Twist]]:
+    """What the mission published at this tick, written as the ``mission`` publisher; returns
+    the cmd_vels for the simulator and notes the stored markers and the last log line."""
+    commands: list[tuple[str, msgs.Twist]] = []
+    for topic, msgtype, raw, value in proc.receive():
+        writer.write_raw(topic, msgtype, raw, t, publisher="mission")
+        robot = contract.robot_of_topic(topic)
+        if robot is not None and topic == contract.cmd_vel(robot):
+            assert isinstance(value, msgs.Twist)
+            commands.append((robot, value))
+        elif topic == contract.MARKER_POSES and isinstance(value, msgs.FiducialTransformArray):
+            run.markers = {
+                f.fiducial_id: (
+                    f.transform.translation.x,
+                    f.transform.translation.y,
+                    f.transform.translation.z,
+                )
+                for f in value.transforms
+            }
+        elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
+            run.last_log = value.msg
+    return commands
+
+
+def _progress(run: _Run, t: int, scenario: Scenario) -> Progress:
+    return Progress(
+        (t - run.t0) / 1e9, len(run.markers), len(scenario.markers), run.frames, run.last_log
+    )
+
+
+def _close_run(writer: bag.BagWriter, run: _Run) -> None:
+    """The run's outcome into the log's status; a run that did not end by itself also gets the
+    recorder's last ``/rosout`` line saying why."""
+    writer.outcome, writer.outcome_reason = run.outcome, run.reason
+    if run.outcome == "done":
+        return
+    writer.write(
+        contract.ROSOUT,
+        msgs.Log(
+            stamp=_time(run.last_t),
+            level=msgs.Log.ERROR,
+            name="record",
+            msg=f"run ended: {OUTCOMES.get(run.outcome, run.outcome)}",
+        ),
+        run.last_t,
+        publisher="recorder",
+    )
+
+
+def _marker_errors(
+    scenario: Scenario, markers: dict[int, tuple[float, float, float]]
+) -> dict[int, float]:
+    """Each stored marker's distance to the true one (metres)."""
+    true = {m.id: m for m in scenario.markers}
+    return {
+        mid: math.dist(p, (true[mid].x, true[mid].y, true[mid].z))
+        for mid, p in markers.items()
+        if mid in true
+    }
+
+
+def _time(t_ns: int) -> msgs.Time:
+    return msgs.Time.from_ns(t_ns)
+
+
+def _found_as_graded(path: Path) -> tuple[FoundMarker, ...]:
+    """The markers the fresh log shows found, observed by its own rubric: the summary must
+    count what ``usar grade`` counts, whatever topics the mission publishes."""
+    from usar_replay.grading.grade import observe_run
+    from usar_replay.log.run import open_run
+
+    return observe_run(open_run(path)).found_markers()
 
 
 def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
@@ -394,12 +484,19 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
         f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
         f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
-        f"Markers found: {len(result.markers_found)}",
+        f"Markers found: {len(result.found)}/{result.markers_total} (as `usar grade` counts them)",
     ]
-    for mid, pos in result.markers_found.items():
-        err = result.marker_errors_m.get(mid)
-        err_s = f", error {err * 100:.1f} cm" if err is not None else ""
-        lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
+    found = {f.marker_id: f.text for f in result.found}
+    for mid in sorted({*found, *result.markers_found}):
+        lines.append(f"  marker {mid}: {found.get(mid, 'not found as the rubric counts it')}")
+        pos = result.markers_found.get(mid)
+        if pos is not None:
+            err = result.marker_errors_m.get(mid)
+            err_s = f", error {err * 100:.1f} cm" if err is not None else ""
+            lines.append(
+                f"    stored on {contract.MARKER_POSES} at "
+                f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
+            )
     out = file or sys.stdout
     print("\n".join(lines), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):

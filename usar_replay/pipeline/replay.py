@@ -48,6 +48,7 @@ from usar_replay.node.worker import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
+    MissionTarget,
     hide_from_mission,
     resolve_target,
 )
@@ -442,61 +443,21 @@ def replay(
 
     A damaged or interrupted log is replayed as far as it goes; ``report.log_problem`` says so
     (the CLI exits 3). Raises :class:`MissingTopic` for a complete log without a needed topic.
+
+    The phases: open and check the log, resolve the mission code (:func:`_resolve_mission`),
+    feed the recorded ticks to a fresh mission process while comparing what comes back
+    (:func:`_drive`, with a :class:`_Replayer` that compares, digests and feeds the grader),
+    then sum up in a :class:`ReplayReport`.
     """
     run = source if isinstance(source, Run) else open_run(source)
     scenario = run.require_scenario()
     asg = assignment_of(scenario)
     run.require_topics([*asg.sim_topics, *required_topics])
-    recorded_target = run.mission.target or "builtin"
-    spec = mission or recorded_target
-    try:
-        target = resolve_target(spec)
-    except UsageError as err:
-        if mission is None:
-            raise UsageError(
-                f"{run.path} was recorded with mission {recorded_target!r}, which is not here "
-                "to replay; pass --mission FILE"
-            ) from err
-        raise
+    target = _resolve_mission(run, mission)
     use = settings or run.settings
     same_code = bool(run.mission.sha256) and target.sha256 == run.mission.sha256
-    regression = use != run.settings or not same_code
-    comparison = _Comparison()
-    changes = Changes()
-    digest = hashlib.sha256()
-    inputs = 0
-    ticks = 0
-    decode_for_grade = frozenset(grade_topics) if grade_sink is not None else frozenset()
+    replayer = _Replayer(grade_sink, frozenset(grade_topics) if grade_sink else frozenset())
     crashed: MissionEnded | None = None
-
-    def feed(topic: str, msgtype: str, data: bytes, value: msgs.Message | None, t: int) -> None:
-        if grade_sink is None:
-            return
-        if value is None and topic in decode_for_grade:
-            value = _try_decode(data, msgtype)
-        grade_sink(topic, value, t)
-
-    def finish(tick: _Tick, proc: MissionProcess) -> None:
-        nonlocal inputs, ticks
-        outputs = proc.receive()
-        ticks += 1
-        inputs += len(tick.inputs)
-        replayed = []
-        for topic, msgtype, data, value in outputs:
-            digest.update(_digest_record(topic, tick.t, data))
-            changes.note(topic, value, recorded=False)
-            replayed.append(_Pending(topic, tick.t, data, msgtype, value))
-        for p in tick.recorded:
-            changes.note(p.topic, p.msg, recorded=True)
-        comparison.tick(tick.recorded, replayed)
-        for topic, msgtype, data in tick.inputs:
-            feed(topic, msgtype, data, None, tick.t)
-        for m in tick.truth:
-            feed(m.topic, m.msgtype, m.data, None, tick.t)
-        for topic, msgtype, data, value in outputs:
-            feed(topic, msgtype, data, value, tick.t)
-
-    in_flight: deque[_Tick] = deque()
     last: _Tick | None = None
     with MissionProcess(
         target,
@@ -506,52 +467,124 @@ def replay(
         limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
-            for tick in _ticks(run):
-                last = tick
-                if not tick.inputs or proc.shutdown_requested:
-                    # nothing for the mission (or it said it is done): the recording's outputs
-                    # here have no replayed counterpart
-                    for topic, msgtype, data in tick.inputs:
-                        feed(topic, msgtype, data, None, tick.t)
-                    for m in tick.truth:
-                        feed(m.topic, m.msgtype, m.data, None, tick.t)
-                    for p in tick.recorded:
-                        changes.note(p.topic, p.msg, recorded=True)
-                    comparison.tick(tick.recorded, ())
-                    continue
-                proc.send(tick.t, tick.inputs)
-                tick.sent = True
-                in_flight.append(tick)
-                while len(in_flight) > max(window, 1):
-                    finish(in_flight.popleft(), proc)
-            cut = run.reader.damage is not None or run.file_state != "complete"
-            while in_flight:
-                tick = in_flight.popleft()
-                if cut and tick is last:
-                    proc.receive()  # the log ends inside this tick: nothing to compare with
-                    break
-                finish(tick, proc)
+            last = _drive(run, proc, replayer, window)
         except MissionEnded as ended:
-            crashed = ended
+            crashed, last = ended, replayer.last
     uncompared = len(last.recorded) if (last is not None and run.problem()) else 0
     return ReplayReport(
         source=str(run.path),
         start_ns=run.start_ns,
-        topics=comparison.topics,
-        divergence=comparison.divergence,
-        digest=digest.hexdigest(),
-        inputs=inputs,
-        changes=changes,
-        regression=regression,
+        topics=replayer.comparison.topics,
+        divergence=replayer.comparison.divergence,
+        digest=replayer.digest.hexdigest(),
+        inputs=replayer.inputs,
+        changes=replayer.changes,
+        regression=use != run.settings or not same_code,
         log_problem=run.problem(),
         uncompared=uncompared,
-        ticks=ticks,
+        ticks=replayer.ticks,
         mission=target.spec,
         same_code=same_code,
         settings_changed=use != run.settings,
         mission_failure=None if crashed is None else crashed.verdict,
         mission_failure_detail="" if crashed is None else crashed.detail,
     )
+
+
+def _resolve_mission(run: Run, mission: str | None) -> MissionTarget:
+    """``--mission``, else the mission the log names (which must be here to replay)."""
+    recorded_target = run.mission.target or "builtin"
+    try:
+        return resolve_target(mission or recorded_target)
+    except UsageError as err:
+        if mission is None:
+            raise UsageError(
+                f"{run.path} was recorded with mission {recorded_target!r}, which is not here "
+                "to replay; pass --mission FILE"
+            ) from err
+        raise
+
+
+class _Replayer:
+    """What a replay accumulates tick by tick: the comparison with the recording, the changes
+    people read, the digest of the replayed outputs, and the grader's stream."""
+
+    def __init__(self, grade_sink: GradeSink | None, decode_for_grade: frozenset[str]) -> None:
+        self.grade_sink = grade_sink
+        self.decode_for_grade = decode_for_grade
+        self.comparison = _Comparison()
+        self.changes = Changes()
+        self.digest = hashlib.sha256()
+        self.inputs = 0
+        self.ticks = 0
+        self.last: _Tick | None = None
+
+    def feed(
+        self, topic: str, msgtype: str, data: bytes, value: msgs.Message | None, t: int
+    ) -> None:
+        """One message to the grader (decoded only when the grader reads its topic)."""
+        if self.grade_sink is None:
+            return
+        if value is None and topic in self.decode_for_grade:
+            value = _try_decode(data, msgtype)
+        self.grade_sink(topic, value, t)
+
+    def _feed_recorded(self, tick: _Tick) -> None:
+        for topic, msgtype, data in tick.inputs:
+            self.feed(topic, msgtype, data, None, tick.t)
+        for m in tick.truth:
+            self.feed(m.topic, m.msgtype, m.data, None, tick.t)
+
+    def skip(self, tick: _Tick) -> None:
+        """A tick with nothing for the mission (or after it said it is done): the recording's
+        outputs here have no replayed counterpart."""
+        self._feed_recorded(tick)
+        for p in tick.recorded:
+            self.changes.note(p.topic, p.msg, recorded=True)
+        self.comparison.tick(tick.recorded, ())
+
+    def finish(self, tick: _Tick, proc: MissionProcess) -> None:
+        """The mission's outputs for a sent tick: digested, compared with the recorded ones,
+        and fed to the grader after the tick's inputs and truth."""
+        outputs = proc.receive()
+        self.ticks += 1
+        self.inputs += len(tick.inputs)
+        replayed = []
+        for topic, msgtype, data, value in outputs:
+            self.digest.update(_digest_record(topic, tick.t, data))
+            self.changes.note(topic, value, recorded=False)
+            replayed.append(_Pending(topic, tick.t, data, msgtype, value))
+        for p in tick.recorded:
+            self.changes.note(p.topic, p.msg, recorded=True)
+        self.comparison.tick(tick.recorded, replayed)
+        self._feed_recorded(tick)
+        for topic, msgtype, data, value in outputs:
+            self.feed(topic, msgtype, data, value, tick.t)
+
+
+def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> _Tick | None:
+    """Send every recorded tick to the mission process, keeping up to ``window`` ticks in
+    flight (the mission thinks while the log is read), and finish each in order. Returns the
+    log's last tick."""
+    in_flight: deque[_Tick] = deque()
+    for tick in _ticks(run):
+        replayer.last = tick
+        if not tick.inputs or proc.shutdown_requested:
+            replayer.skip(tick)
+            continue
+        proc.send(tick.t, tick.inputs)
+        tick.sent = True
+        in_flight.append(tick)
+        while len(in_flight) > max(window, 1):
+            replayer.finish(in_flight.popleft(), proc)
+    cut = run.reader.damage is not None or run.file_state != "complete"
+    while in_flight:
+        tick = in_flight.popleft()
+        if cut and tick is replayer.last:
+            proc.receive()  # the log ends inside this tick: nothing to compare with
+            break
+        replayer.finish(tick, proc)
+    return replayer.last
 
 
 def _digest_record(topic: str, t_ns: int, data: bytes) -> bytes:
