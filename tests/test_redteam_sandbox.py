@@ -30,7 +30,7 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.node.jail import bwrap_available
 from usar_replay.node.worker import MissionLimits
 from usar_replay.pipeline.record import RecordResult, record
-from usar_replay.world.scenario import to_toml
+from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 _OK, _WHY = bwrap_available()

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from conftest import one_room
 
-from usar_replay.world.scenario import to_toml
+from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 MISSION = "from usar_replay.api import Node\n\n\ndef main() -> None:\n    Node('idle')\n"
