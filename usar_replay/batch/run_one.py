@@ -129,6 +129,10 @@ def _mission_limits(job: RunJob) -> Any:
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
         sandbox=sandbox,
+        # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
+        # grade and log are written by this process, outside it); never run bare by accident
+        jail="required" if lim.get("sandbox", True) else "off",
+        read_roots=(str(Path(job.submission_path).resolve()),),
     )
 
 

@@ -42,6 +42,7 @@ from usar_replay.node.worker import (
     MissionLimits,
     MissionProcess,
     MissionTarget,
+    hide_from_mission,
     resolve_target,
 )
 from usar_replay.sim.camera import encode_image
@@ -361,8 +362,10 @@ def _tick_loop(
     steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
     end_ns = run.t0 + int(limit_s * 1e9)
     params = mission_parameters(scenario, settings)
+    # the log being written holds the truth: unreadable to the mission even next to its file
+    hidden = hide_from_mission(limits, str(writer.part_path))
     with MissionProcess(
-        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=limits
+        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=hidden
     ) as proc:
         latency = rs.actuation_latency_ticks
         tick: _Observed | None = _observe(sim, scenario, asg, first)
