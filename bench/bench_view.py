@@ -20,7 +20,8 @@ from pathlib import Path
 
 from usar_replay.core.contract import IMAGE
 from usar_replay.log.run import open_run
-from usar_replay.viewer.view import Output, view_run
+from usar_replay.viewer.view import view_run
+from usar_replay.viewer.viewer_process import Output
 
 DEFAULT_LOG = Path("recordings/course.mcap")
 

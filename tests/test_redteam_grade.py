@@ -22,7 +22,8 @@ from usar_replay.core import contract, msgs
 from usar_replay.grading.grade import grade_file
 from usar_replay.grading.rubric_usar import Grader, judge
 from usar_replay.log.run import open_run
-from usar_replay.world.scenario import RobotStart, course_world, to_toml
+from usar_replay.world.scenario import RobotStart, course_world
+from usar_replay.world.scenario_toml import to_toml
 from usar_replay.world.variants import make_variant
 from usar_replay.world.world_key import ENV_VAR, WorldKey, key_from_env
 

@@ -37,13 +37,12 @@ from usar_replay.log.bag import BagReader
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult
 from usar_replay.viewer.scene import escape_path_part, frame_entity_path, frame_entity_paths
-from usar_replay.viewer.view import (
+from usar_replay.viewer.view import ViewResult, view_run
+from usar_replay.viewer.viewer_process import (
     Output,
-    ViewResult,
     choose_output,
     default_rrd_path,
     open_command,
-    view_run,
 )
 from usar_replay.world.detect import DetectorParams, detect_with_corners
 

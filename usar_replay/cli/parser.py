@@ -13,8 +13,10 @@ from typing import TYPE_CHECKING
 from usar_replay import __version__
 from usar_replay.cli import (
     batch,
+    echo,
     grade,
     info,
+    log,
     record,
     recover,
     replay,
@@ -29,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = ["COMMANDS", "build_parser"]
 
-COMMANDS = (record, replay, grade, report, batch, view, scenario, info, recover)
+COMMANDS = (record, replay, grade, report, batch, view, echo, log, scenario, info, recover)
 """The commands, in the order ``usar --help`` lists them."""
 
 

@@ -53,13 +53,8 @@ def run(args: argparse.Namespace) -> int:
     # break the one-line error contract; the failure itself still raises and is reported below
     os.environ.setdefault("RUST_LOG", "off")
     from usar_replay.log.run import open_run
-    from usar_replay.viewer.view import (
-        check_rrd,
-        choose_output,
-        open_command,
-        view_run,
-        wait_until_interrupted,
-    )
+    from usar_replay.viewer.view import view_run, wait_until_interrupted
+    from usar_replay.viewer.viewer_process import check_rrd, choose_output, open_command
 
     output = choose_output(args.file, save=args.save, web=args.web, env=os.environ)
     if output.rrd is not None:  # before any work: never over the log or an existing file

@@ -51,6 +51,7 @@ from usar_replay.node.worker import (
     MissionLimits,
     MissionProcess,
     MissionTarget,
+    hide_from_mission,
     resolve_target,
 )
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
@@ -476,7 +477,7 @@ def replay(
         asg.parameters(scenario, use),
         sim_topics=mission_inputs(asg, world_detects),
         sim_frames=asg.sim_frames,
-        limits=limits,
+        limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
             last = _drive(run, proc, replayer, window, redetect)

@@ -1,7 +1,7 @@
 """`usar view`: a recording in the rerun viewer. The only module that imports ``rerun``.
 
 What is shown is decided by :mod:`usar_replay.viewer.scene` (pure: messages -> columns per entity);
-this module hands those columns to rerun, lays the views out, and runs the viewer process:
+this module hands those columns to rerun and lays the views out:
 
 * **sending**: each entity goes out with ONE ``send_columns`` call on one timeline,
   :data:`TIMELINE` (a *duration* column: sim time is time since the simulator started, not a
@@ -10,12 +10,8 @@ this module hands those columns to rerun, lays the views out, and runs the viewe
   row, ``rr.log`` measured 80-110 us per row (archetype construction plus ``set_time``): 5-6 s for
   the ~60k rows of an 8-minute course log on top of reading it;
 * **the layout**: :func:`build_blueprint`;
-* **where the view goes** (:class:`Output`): an ``.rrd`` written to a temporary name and renamed
-  when complete, the native viewer, or the web viewer. Both viewers are the ``rerun`` command of
-  this environment started as a child process (:class:`ViewerProcess`) that binds its ports to one
-  address (``--bind``, 127.0.0.1 by default), so the web page and its data port are reachable
-  from the same places. A viewer that cannot open a window exits within a fraction of a second;
-  that exit is watched for, so falling back to a file is quick.
+* **where the view goes**: :mod:`usar_replay.viewer.viewer_process` (an ``.rrd`` written to a
+  temporary name and renamed when complete, the native viewer, or the web viewer).
 
 The log is read through an opened :class:`usar_replay.log.run.Run` (the caller opens it once); the
 bag decoder and the grader are imported inside :func:`view_run`, the workflow entry point.
@@ -25,22 +21,13 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import ipaddress
 import os
-import shlex
-import shutil
-import signal
-import socket
-import subprocess
-import sys
-import tempfile
 import time
 import uuid
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
-from urllib.parse import quote
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import rerun as rr
@@ -48,10 +35,17 @@ import rerun.blueprint as rrb
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.errors import UsageError, UsarError
-from usar_replay.core.outfiles import check_output
+from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.viewer import scene as sc
 from usar_replay.viewer.scene import ImageBatch, Scene, Strips
+from usar_replay.viewer.viewer_process import (
+    DEFAULT_BIND,
+    Output,
+    ViewerProcess,
+    check_rrd,
+    default_rrd_path,
+)
 from usar_replay.world.scenario import Box, Scenario, building_extent
 
 if TYPE_CHECKING:
@@ -61,13 +55,8 @@ if TYPE_CHECKING:
 __all__ = [
     "APPLICATION_ID",
     "TIMELINE",
-    "Output",
     "ViewResult",
-    "ViewerProcess",
     "build_blueprint",
-    "choose_output",
-    "default_rrd_path",
-    "open_command",
     "send_scene",
     "view_run",
     "wait_until_interrupted",
@@ -76,17 +65,11 @@ __all__ = [
 APPLICATION_ID = "usar-replay"
 TIMELINE = "sim_time"
 """The one timeline: sim time in nanoseconds, as a duration (the log's time axis)."""
-DEFAULT_BIND = "127.0.0.1"
 IMAGE_BATCH_BYTES = 8 << 20
 """Camera images go out in chunks of about this many bytes while the log streams: memory stays
 bounded, and rerun writes many small chunks much faster than one big one (measured on a course
 log: 4776 frames, 164 MB of PNG, one chunk 4.0 s, 8 MB chunks 0.3 s); the viewer also pages
 small chunks in and out better."""
-VIEWER_START_S = 10.0
-"""How long a starting viewer may take to listen on its ports."""
-VIEWER_SETTLE_S = 1.0
-"""A native viewer that cannot open its window starts its server, then exits (measured: 0.02 s
-later); one that is still running this long after listening is taken as up."""
 
 
 def _duration(times: Sequence[int]) -> rr.TimeColumn:
@@ -123,7 +106,7 @@ def send_scene(rec: rr.RecordingStream, scene: Scene) -> None:
         linear = entity.endswith("linear_x")
         robot = entity.split("/")[2]
         name = "linear.x (m/s)" if linear else "angular.z (rad/s)"
-        color = sc.robot_color(robot) if linear else sc.ANGULAR_COLOR
+        color = scene.robot_color(robot) if linear else sc.ANGULAR_COLOR
         rec.log(entity, rr.SeriesLines(names=name, colors=color, widths=1.5), static=True)
         rec.send_columns(
             entity,
@@ -138,7 +121,9 @@ def send_scene(rec: rr.RecordingStream, scene: Scene) -> None:
         )
     scn = scene.scenario
     extent = building_extent(scn) if scn is not None and scn.walls else None
-    rec.send_blueprint(build_blueprint(scene.pinhole_entity, scene.plotted_robots(), extent))
+    camera = f"{scene.assignment.camera_robot} camera + detections"
+    blueprint = build_blueprint(scene.pinhole_entity, scene.plotted_robots(), extent, camera)
+    rec.send_blueprint(blueprint)
 
 
 def _solid_boxes(items: Sequence[Box], color: tuple[int, int, int]) -> rr.Boxes3D:
@@ -207,19 +192,19 @@ def _send_world(rec: rr.RecordingStream, scn: Scenario) -> None:
     points = rr.Points3D(
         [(x, y, 0.01) for _, (x, y, _) in homes],
         radii=0.04,
-        colors=[sc.robot_color(name) for name, _ in homes],
+        colors=[sc.robot_color(name, asg.robot_names) for name, _ in homes],
         labels=[f"{name} home" for name, _ in homes],
     )
     rec.log(sc.HOMES_ENTITY, points, static=True)
 
 
-def _body(robot: str, *, solid: bool) -> rr.Boxes3D:
+def _body(robot: str, color: tuple[int, int, int], *, solid: bool) -> rr.Boxes3D:
     centre, half = sc.robot_body()
     mode = rr.components.FillMode.Solid if solid else rr.components.FillMode.MajorWireframe
     return rr.Boxes3D(
         centers=[centre],
         half_sizes=[half],
-        colors=sc.robot_color(robot),
+        colors=color,
         fill_mode=mode,
         labels=[robot] if solid else None,
     )
@@ -243,7 +228,7 @@ def _send_tf(rec: rr.RecordingStream, scene: Scene) -> None:
             ),
         )
     for robot, entity in scene.body_entities().items():
-        rec.log(entity, _body(robot, solid=True), static=True)
+        rec.log(entity, _body(robot, scene.robot_color(robot), solid=True), static=True)
 
 
 def _send_camera(rec: rr.RecordingStream, scene: Scene) -> None:
@@ -272,22 +257,24 @@ def _send_camera(rec: rr.RecordingStream, scene: Scene) -> None:
 
 
 def _send_strips3d(
-    rec: rr.RecordingStream, entity: str, rows: Strips, robot: str, radius: float
+    rec: rr.RecordingStream,
+    entity: str,
+    rows: Strips,
+    color: tuple[int, int, int],
+    radius: float,
 ) -> None:
     n = len(rows.items)
     rec.send_columns(
         entity,
         indexes=[_duration(rows.times)],
-        columns=rr.LineStrips3D.columns(
-            strips=rows.items, colors=[sc.robot_color(robot)] * n, radii=[radius] * n
-        ),
+        columns=rr.LineStrips3D.columns(strips=rows.items, colors=[color] * n, radii=[radius] * n),
     )
 
 
 def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
     for robot, poses in sorted(scene.truth.items()):
         entity = f"{sc.TRUTH_ENTITY}/{robot}"
-        rec.log(entity + "/body", _body(robot, solid=False), static=True)
+        rec.log(entity + "/body", _body(robot, scene.robot_color(robot), solid=False), static=True)
         rec.send_columns(
             entity,
             indexes=[_duration(poses.times)],
@@ -297,7 +284,8 @@ def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
             ),
         )
     for robot, path in sorted(scene.paths.items()):
-        _send_strips3d(rec, f"{sc.TRUTH_ENTITY}/{robot}_path", path.rows, robot, 0.01)
+        entity = f"{sc.TRUTH_ENTITY}/{robot}_path"
+        _send_strips3d(rec, entity, path.rows, scene.robot_color(robot), 0.01)
     for robot, rows in sorted(scene.goals.items()):
         n = len(rows.items)
         rec.send_columns(
@@ -307,12 +295,13 @@ def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
                 origins=[o for o, _ in rows.items],
                 vectors=[v for _, v in rows.items],
                 labels=rows.labels,
-                colors=[sc.robot_color(robot)] * n,
+                colors=[scene.robot_color(robot)] * n,
                 radii=[0.02] * n,
             ),
         )
     for robot, rows in sorted(scene.plans.items()):
-        _send_strips3d(rec, f"{sc.MAP_ENTITY}/{robot}/plan", rows, robot, 0.005)
+        entity = f"{sc.MAP_ENTITY}/{robot}/plan"
+        _send_strips3d(rec, entity, rows, scene.robot_color(robot), 0.005)
 
 
 def _send_markers(rec: rr.RecordingStream, scene: Scene) -> None:
@@ -347,6 +336,7 @@ def build_blueprint(
     pinhole_entity: str,
     robots: Sequence[str],
     extent: tuple[float, float, float, float] | None = None,
+    camera_name: str = "camera + detections",
 ) -> rrb.Blueprint:
     """The ready layout: the building in 3D and the log on the left; camera and plots right.
 
@@ -375,7 +365,7 @@ def build_blueprint(
                 row_shares=[3, 1],
             ),
             rrb.Vertical(
-                rrb.Spatial2DView(origin=pinhole_entity, name="explorer camera + detections"),
+                rrb.Spatial2DView(origin=pinhole_entity, name=camera_name),
                 *plots,
                 row_shares=[2] + [1] * len(plots),
             ),
@@ -391,218 +381,7 @@ def build_blueprint(
 # --- where the view goes -------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Output:
-    """Where a view goes: a native viewer, an ``.rrd`` file, the web viewer (file and web mix)."""
-
-    spawn: bool = False
-    rrd: Path | None = None
-    web: bool = False
-
-
-def default_rrd_path(log_path: str | os.PathLike[str]) -> Path:
-    """Next to the recording, same stem: ``runs/course.mcap`` -> ``runs/course.rrd``."""
-    return Path(log_path).with_suffix(".rrd")
-
-
-def choose_output(
-    log_path: str | os.PathLike[str],
-    *,
-    save: str | os.PathLike[str] | None,
-    web: bool,
-    env: Mapping[str, str],
-) -> Output:
-    """The CLI's rule: ``--save`` writes a file; ``--web`` serves; else a display spawns the
-    native viewer and no display writes the file next to the recording (so a headless machine
-    still produces something to open elsewhere)."""
-    rrd = Path(save) if save is not None else None
-    if web:
-        return Output(rrd=rrd, web=True)
-    if rrd is not None:
-        return Output(rrd=rrd)
-    if env.get("DISPLAY") or env.get("WAYLAND_DISPLAY"):
-        return Output(spawn=True)
-    return Output(rrd=default_rrd_path(log_path))
-
-
-def check_rrd(rrd: Path, log: Path, *, overwrite: bool, option: str = "--save") -> None:
-    """An ``.rrd`` output may not be the log, a directory, or (without ``overwrite``) a file
-    that exists (:func:`usar_replay.core.outfiles.check_output`; raises ``UsageError``, exit 2)."""
-    check_output(rrd, overwrite=overwrite, inputs=[log], option=option)
-
-
-def _rerun_executable() -> str | None:
-    """The ``rerun`` CLI of this environment (the one that matches this SDK's file format)."""
-    sibling = Path(sys.executable).parent / "rerun"
-    found = shutil.which("rerun")
-    if found and (not sibling.exists() or Path(found).resolve() == sibling.resolve()):
-        return "rerun"
-    return str(sibling) if sibling.exists() else found
-
-
-def _rerun_binary() -> str | None:
-    """The viewer binary itself, for starting it as a child process: the ``rerun`` command is a
-    Python wrapper that runs this binary as *its* child, so stopping the wrapper would leave
-    the binary running (and its ports taken)."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("rerun_cli")
-    if spec is not None and spec.origin is not None:
-        binary = Path(spec.origin).parent / "rerun"
-        if binary.is_file() and os.access(binary, os.X_OK):
-            return str(binary)
-    return _rerun_executable()
-
-
-def open_command(rrd: str | os.PathLike[str]) -> str:
-    """The exact shell command that opens ``rrd`` in the viewer (``rerun PATH``)."""
-    exe = _rerun_executable() or "rerun"
-    return f"{shlex.quote(exe)} {shlex.quote(str(rrd))}"
-
-
 # --- the viewer process --------------------------------------------------------------------------
-
-
-def _port_open(host: str, port: int) -> bool:
-    try:
-        with socket.create_connection((host, port), timeout=0.5):
-            return True
-    except OSError:
-        return False
-
-
-def _local_host(bind: str) -> str:
-    """Where this machine reaches a server bound to ``bind`` (loopback for 'all interfaces')."""
-    try:
-        if ipaddress.ip_address(bind).is_unspecified:
-            return "127.0.0.1"
-    except ValueError:
-        pass
-    return bind
-
-
-def _url_host(host: str) -> str:
-    return f"[{host}]" if ":" in host else host
-
-
-@dataclass(slots=True)
-class ViewerProcess:
-    """A ``rerun`` viewer (native, or the web viewer's server) this command started or found.
-
-    Both ports of the web viewer (the page and its gRPC data) are bound to the same ``bind``
-    address by the ``rerun`` command itself, so they are reachable from the same places.
-    """
-
-    grpc_url: str
-    """Where this process sends the recording (``rerun+http://HOST:PORT/proxy``)."""
-    proc: subprocess.Popen[bytes] | None = None
-    """None when a viewer was already listening on the port (it is not ours to stop)."""
-    web_url: str | None = None
-
-    @classmethod
-    def start(cls, *, web: bool, bind: str, grpc_port: int, web_port: int) -> ViewerProcess:
-        """Start the native viewer (``web`` False) or the web viewer, and wait until it
-        listens. Raises :class:`UsageError` when it cannot start, saying why in one line."""
-        exe = _rerun_binary()
-        if exe is None:
-            raise UsageError("the `rerun` command is not installed; use --save OUT.rrd")
-        host = _local_host(bind)
-        grpc_url = f"rerun+http://{_url_host(host)}:{grpc_port}/proxy"
-        if not web and _port_open(host, grpc_port):
-            return cls(grpc_url)  # a viewer is already open there: use it, as rerun does
-        wanted = [(grpc_port, "--grpc-port"), *([(web_port, "--web-port")] if web else [])]
-        for port, option in wanted:
-            if _port_open(host, port):
-                raise UsageError(f"port {port} is in use; pick another with {option} N")
-        args = [exe, "--bind", bind, "--port", str(grpc_port)]
-        if web:
-            args += ["--serve-web", "--web-viewer-port", str(web_port)]
-            args += ["--server-memory-limit", "50%"]
-        else:
-            args += ["--hide-welcome-screen", "--memory-limit", "75%"]
-        errors: IO[bytes] = tempfile.TemporaryFile()  # noqa: SIM115 - kept by the child
-        env = {**os.environ, "RUST_LOG": os.environ.get("RUST_LOG", "warn")}
-        try:
-            proc = subprocess.Popen(
-                args,
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,
-                stderr=errors,
-                env=env,
-                start_new_session=True,  # the native viewer outlives this command; the web
-                # server is stopped as a group (stop()), whatever children it has
-            )
-        except OSError as err:
-            errors.close()
-            raise UsageError(f"cannot start `{exe}`: {err.strerror or err}") from err
-        ports = [grpc_port, web_port] if web else [grpc_port]
-        problem = _wait_listening(proc, host, ports, settle=not web)
-        if problem is not None:
-            errors.seek(0)
-            why = _last_error(errors.read().decode("utf-8", "replace")) or problem
-            errors.close()
-            raise UsageError(f"the rerun viewer did not start: {why}")
-        errors.close()
-        web_url = None
-        if web:
-            shown = _shown_host(bind)
-            data = f"rerun+http://{_url_host(shown)}:{grpc_port}/proxy"
-            web_url = f"http://{_url_host(shown)}:{web_port}/?url={quote(data, safe=':/')}"
-        return cls(grpc_url, proc, web_url)
-
-    def stop(self) -> None:
-        """Stop a web viewer's server (a native viewer is the user's to close)."""
-        if self.proc is None or self.web_url is None or self.proc.poll() is not None:
-            return
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(self.proc.pid, signal.SIGTERM)
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.proc.pid, signal.SIGKILL)
-            self.proc.wait()
-
-
-def _shown_host(bind: str) -> str:
-    """The name a browser uses for a server bound to ``bind``: ``localhost`` for loopback, this
-    machine's name when it listens on every interface (a remote browser needs it)."""
-    ip = ipaddress.ip_address(bind)
-    if ip.is_loopback:
-        return "localhost"
-    return socket.gethostname() if ip.is_unspecified else bind
-
-
-def _wait_listening(
-    proc: subprocess.Popen[bytes], host: str, ports: Sequence[int], *, settle: bool
-) -> str | None:
-    """None once ``proc`` listens on every port (and, with ``settle``, is still running
-    :data:`VIEWER_SETTLE_S` later); else what went wrong. Returns as soon as it exits."""
-    deadline = time.monotonic() + VIEWER_START_S
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            return f"it exited with code {proc.returncode}"
-        if all(_port_open(host, p) for p in ports):
-            if not settle:
-                return None
-            try:
-                proc.wait(timeout=VIEWER_SETTLE_S)
-            except subprocess.TimeoutExpired:
-                return None
-            return f"it exited with code {proc.returncode}"
-        time.sleep(0.05)
-    proc.kill()
-    proc.wait()
-    return f"it did not listen within {VIEWER_START_S:.0f} s"
-
-
-def _last_error(text: str) -> str:
-    """The viewer's own reason, e.g. ``Failed to open connection to X server``."""
-    for line in reversed(text.strip().splitlines()):
-        if "Error" in line or "error" in line:
-            reason = line.split(": ")[-1].strip()
-            return reason[:120]
-    return ""
 
 
 # --- the workflow --------------------------------------------------------------------------------
@@ -626,31 +405,29 @@ class ViewResult:
     """The web viewer's server, kept while it serves (stopped by :func:`wait_until_interrupted`)."""
 
 
-CAMERA_INFO_TOPICS = frozenset({contract.CAMERA_INFO, contract.ROS2_CAMERA_INFO})
-
-
 class _Decoder:
     """Decodes only what the viewer draws; CameraInfo only when it changes (not its stamp).
 
     Odometry is skipped: ``odom -> base_footprint`` on ``/tf`` carries the same pose, and the two
     odometry topics are a quarter of a course log's messages. A payload that does not decode is
-    counted and skipped (the rest of the log is still shown).
+    counted and skipped (the rest of the log is still shown). The odometry and camera-info topics
+    are the run's assignment's.
     """
 
-    SKIP = frozenset(contract.odom(r) for r in (*contract.ROBOTS, contract.ROS2_ROBOT))
-
-    def __init__(self) -> None:
+    def __init__(self, asg: Assignment) -> None:
         from usar_replay.log import bag
 
         self._decode = bag.decode
+        self._skip = frozenset(contract.odom(r) for r in asg.robot_names)
+        self._camera_info_topic = asg.camera_info_topic
         self._info_tail: bytes | None = None
         self.failures = 0
         self.first_failure = ""
 
     def __call__(self, topic: str, msgtype: str, data: bytes, t_ns: int) -> msgs.Message | None:
-        if topic in self.SKIP:
+        if topic in self._skip:
             return None
-        if topic in CAMERA_INFO_TOPICS:
+        if topic == self._camera_info_topic:
             tail = data[12:]  # CDR: 4 bytes encapsulation, then the 8-byte stamp
             if tail == self._info_tail:
                 return None
@@ -683,7 +460,7 @@ def _stream(
     with rec:  # leaving the block flushes and finalises file sinks
         rec.send_recording_name(run.path.stem)
         scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
-        decode = _Decoder()
+        decode = _Decoder(scene.assignment)
         for m in run.messages(decode=False):
             scene.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
             if scene.pending_image_bytes >= IMAGE_BATCH_BYTES:
