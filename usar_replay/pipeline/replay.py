@@ -480,6 +480,11 @@ def replay(
         limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
+            # other code or settings may switch the course's detector otherwise than the
+            # recording did: then each tick's detections wait for the replayed switches
+            # (lockstep); a faithful replay follows the recorded ones with ticks in flight
+            if redetect is not None and (use != run.settings or not same_code):
+                replayer.switches, window = redetect, 0
             last = _drive(run, proc, replayer, window, redetect)
         except MissionEnded as ended:
             crashed, last = ended, replayer.last
@@ -533,6 +538,8 @@ class _Replayer:
         self.last: _Tick | None = None
         self.never_graded: frozenset[str] = frozenset()
         """Output topics the grader never sees from a mission (the course's detections)."""
+        self.switches: CourseDetector | None = None
+        """The course's detector that follows the *replayed* mission's on/off switches."""
 
     def feed(
         self, topic: str, msgtype: str, data: bytes, value: msgs.Message | None, t: int
@@ -564,6 +571,8 @@ class _Replayer:
         """The mission's outputs for a sent tick: digested, compared with the recorded ones,
         and fed to the grader after the tick's inputs and truth."""
         outputs = proc.receive()
+        if self.switches is not None:
+            self.switches.note_outputs((topic, value) for topic, _, _, value in outputs)
         self.ticks += 1
         self.inputs += len(tick.inputs)
         replayed = list(tick.course)
@@ -596,14 +605,14 @@ def _drive(
     for tick in _ticks(run):
         replayer.last = tick
         if redetect is not None:
-            _redetect(redetect, tick)
+            _redetect(redetect, tick, recorded_switches=replayer.switches is None)
         if not tick.inputs or proc.shutdown_requested:
             replayer.skip(tick)
             continue
         proc.send(tick.t, tick.inputs)
         tick.sent = True
         in_flight.append(tick)
-        while len(in_flight) > max(window, 1):
+        while len(in_flight) > max(window, 0 if replayer.switches else 1):
             replayer.finish(in_flight.popleft(), proc)
     cut = run.reader.damage is not None or run.file_state != "complete"
     while in_flight:
@@ -615,12 +624,16 @@ def _drive(
     return replayer.last
 
 
-def _redetect(detector: CourseDetector, tick: _Tick) -> None:
+def _redetect(detector: CourseDetector, tick: _Tick, *, recorded_switches: bool) -> None:
     """Re-run the course's detector on the tick's recorded frame: the mission receives the
     re-run's detections (with the recorded settings, the recorded bytes; with ``--set
-    detector.*``, the changed detector's), and the recorded ones are compared with them."""
+    detector.*``, the changed detector's), and the recorded ones are compared with them. The
+    detector is switched by the tick's recorded outputs (``recorded_switches``), else by the
+    replayed ones as they come back (:attr:`_Replayer.switches`)."""
     recorded_outputs = [(p.topic, p.msgtype, p.data) for p in tick.recorded]
-    tick.inputs, recorded, redone = detector.replay_tick(tick.inputs, recorded_outputs)
+    tick.inputs, recorded, redone = detector.replay_tick(
+        tick.inputs, recorded_outputs if recorded_switches else []
+    )
     def pending(items: list[tuple[str, str, bytes]]) -> list[_Pending]:
         return [_Pending(tp, tick.t, data, mt, _try_decode(data, mt)) for tp, mt, data in items]
 
