@@ -107,6 +107,7 @@ def _grade_all(
 
 
 def run(args: argparse.Namespace) -> int:
+    from usar_replay.cli.textout import print_wrapped
     from usar_replay.grading.reports import summary_line, to_table
 
     if args.jobs < 1:
@@ -122,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
             print(to_table(r))
             print()
         if not r.log_complete:
-            print(
+            print_wrapped(
                 f"usar: {r.source}: the log is incomplete ({r.log_problem}); "
                 "graded as far as it goes",
                 file=sys.stderr,
