@@ -126,8 +126,7 @@ def _why_not_done(result: RecordResult, args: argparse.Namespace) -> str:
     stopped before the mission said it was done, so the log is not a finished run."""
     if result.outcome == "max_sim_time":
         return (
-            f"stopped by --max-sim-time {args.max_sim_time:g} s before the mission said it "
-            "was done"
+            f"stopped by --max-sim-time {args.max_sim_time:g} s before the mission said it was done"
         )
     if result.outcome == "time_limit":
         return (
