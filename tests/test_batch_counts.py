@@ -31,7 +31,7 @@ def test_the_legend_tells_max_sim_time_from_the_time_limit(tmp_path: Path) -> No
     table = to_table(collect(plan, {"w": 60.0})).splitlines()
     assert table[1].split() == ["alice", "30S", "30/60"]
     assert table[2].split() == ["bob", "30T", "30/60"]
-    legend = " ".join(table[3:])
+    legend = " ".join(" ".join(table[3:]).split())
     assert "S stopped at the batch's --max-sim-time" in legend
     assert "T stopped at the world's time limit" in legend
 
