@@ -13,8 +13,8 @@ gets ``--out`` set to the file it would have written (``recordings/course.mcap``
 ``recordings/course-seed3.mcap``), so the later commands find what they expect. Every other
 word of every command is the README's. The set-up's recording is stood in for by a file at
 ``recordings/course.mcap`` (only its existence matters: the tour's first command must replace
-it). ``usar view`` runs with no ``DISPLAY``, so it writes ``FILE.rrd`` instead of opening a
-window.
+it). ``usar view`` runs with no ``DISPLAY``, so it writes ``recordings/course.rrd`` instead of
+opening a window.
 
 Every ``usar`` subcommand is in the tour, or in :data:`LEFT_OUT` with the reason; a new
 subcommand (``usar echo``, ``usar log``) fails :func:`test_the_tour_shows_every_command` until
@@ -134,7 +134,7 @@ def test_the_tour_runs_as_written(tmp_path: Path) -> None:
     # what the tour says it makes is there
     for made in ("runs/alice.mcap", "grades.xml", "grades.csv", "pages/index.html"):
         assert (work / made).is_file(), made
-    assert (work / "recordings" / "course.mcap.rrd").is_file()
+    assert (work / "recordings" / "course.rrd").is_file()
 
 
 @pytest.mark.parametrize(
