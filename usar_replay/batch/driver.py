@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import sys
+import textwrap
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -80,7 +81,12 @@ class BatchSummary:
             )
         for r in self.errors:
             first = r.error.strip().splitlines()[0] if r.error.strip() else "unknown error"
-            out.append(f"error: {r.team} on {r.world}: {first} (it is redone next time)")
+            out += textwrap.wrap(
+                f"error: {r.team} on {r.world}: {first} (it is redone next time)",
+                100,
+                subsequent_indent="  ",
+                break_on_hyphens=False,
+            )
         return out
 
 
