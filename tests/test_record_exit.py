@@ -11,7 +11,7 @@ from conftest import one_room
 
 from usar_replay.cli.main import main
 from usar_replay.log.run import open_run
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 STARTER = Path(__file__).resolve().parent.parent / "examples" / "starter_mission.py"
 

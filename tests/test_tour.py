@@ -35,7 +35,7 @@ import pytest
 from example_worlds import quick_room
 
 from usar_replay.cli.parser import build_parser
-from usar_replay.world.scenario import to_toml
+from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"

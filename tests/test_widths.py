@@ -22,7 +22,7 @@ from conftest import one_room
 from usar_replay.batch.driver import BatchSummary
 from usar_replay.batch.plan import Plan, RunResult, Submission, World
 from usar_replay.pipeline.record import RecordResult, print_summary
-from usar_replay.world.scenario import to_toml
+from usar_replay.world.scenario_toml import to_toml
 
 WIDTH = 100
 
