@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 from conftest import one_room
 
+from usar_replay.batch.classreport import collect, to_table
 from usar_replay.batch.driver import BatchSummary
 from usar_replay.batch.plan import Plan, RunResult, Submission, World
 from usar_replay.pipeline.record import RecordResult, print_summary
@@ -104,3 +105,5 @@ def test_the_batch_lines_fit(tmp_path: Path) -> None:
     text = "\n".join(BatchSummary(plan, results).lines())
     assert "out of memory 1" in text
     assert not _too_wide(text), _too_wide(text)
+    table = to_table(collect(plan, {"course-variant-seed12": 60.0}))
+    assert table.splitlines()[0].startswith("team") and not _too_wide(table), _too_wide(table)
