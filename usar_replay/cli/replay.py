@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_MISSION, EXIT_OK
-from usar_replay.cli.textout import print_wrapped
+from usar_replay.cli.textout import incomplete_note
 
 if TYPE_CHECKING:
     from usar_replay.grading.delta import RubricDelta
@@ -95,11 +95,7 @@ def run(args: argparse.Namespace) -> int:
             code = EXIT_FAIL
     _replay_reports_out(args, report, grades, delta)
     if report.log_problem:
-        print_wrapped(
-            f"usar: {args.file}: the log is incomplete ({report.log_problem}); "
-            "replayed as far as it goes",
-            file=sys.stderr,
-        )
+        print(incomplete_note(args.file, report.log_problem, "replayed"), file=sys.stderr)
         return EXIT_INCOMPLETE
     return code
 

@@ -11,7 +11,7 @@ import sys
 import textwrap
 from typing import TextIO
 
-__all__ = ["WIDTH", "print_wrapped", "wrap"]
+__all__ = ["WIDTH", "incomplete_note", "print_wrapped", "wrap"]
 
 WIDTH = 100
 """The widest line a command prints."""
@@ -32,3 +32,13 @@ def wrap(text: str, width: int = WIDTH, indent: str = "  ") -> list[str]:
 def print_wrapped(text: str, file: TextIO | None = None, width: int = WIDTH) -> None:
     """Print ``text`` wrapped to ``width`` (stdout unless ``file``)."""
     print("\n".join(wrap(text, width)), file=file or sys.stdout)
+
+
+def incomplete_note(path: str, problem: str, done: str) -> str:
+    """The one stderr line of a command that worked through a damaged log (exit 3): what is
+    wrong when that fits in :data:`WIDTH` columns, else where to read it (``usar info``), so
+    the line stays one line (scripts and tests read it as the command's one note) and fits."""
+    full = f"usar: {path}: the log is incomplete ({problem}); {done} as far as it goes"
+    if len(full) <= WIDTH:
+        return full
+    return f"usar: {path}: the log is incomplete; {done} as far as it goes (`usar info` says why)"
