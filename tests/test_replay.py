@@ -197,13 +197,17 @@ def test_regression_mode_via_the_command(
     delta = out[out.index("Rubric lines that change (recorded -> replayed):") :]
     assert delta[1].split()[:6] == ["marker_0.detected", "PASS", "12/12", "->", "FAIL", "0/12"]
     assert delta[1].endswith("-12 pts")
-    assert "  total 60 -> 40 of 60 (-20 pts)" in delta
     assert out[-1] == "Replay does NOT reproduce the recording: see the changes above."
     import json
 
     doc = json.loads(js.read_text())["replay"]["rubric_delta"]
-    assert (doc["total_before"], doc["total_after"]) == (60.0, 40.0)
-    assert [row["id"] for row in doc["lines"]] == ["marker_0.detected", "marker_0.broadcast"]
+    ids = [row["id"] for row in doc["lines"]]
+    assert ids[:2] == ["marker_0.detected", "marker_0.broadcast"]
+    assert doc["total_before"] == 60.0 and doc["total_after"] <= 40.0
+    lost = sum(row["points"] for row in doc["lines"])
+    assert doc["total_after"] - doc["total_before"] == lost
+    total = f"  total 60 -> {doc['total_after']:g} of 60 ({lost:+g} pts)"
+    assert total in delta and all(f"  {i} " in "\n".join(delta) for i in ids)
     assert (
         main(["replay", "--expect-changes", "--set", "detector.dictionary=DICT_5X5_50", path]) == 0
     )
