@@ -35,10 +35,18 @@ def print_wrapped(text: str, file: TextIO | None = None, width: int = WIDTH) -> 
 
 
 def incomplete_note(path: str, problem: str, done: str) -> str:
-    """The one stderr line of a command that worked through a damaged log (exit 3): what is
-    wrong when that fits in :data:`WIDTH` columns, else where to read it (``usar info``), so
-    the line stays one line (scripts and tests read it as the command's one note) and fits."""
-    full = f"usar: {path}: the log is incomplete ({problem}); {done} as far as it goes"
-    if len(full) <= WIDTH:
-        return full
-    return f"usar: {path}: the log is incomplete; {done} as far as it goes (`usar info` says why)"
+    """The one stderr line of a command that worked through a damaged log (exit 3).
+
+    It stays one line (scripts, and the README's contract, read it as the command's one note)
+    and names the path as given; to fit :data:`WIDTH` columns the problem is shortened, from
+    all of it down to how many messages were read (the table or ``usar info`` says the rest).
+    Only a path too long for a line makes the line longer."""
+    import re
+
+    tail = f"{done} as far as it goes"
+    candidates = [f"usar: {path}: the log is incomplete ({problem}); {tail}"]
+    for pattern in (r"read \d+ messages up to sim time [\d.]+ s", r"read \d+ messages"):
+        found = re.search(pattern, problem)
+        if found is not None:
+            candidates.append(f"usar: {path}: the log is incomplete ({found[0]}); {tail}")
+    return next((c for c in candidates if len(c) <= WIDTH), candidates[-1])
