@@ -451,7 +451,10 @@ def detection_figure(d: Detection) -> str:
     if side < ZOOM_BELOW * w:
         half = side / 2 + max(side * 0.6, 6.0)
         cu, cv = (max(us) + min(us)) / 2, (max(vs) + min(vs)) / 2
-        box = (cu - half, cv - half, 2 * half, 2 * half)
+        # the inset stays inside the frame where it can (a marker at the edge is not centred)
+        bx = min(max(cu - half, 0.0), max(w - 2 * half, 0.0))
+        by = min(max(cv - half, 0.0), max(h - 2 * half, 0.0))
+        box = (bx, by, 2 * half, 2 * half)
         zoom = FRAME_PX / 2 / (2 * half)
         body.append(_svg_frame(d, uri, box, pts, FRAME_PX // 2, "zoom"))
         caption += f" ({side:.0f} px wide; zoomed {zoom:.0f}x on the right)"
