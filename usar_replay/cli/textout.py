@@ -45,8 +45,11 @@ def incomplete_note(path: str, problem: str, done: str) -> str:
 
     tail = f"{done} as far as it goes"
     candidates = [f"usar: {path}: the log is incomplete ({problem}); {tail}"]
-    for pattern in (r"read \d+ messages up to sim time [\d.]+ s", r"read \d+ messages"):
-        found = re.search(pattern, problem)
-        if found is not None:
-            candidates.append(f"usar: {path}: the log is incomplete ({found[0]}); {tail}")
+    timed = re.search(r"read (\d+) messages up to sim time ([\d.]+) s", problem)
+    if timed is not None:  # where the readable part ends, in fewer words
+        short = f"{timed[1]} messages, to {timed[2]} s"
+        candidates.append(f"usar: {path}: the log is incomplete ({short}); {tail}")
+    found = re.search(r"read \d+ messages", problem)
+    if found is not None:
+        candidates.append(f"usar: {path}: the log is incomplete ({found[0]}); {tail}")
     return next((c for c in candidates if len(c) <= WIDTH), candidates[-1])
