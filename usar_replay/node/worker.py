@@ -338,17 +338,22 @@ class MissionProcess:
         }
         parent_sock, child_sock = socket.socketpair()
         with child_sock:
-            # a fresh interpreter running this module: no fork of usar's state (pybullet, an
-            # open log), no re-import of the caller's __main__ (multiprocessing's spawn does)
-            self._proc = subprocess.Popen(
-                [sys.executable, "-m", "usar_replay.node.worker", str(child_sock.fileno())],
-                pass_fds=(child_sock.fileno(),),
-                stdin=subprocess.DEVNULL,
-            )
+            self._proc = self._spawn(child_sock.fileno())
         self._conn = multiprocessing.connection.Connection(parent_sock.detach())
         self._conn.send_bytes(pickle.dumps(self._setup))
         self._in_flight = 0
         self._wait(self.limits.startup_timeout_s, "starting (import and main())")
+
+    def _spawn(self, fd: int) -> subprocess.Popen[bytes]:
+        """Start the process that serves the tick protocol on socket ``fd``: here a fresh
+        interpreter running this module (no fork of usar's state: pybullet, an open log; no
+        re-import of the caller's ``__main__``, as multiprocessing's spawn does). Another front
+        end (the ROS 1 bridge, :mod:`usar_replay.ros1.process`) starts its own process here."""
+        return subprocess.Popen(
+            [sys.executable, "-m", "usar_replay.node.worker", str(fd)],
+            pass_fds=(fd,),
+            stdin=subprocess.DEVNULL,
+        )
 
     def __enter__(self) -> MissionProcess:
         return self

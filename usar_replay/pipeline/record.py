@@ -68,6 +68,7 @@ OUTCOMES = {
     "hung": "a mission callback did not return in time",
     "out_of_memory": "the mission ran out of memory",
     "refused": "the mission published something it may not",
+    "build_failed": "the ROS 1 package did not build (catkin_make)",
 }
 """How a run can end (``usar.status`` ``outcome``), with the words people read."""
 
@@ -229,6 +230,8 @@ def record(
     *,
     mission: str | None = None,
     limits: MissionLimits | None = None,
+    target: MissionTarget | None = None,
+    process: Callable[..., MissionProcess] = MissionProcess,
 ) -> RecordResult:
     """Run ``mission`` (default: the built-in one) on ``scenario`` and write the log to ``out``.
 
@@ -240,11 +243,15 @@ def record(
     The phases: open the simulator and the log, write what makes the log self-contained
     (:func:`_write_header`), run the tick loop with the mission process (:func:`_tick_loop`),
     close the log with the run's outcome (:func:`_close_run`), then sum up.
+
+    ``target`` and ``process`` let another front end take the mission process's place (the
+    ROS 1 bridge: :mod:`usar_replay.ros1.process`): ``process(target, parameters, sim_topics=,
+    sim_frames=, limits=)`` must speak the mission process's tick protocol.
     """
     settings = settings or RunSettings()
     rs = settings.record
     asg = assignment_of(scenario)
-    target = resolve_target(mission or asg.builtin_mission)
+    target = target or resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
     with _simulator(scenario, settings, asg) as sim, bag.BagWriter(out) as writer:
@@ -256,7 +263,9 @@ def record(
             reason=f"stopped at {limit_s:g} s of sim time",
         )
         try:
-            _tick_loop(sim, writer, scenario, settings, asg, target, run, limit_s, progress, limits)
+            _tick_loop(
+                sim, writer, scenario, settings, asg, target, run, limit_s, progress, limits, process
+            )
         except MissionEnded as ended:
             run.outcome, run.reason = ended.verdict, ended.detail
         except KeyboardInterrupt:
@@ -334,6 +343,7 @@ def _tick_loop(
     limit_s: float,
     progress: Callable[[Progress], None] | None,
     limits: MissionLimits | None,
+    process: Callable[..., MissionProcess] = MissionProcess,
 ) -> None:
     """sim -> log and mission -> log and sim, one control tick at a time, until the mission
     says it is done or the sim clock passes the limit (a :class:`MissionEnded` ends it early).
@@ -349,7 +359,7 @@ def _tick_loop(
     steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
     end_ns = run.t0 + int(limit_s * 1e9)
     params = mission_parameters(scenario, settings)
-    with MissionProcess(
+    with process(
         target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=limits
     ) as proc:
         latency = rs.actuation_latency_ticks
@@ -468,6 +478,6 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
         lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
     out = file or sys.stdout
     print("\n".join(lines), file=out)
-    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
         print(result.outcome_reason.rstrip(), file=out)
