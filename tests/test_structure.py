@@ -240,7 +240,7 @@ def test_a_misplaced_module_fails_with_where_it_belongs(tmp_path: Path) -> None:
         )
     )
     assert "the world layer may import only core" in world
-    assert "belongs in log, grading, pipeline, viewer, batch, cli" in world
+    assert "belongs in log, grading, pipeline, ros1, viewer, batch, cli" in world
     assert "only sim/ may import it" in heavy
     assert "is in no layer" in stray and "world/" in stray
 
