@@ -109,9 +109,7 @@ def test_package_hash_covers_the_sources(tmp_path: Path) -> None:
     assert package_sha256(pkg) != before
 
 
-def test_a_build_failure_is_a_verdict(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_a_build_failure_is_a_verdict(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A C++ error: exit 4, the compiler's error shown, a closed log saying ``build_failed``."""
     broken = tmp_path / "usar_course"
     shutil.copytree(EXAMPLE, broken)
@@ -148,7 +146,8 @@ def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
     assert report.passed, [(c.id, c.measured) for c in report.checks if not c.passed]
     assert report.points == report.max_points == 60
     info = run.mission
-    assert info.target.startswith(f"ros1:{EXAMPLE}") and "--launch usar_course.launch" in info.target
+    assert info.target.startswith(f"ros1:{EXAMPLE}")
+    assert info.target.endswith("--launch usar_course.launch")
     assert info.sha256 == package_sha256(find_package(EXAMPLE))
 
 
