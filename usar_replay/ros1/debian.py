@@ -15,7 +15,6 @@ catkin and roslaunch run as Debian's own programs (``/usr/bin/python3``, by thei
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 from usar_replay.core.errors import UsageError
@@ -26,6 +25,8 @@ DIST_PACKAGES = Path("/usr/lib/python3/dist-packages")
 """Where Debian installs rospy, actionlib, tf2_ros and the generated Python messages."""
 
 APT_PACKAGES: dict[str, str] = {
+    "g++": "the C++ compiler",
+    "cmake": "catkin_make's build system",
     "catkin": "catkin_make and the catkin CMake macros",
     "ros-message-generation": "message_generation (fiducial_msgs is generated at build time)",
     "ros-std-msgs": "std_msgs .msg definitions (fiducial_msgs' Header)",
@@ -49,6 +50,8 @@ APT_PACKAGES: dict[str, str] = {
 
 # a file each package installs: the check looks for these, never runs apt or dpkg
 _PROBES: dict[str, str] = {
+    "g++": "/usr/bin/g++",
+    "cmake": "/usr/bin/cmake",
     "catkin": "/usr/bin/catkin_make",
     "ros-message-generation": "/usr/share/message_generation/package.xml",
     "ros-std-msgs": "/usr/share/std_msgs/msg/Header.msg",
@@ -81,11 +84,9 @@ def install_line(packages: list[str] | None = None) -> str:
 
 
 def missing() -> list[str]:
-    """The Debian packages of :data:`APT_PACKAGES` that are not installed here (also when
-    this is not Debian: then all of them), plus ``g++``/``cmake`` when absent."""
-    out = [name for name, probe in _PROBES.items() if not Path(probe).exists()]
-    out += [tool for tool in ("g++", "cmake") if shutil.which(tool) is None]
-    return out
+    """The Debian packages of :data:`APT_PACKAGES` that are not installed here (on another
+    system: all of them)."""
+    return [name for name, probe in _PROBES.items() if not Path(probe).exists()]
 
 
 def check() -> None:
