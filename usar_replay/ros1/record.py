@@ -27,7 +27,8 @@ __all__ = ["choose_entry", "record_ros1"]
 
 
 def choose_entry(pkg: Package, options: Ros1Options) -> Ros1Options:
-    """Check ``--launch``/``--node`` against the package; with neither, its one launch file."""
+    """Check ``--launch``/``--node`` against the package; with neither, its launch file named
+    after the package, or its only launch file."""
     if options.launch and options.node:
         raise UsageError("--launch and --node: give one of them")
     if options.launch:
@@ -38,6 +39,8 @@ def choose_entry(pkg: Package, options: Ros1Options) -> Ros1Options:
     if options.node:
         return options  # an executable exists only once built: a missing one is a crash
     found = sorted(pkg.path.rglob("*.launch"))
+    named = [p for p in found if p.stem == pkg.name]
+    found = named or found
     if len(found) != 1:
         raise UsageError(
             f"--ros1 {pkg.path}: {len(found)} launch files; say which with --launch FILE "
