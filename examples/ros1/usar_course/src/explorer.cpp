@@ -61,6 +61,7 @@ Explorer::Explorer(ros::NodeHandle* nh, tf2_ros::Buffer* buffer)
   nh_->param("/mission/spin_speed", spin_speed_, 0.1);
   nh_->param("/mission/max_detection_range", max_range_, 2.5);
   nh_->param("/mission/settle_frames", settle_frames_, 5);
+  ros::NodeHandle("~").param<std::string>("bug", bug_, "");
   cmd_vel_ = nh_->advertise<geometry_msgs::Twist>("/explorer/cmd_vel", 10);
   fiducials_ = nh_->subscribe("/fiducial_transforms", 10, &Explorer::fiducial_callback, this);
   ROS_INFO("explorer: %zu lookup targets", targets_.size());
@@ -73,6 +74,12 @@ bool Explorer::step() {
       next_target();
       break;
     case State::kToTarget:
+      if (bug_ == "two_cmd_vel_publishers") {
+        // BUG (team 002): the spin publisher runs while move_base drives the explorer
+        geometry_msgs::Twist spin;
+        spin.angular.z = spin_speed_;
+        cmd_vel_.publish(spin);
+      }
       if (client_.getState().isDone()) {
         ROS_INFO("explorer: at target_%zu (%s), searching", target_index_ + 1,
                  client_.getState().toString().c_str());
@@ -146,6 +153,11 @@ void Explorer::fiducial_callback(const fiducial_msgs::FiducialTransformArray::Co
   tf.header.frame_id = msg->header.frame_id;
   tf.child_frame_id = kMarkerFrame;
   tf.transform = best->transform;
+  if (bug_ == "identity_broadcast") {
+    // BUG (team 001): a broadcast with nothing filled in: marker_frame is the camera itself
+    tf.transform = geometry_msgs::Transform();
+    tf.transform.rotation.w = 1.0;
+  }
   broadcaster_.sendTransform(tf);
   pending_.push_back(msg->header.stamp);
 }

@@ -74,6 +74,7 @@ class Explorer {
   double spin_speed_;
   double max_range_;
   int settle_frames_;
+  std::string bug_;  ///< ~bug: one of the course's real bugs, for the faulty launch files
   State state_{State::kStart};
   std::size_t target_index_{0};
   ros::Time search_start_;
