@@ -2,8 +2,8 @@
 
     python bench/bench_ros1.py [--world room|course] [--rtf 4 8 0] [--package DIR]
 
-Builds the package once (catkin_make in a private workspace: the build time), then records it
-on the world at each ``--rtf`` cap, reusing that build, and prints per run: the outcome, the
+Builds the package once into an empty build cache (catkin_make: the build time), then records
+it on the world at each ``--rtf`` cap, reusing that build, and prints per run: the outcome, the
 rubric's points, sim time, wall time and the real-time factor reached (sim / wall). The
 outcome and points say whether the node kept up: at a cap it cannot sustain, its replies land
 a tick late and the run degrades (a marker missed, a goal late) rather than failing loudly.
@@ -13,17 +13,15 @@ Nothing is asserted; the numbers go into docs/ros1.md and the README.
 from __future__ import annotations
 
 import argparse
-import shutil
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import grade_file
 from usar_replay.ros1 import build as build_mod
-from usar_replay.ros1 import process
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario import course_world
@@ -42,20 +40,15 @@ def main() -> None:
     args = ap.parse_args()
     scenario = one_room() if args.world == "room" else course_world()
     with tempfile.TemporaryDirectory(prefix="bench-ros1-") as tmp:
+        os.environ["XDG_CACHE_HOME"] = tmp  # a cold build, then the runs reuse it
         pkg = build_mod.find_package(args.package)
         t0 = time.perf_counter()
         cpu0 = _children_cpu()
-        built = build_mod.build(pkg, Path(tmp) / "ws")
+        build_mod.cached_build(pkg)
         print(
             f"build: {time.perf_counter() - t0:.1f} s wall, {_children_cpu() - cpu0:.1f} s CPU"
             f" (catkin_make -j2, {pkg.name} + fiducial_msgs)"
         )
-
-        def reuse(package: Any, workspace: Path, **_: Any) -> build_mod.Built:
-            shutil.copytree(built.workspace, workspace, dirs_exist_ok=True, symlinks=True)
-            return build_mod.Built(workspace, package, 0.0)
-
-        process.build = reuse  # the runs below reuse the one build
         for rtf in args.rtf:
             out = Path(tmp) / f"{args.world}-rtf{rtf:g}.mcap"
             start = time.perf_counter()

@@ -8,8 +8,10 @@ world's 60/60 is slow.
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -24,6 +26,18 @@ from usar_replay.ros1.build import find_package, package_sha256
 from usar_replay.world.scenario import course_world, save
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ros1" / "usar_course"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """One build cache for this module: the example is built once, its variants reuse it."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))
+    yield
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
 
 
 def test_debian_ros1_is_installed() -> None:
@@ -127,11 +141,20 @@ def test_a_build_failure_is_a_verdict(tmp_path: Path, capsys: pytest.CaptureFixt
     assert "catkin_make failed for package usar_course" in run.outcome_reason
 
 
-def _record(tmp_path: Path, world_toml: Path, name: str, *extra: str) -> Path:
+def _record(
+    tmp_path: Path, world_toml: Path, name: str, launch: str = "usar_course.launch"
+) -> Path:
     out = tmp_path / f"{name}.mcap"
     args = ["record", "--ros1", str(EXAMPLE), "--scenario", str(world_toml), "--out", str(out)]
-    assert main([*args, "--quiet", *extra]) == 0
+    assert main([*args, "--quiet", "--launch", launch]) == 0
     return out
+
+
+def _failed(out: Path) -> set[str]:
+    report = grade_file(out)
+    for c in report.checks:
+        assert c.points == (c.max_points if c.passed else 0.0), c.id
+    return {c.id for c in report.checks if not c.passed}
 
 
 def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
@@ -149,6 +172,26 @@ def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
     assert info.target.startswith(f"ros1:{EXAMPLE}")
     assert info.target.endswith("--launch usar_course.launch")
     assert info.sha256 == package_sha256(find_package(EXAMPLE))
+
+
+def test_the_identity_broadcast_loses_the_broadcast_and_the_visit(tmp_path: Path) -> None:
+    """Team 001's bug: marker_frame broadcast with an empty (identity) transform. The stored
+    "marker" is the camera's own place, so the broadcast line fails, and the follower, sent in
+    front of the camera's place, misses the marker; nothing else is lost."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = _record(tmp_path, world, "identity", "faulty_identity_broadcast.launch")
+    assert _failed(out) == {"marker_0.broadcast", "follower.marker_0"}
+
+
+def test_two_cmd_vel_publishers_lose_only_their_line(tmp_path: Path) -> None:
+    """Team 002's bug: the spin publisher runs while move_base drives the explorer. move_base's
+    command is the later one in a tick, so the robot still drives (as team 002 saw, move_base
+    "overwriting" their publisher); the rubric reports the fight and nothing else fails."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = _record(tmp_path, world, "two", "faulty_two_cmd_vel_publishers.launch")
+    assert _failed(out) == {"explorer.cmd_vel_one_publisher"}
 
 
 @pytest.mark.slow

@@ -89,17 +89,18 @@ class Graph:
 
     def __init__(self, config: dict[str, Any], env: dict[str, str]) -> None:
         ws = Path(config["workspace"])
+        run = Path(config["run_dir"])
         if config.get("launch"):
             what = f"roslaunch {config['package']} {config['launch']}"
         else:
             what = f"rosrun {config['package']} {config['node']}"
         self.what = what
-        self.log_path = ws / "graph.log"
+        self.log_path = run / "graph.log"
         script = f'source "{ws}/devel/setup.bash" && exec {what}'
         with self.log_path.open("wb") as log:
             self.proc = subprocess.Popen(
                 ["bash", "-c", script],
-                cwd=ws,
+                cwd=run,
                 env=env,
                 stdin=subprocess.DEVNULL,
                 stdout=log,
@@ -150,14 +151,15 @@ class Bridge:
         self.rtf = float(config.get("rtf", 4.0))
         self.settle_s = float(config.get("settle_ms", 3.0)) / 1000.0
         ws = Path(config["workspace"])
+        run = Path(config["run_dir"])
         self.port = _free_port()
         self.uri = f"http://127.0.0.1:{self.port}/"
         self.env = catkin_env()
         self.env.update(
             ROS_MASTER_URI=self.uri,
             ROS_IP="127.0.0.1",
-            ROS_HOME=str(ws / "ros_home"),
-            ROS_LOG_DIR=str(ws / "ros_log"),
+            ROS_HOME=str(run / "ros_home"),
+            ROS_LOG_DIR=str(run / "ros_log"),
             PYTHONUNBUFFERED="1",
         )
         os.environ.update(
@@ -190,7 +192,7 @@ class Bridge:
     def start(self) -> None:
         """The master, the parameters, the bridge's node, then the student's graph; returns
         once the graph has registered a node with the master (or raises with its output)."""
-        ws = Path(self.config["workspace"])
+        ws = Path(self.config["run_dir"])
         with (ws / "master.log").open("wb") as log:
             self.master = subprocess.Popen(
                 ["rosmaster", "--core", "-p", str(self.port)],

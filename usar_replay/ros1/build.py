@@ -25,7 +25,16 @@ from pathlib import Path
 from usar_replay.core.errors import UsageError
 from usar_replay.node.worker import MissionEnded
 
-__all__ = ["FIDUCIAL_MSGS", "Built", "Package", "build", "find_package", "package_sha256"]
+__all__ = [
+    "FIDUCIAL_MSGS",
+    "Built",
+    "Package",
+    "build",
+    "cache_root",
+    "cached_build",
+    "find_package",
+    "package_sha256",
+]
 
 FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
@@ -49,7 +58,8 @@ class Built:
     workspace: Path
     package: Package
     seconds: float
-    """Wall seconds catkin_make took."""
+    """Wall seconds catkin_make took (0 for a build found in the cache)."""
+    cached: bool = False
 
     @property
     def setup(self) -> Path:
@@ -159,3 +169,47 @@ def build(pkg: Package, workspace: Path, jobs: int = 2, timeout_s: float = 900.0
             + f"\ncatkin_make failed for package {pkg.name}",
         )
     return Built(workspace, pkg, time.perf_counter() - start)
+
+
+def cache_root() -> Path:
+    """Where built workspaces are kept: ``$XDG_CACHE_HOME/usar/ros1`` (``~/.cache/...``)."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "usar" / "ros1"
+
+
+def _build_key(pkg: Package) -> str:
+    """Same package files, same fiducial_msgs, same usar, same compiler: the same build."""
+    from usar_replay import __version__
+
+    h = hashlib.sha256()
+    h.update(package_sha256(pkg).encode())
+    h.update(package_sha256(Package(FIDUCIAL_MSGS, "fiducial_msgs")).encode())
+    h.update(__version__.encode())
+    h.update(str(shutil.which("g++")).encode())
+    return f"{pkg.name}-{h.hexdigest()[:20]}"
+
+
+def cached_build(pkg: Package, root: Path | None = None) -> Built:
+    """:func:`build` once per package content: a workspace built before (same files, same
+    fiducial_msgs, same usar) is reused as it is, read only. Why: catkin_make costs ~40 s of
+    CPU, and a class's runs (or a test's variants of one package) build the same files. The
+    workspace is built in place (catkin writes absolute paths into ``devel/``), under a lock so
+    that two runs never build one key at once; a failed build is not kept."""
+    import fcntl
+
+    root = root or cache_root()
+    root.mkdir(parents=True, exist_ok=True)
+    key = _build_key(pkg)
+    ws = root / key
+    with (root / f"{key}.lock").open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if (ws / ".usar-built").is_file():
+            return Built(ws, pkg, 0.0, cached=True)
+        shutil.rmtree(ws, ignore_errors=True)
+        try:
+            built = build(pkg, ws)
+        except BaseException:
+            shutil.rmtree(ws, ignore_errors=True)
+            raise
+        (ws / ".usar-built").write_text(f"{built.seconds:.1f}\n", encoding="utf-8")
+        return built

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
-from usar_replay.ros1.build import Package, build, package_sha256
+from usar_replay.ros1.build import Package, build, cached_build, package_sha256
 from usar_replay.ros1.isolation import isolated_command
 
 __all__ = ["Ros1Options", "Ros1Process", "ros1_target"]
@@ -49,7 +49,9 @@ class Ros1Options:
     isolate: bool = True
     """Run the master and the graph in their own network namespace when possible."""
     keep_workspace: bool = False
-    """Leave the private workspace (build and ROS logs) on disk, for debugging."""
+    """Leave the run's folder (bridge, master and graph output, ROS logs) on disk."""
+    cache: bool = True
+    """Reuse a workspace built before from the same files (:func:`cached_build`)."""
 
 
 def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
@@ -79,12 +81,19 @@ class Ros1Process(MissionProcess):
         options: Ros1Options,
     ) -> None:
         self.options = options
-        self.workspace = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
+        self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
         try:
-            self.built = build(package, self.workspace)
-            config = {"package": package.name, "workspace": str(self.workspace)}
+            if options.cache:
+                self.built = cached_build(package)
+            else:
+                self.built = build(package, self.run_dir / "ws")
+            config = {
+                "package": package.name,
+                "workspace": str(self.built.workspace),
+                "run_dir": str(self.run_dir),
+            }
             config.update({k: v for k, v in asdict(options).items()})
-            self._config_path = self.workspace / "bridge.json"
+            self._config_path = self.run_dir / "bridge.json"
             self._config_path.write_text(json.dumps(config), encoding="utf-8")
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
             limits = limits or MissionLimits()
@@ -100,7 +109,7 @@ class Ros1Process(MissionProcess):
     def _spawn(self, fd: int) -> subprocess.Popen[bytes]:
         """The bridge, in its own network namespace, with its output in the workspace."""
         cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
-        with (self.workspace / "bridge.log").open("wb") as log:
+        with (self.run_dir / "bridge.log").open("wb") as log:
             return subprocess.Popen(
                 isolated_command(cmd, isolate=self.options.isolate),
                 pass_fds=(fd,),
@@ -121,4 +130,4 @@ class Ros1Process(MissionProcess):
 
     def _cleanup(self) -> None:
         if not self.options.keep_workspace:
-            shutil.rmtree(self.workspace, ignore_errors=True)
+            shutil.rmtree(self.run_dir, ignore_errors=True)
