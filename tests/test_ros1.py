@@ -203,3 +203,27 @@ def test_the_example_package_scores_60_on_the_course_world(tmp_path: Path) -> No
     assert report.points == report.max_points == 60, [
         (c.id, c.measured) for c in report.checks if not c.passed
     ]
+
+
+@pytest.mark.slow
+def test_a_class_of_catkin_packages_is_graded_in_parallel(tmp_path: Path) -> None:
+    """``usar batch`` on team folders holding catkin packages: two runs at once, each with its
+    own master (its own network namespace or port); one team's package does not build."""
+    import json
+
+    subs = tmp_path / "subs"
+    shutil.copytree(EXAMPLE, subs / "good")
+    shutil.copytree(EXAMPLE, subs / "broken")
+    src = subs / "broken" / "src" / "main.cpp"
+    src.write_text(src.read_text().replace("ros::Rate rate(20.0);", "ros::Rate rate(;"))
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "out"
+    args = ["batch", str(subs), "--scenario", str(world), "-o", str(out), "--jobs", "2"]
+    assert main([*args, "--quiet", "--gradescope"]) == 0
+    good = json.loads((out / "good" / "results.json").read_text())
+    broken = json.loads((out / "broken" / "results.json").read_text())
+    assert good["score"] == good["max_score"] == 60
+    assert broken["score"] == 0
+    run = json.loads((out / "broken" / "room.run.json").read_text())
+    assert run["outcome"] == "build_failed"
