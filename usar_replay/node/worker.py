@@ -87,6 +87,11 @@ class MissionTarget:
 def resolve_target(spec: str | None) -> MissionTarget:
     """Check ``--mission`` and find its source (a :class:`UsageError` says what is wrong)."""
     spec = (spec or BUILTIN).strip()
+    if spec.startswith("ros1:"):
+        raise UsageError(
+            f"mission {spec!r} is a ROS 1 package: only Python missions are re-run here; "
+            "grade its recorded outputs with usar grade, or record it again with --ros1"
+        )
     text = _BUILTIN_MODULES.get(spec, spec)
     attr = "main"
     if text.endswith(".py") or "/" in text or os.sep in text:
