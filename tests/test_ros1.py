@@ -174,14 +174,17 @@ def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
     assert info.sha256 == package_sha256(find_package(EXAMPLE))
 
 
-def test_the_identity_broadcast_loses_the_broadcast_and_the_visit(tmp_path: Path) -> None:
+def test_the_identity_broadcast_loses_the_broadcast_and_the_follower(tmp_path: Path) -> None:
     """Team 001's bug: marker_frame broadcast with an empty (identity) transform. The stored
     "marker" is the camera's own place, so the broadcast line fails, and the follower, sent in
-    front of the camera's place, misses the marker; nothing else is lost."""
+    front of the camera's place, misses the world's only marker; having visited none, its
+    return home does not count (the rubric's "home after its last marker") and neither does
+    the time limit. The explorer's lines all pass."""
     world = tmp_path / "room.toml"
     save(one_room(), world)
     out = _record(tmp_path, world, "identity", "faulty_identity_broadcast.launch")
-    assert _failed(out) == {"marker_0.broadcast", "follower.marker_0"}
+    lost = {"marker_0.broadcast", "follower.marker_0", "follower.home", "time_limit"}
+    assert _failed(out) == lost
 
 
 def test_two_cmd_vel_publishers_lose_only_their_line(tmp_path: Path) -> None:
