@@ -31,7 +31,7 @@ from usar_replay.batch.plan import Limits  # noqa: E402
 from usar_replay.core.settings import RecordSettings, RunSettings  # noqa: E402
 from usar_replay.core.settings import to_toml as settings_to_toml  # noqa: E402
 from usar_replay.log import bag  # noqa: E402
-from usar_replay.world.scenario import to_toml  # noqa: E402
+from usar_replay.world.scenario_toml import to_toml  # noqa: E402
 
 MINIMAL = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
 ARRIVED = "    def arrived(self, _result: object) -> None:\n        self.spinning = True\n"

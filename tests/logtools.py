@@ -9,7 +9,8 @@ from pathlib import Path
 from usar_replay.core import msgs
 from usar_replay.core.contract import SCENARIO_ATTACHMENT
 from usar_replay.log import bag
-from usar_replay.world.scenario import Scenario, to_toml
+from usar_replay.world.scenario import Scenario
+from usar_replay.world.scenario_toml import to_toml
 
 
 def digest(path: Path) -> str:

@@ -37,7 +37,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.cli import main as cli
 from usar_replay.core.errors import UsageError
-from usar_replay.world.scenario import to_toml
+from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 MINIMAL = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")

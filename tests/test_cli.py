@@ -93,7 +93,8 @@ def test_missing_log_is_one_line_exit_2(command: str, tmp_path: Path) -> None:
 def test_scenario_writes_a_variant_that_loads_back(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from usar_replay.world.scenario import course_world, load
+    from usar_replay.world.scenario import course_world
+    from usar_replay.world.scenario_toml import load
     from usar_replay.world.variants import make_variant
 
     out = tmp_path / "demo3.toml"

@@ -32,6 +32,7 @@ from usar_replay.grading.grade import (
     grade_file,
     load_thresholds,
 )
+from usar_replay.grading.rubric_usar import NO_DETECTOR
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult
@@ -85,10 +86,10 @@ def test_a_clean_synthetic_mission_passes_every_line(tmp_path: Path) -> None:
             {"follower_wiggle_after_stop": 2},
             ["explorer.home_before_follower"],
         ),
-        (
+        (  # and only_on_detection has nothing to judge: no credit without a broadcast
             "marker_frame never broadcast",
             {"broadcast": False},
-            [f"marker_{k}.broadcast" for k in range(4)],
+            [*(f"marker_{k}.broadcast" for k in range(4)), "marker_frame.only_on_detection"],
         ),
     ],
 )
@@ -169,8 +170,31 @@ def test_marker_frame_never_broadcast(room_log: tuple[Path, RecordResult], tmp_p
     rewrite(room_log[0], path, edit)
     assert dropped >= 1
     report = grade_file(path)
-    assert report.failed_ids() == ["marker_0.broadcast"]
+    # no broadcast at all: only_on_detection has nothing to judge and gives no credit
+    assert report.failed_ids() == ["marker_0.broadcast", "marker_frame.only_on_detection"]
     assert report.check("marker_0.broadcast").measured == "no broadcast"
+    assert report.check("marker_frame.only_on_detection").measured.startswith("nothing broadcast")
+
+
+def test_a_log_without_the_detector_is_graded_not_refused(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """A complete log with no /fiducial_transforms at all (a mission that did not start
+    ArucoDetect) is a graded run: `usar grade` exits 1, not 3, and the table says why the
+    detection line failed; exit 3 stays for damaged logs."""
+    path = tmp_path / "no_detector.mcap"
+    rewrite(room_log[0], path, lambda m: False if m.topic == "/fiducial_transforms" else None)
+    assert "/fiducial_transforms" not in open_run(path).topics
+    report = grade_file(path)
+    assert report.log_complete
+    line = report.check("marker_0.detected")
+    assert not line.passed and line.measured == NO_DETECTOR
+    assert report.check("explorer.target_1").passed  # the robots' lines are judged as usual
+    out = usar("grade", str(path))
+    assert out.returncode == 1, out.stderr
+    assert "Traceback" not in out.stderr and "missing" not in out.stderr
+    table = " ".join(out.stdout.split())  # the table wraps its measured column
+    assert "FAIL 0/12 marker_0.detected " + NO_DETECTOR in table, out.stdout
 
 
 def test_a_broadcast_20_cm_off_fails_the_broadcast_line(

@@ -14,19 +14,27 @@ import pytest
 from conftest import one_room
 
 from usar_replay.api import (
+    Buffer,
+    Header,
+    Log,
     Node,
     Odometry,
     ParameterNotDeclared,
     PoseStamped,
+    StaticTransformBroadcaster,
     String,
     TFMessage,
+    Time,
+    Transform,
+    TransformListener,
     TransformStamped,
+    Vector3,
 )
 from usar_replay.cli.main import main
 from usar_replay.core import contract
 from usar_replay.log.run import open_run
 from usar_replay.node.executor import Executor, PublishPolicy
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 S = 1_000_000_000
 T0 = 100 * S
@@ -105,6 +113,49 @@ def test_local_delivery_is_fifo_and_before_the_next_input() -> None:
         ("/b", "b"),
         ("/c", "c"),
     ]
+
+
+def test_what_constructors_publish_is_the_first_ticks_output_in_creation_order() -> None:
+    """A logger line, a static transform and a publish made in ``__init__`` are not lost: they
+    open the first tick's output, in the order they were made, and reach the mission's own
+    subscribers (a later node's TransformListener included) before that tick's timers and
+    inputs, as rclpy delivers them."""
+    order: list[str] = []
+    ex = Executor()
+    with ex.activate():
+        first = Node("first")
+        first.get_logger().info("first is up")
+        StaticTransformBroadcaster(first).sendTransform(
+            TransformStamped(
+                header=Header(frame_id="map"),
+                child_frame_id="landmark",
+                transform=Transform(translation=Vector3(x=2.0)),
+            )
+        )
+        second = Node("second")
+        buffer = Buffer()
+        TransformListener(buffer, second)  # created after the broadcast: still gets it
+        second.create_subscription(String, "/hello", lambda m: order.append(f"hello:{m.data}"))
+        second.create_subscription(String, "/in", lambda m: order.append(f"in:{m.data}"))
+        second.create_timer(0.05, lambda: order.append("timer"))
+        second.create_publisher(String, "/hello").publish(_s("from __init__"))
+        second.get_logger().warning("second is up")
+    assert order == []  # nothing runs before the first tick
+    out = ex.tick(T0, [("/in", _s("1"))])
+    assert [(topic, type(m).__name__) for topic, m in out] == [
+        (contract.ROSOUT, "Log"),
+        (contract.TF_STATIC, "TFMessage"),
+        ("/hello", "String"),
+        (contract.ROSOUT, "Log"),
+    ]
+    logs = [m for _, m in out if isinstance(m, Log)]
+    assert [(m.name, m.msg) for m in logs] == [("first", "first is up"), ("second", "second is up")]
+    assert order == ["hello:from __init__", "in:1"]  # before the tick's input
+    found = buffer.lookup_transform("map", "landmark", Time())
+    assert found.transform.translation.x == 2.0
+    # delivered once: the next tick's output does not repeat them
+    assert ex.tick(T0 + S // 10, [("/in", _s("2"))]) == []
+    assert order[-2:] == ["timer", "in:2"]
 
 
 def test_parameters_dotted_and_slashed_names() -> None:

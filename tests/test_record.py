@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
@@ -12,10 +13,11 @@ from logtools import digest
 
 from usar_replay.cli.main import main
 from usar_replay.core import msgs
+from usar_replay.grading.grade import grade_file
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
-from usar_replay.pipeline.record import RecordResult, record
-from usar_replay.world.scenario import save
+from usar_replay.pipeline.record import RecordResult, print_summary, record
+from usar_replay.world.scenario_toml import save
 
 CONTRACT = {
     "/explorer/camera/rgb/image_raw/compressed": "sensor_msgs/msg/CompressedImage",
@@ -45,6 +47,25 @@ def test_mission_completes_and_finds_the_marker(room_log: tuple[Path, RecordResu
     assert set(result.markers_found) == {0}
     assert result.marker_errors_m[0] < 0.05
     assert result.sim_duration_s < one_room().time_limit_s
+
+
+def test_the_summary_counts_markers_as_the_rubric_does(
+    room_log: tuple[Path, RecordResult],
+) -> None:
+    """The built-in mission's summary: found as `usar grade` counts them (marker_frame
+    broadcasts looked up in map), and where the mission stored it."""
+    path, result = room_log
+    assert [f.marker_id for f in result.found] == [0] and result.markers_total == 1
+    error = result.found[0].error_m
+    assert error is not None and error < 0.10
+    assert grade_file(path).check("marker_0.broadcast").measured == result.found[0].text
+    text = io.StringIO()
+    print_summary(result, text)
+    lines = text.getvalue().splitlines()
+    i = lines.index("Markers found: 1/1 (as `usar grade` counts them)")
+    assert lines[i + 1] == f"  marker 0: {result.found[0].text}"
+    assert lines[i + 2].startswith("    stored on /explorer/marker_poses at (")
+    assert max(len(line) for line in lines) <= 100
 
 
 def test_log_holds_the_whole_contract(room_log: tuple[Path, RecordResult]) -> None:

@@ -24,7 +24,7 @@ from usar_replay.core import msgs
 from usar_replay.core.errors import UsageError
 from usar_replay.log import bag
 from usar_replay.pipeline.record import RecordResult
-from usar_replay.world.scenario import save
+from usar_replay.world.scenario_toml import save
 
 ROOT = os.geteuid() == 0
 
@@ -39,7 +39,7 @@ def _killed_part(src: Path, part_of: Path) -> Path:
     """A real ``.part``: a writer copying ``src`` is killed with SIGKILL two thirds of the way."""
     code = (
         "import os, signal, sys\n"
-        "from usar_replay import bag\n"
+        "from usar_replay.log import bag\n"
         "r = bag.BagReader(sys.argv[1]); n = r.message_count * 2 // 3\n"
         "w = bag.BagWriter(sys.argv[2])\n"
         "for a, d in sorted(r.attachments.items()): w.add_attachment(a, 'application/toml', d, 1)\n"

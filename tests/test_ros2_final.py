@@ -27,7 +27,7 @@ from usar_replay.log.run import open_run
 from usar_replay.node.executor import PublishPolicy
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import outputs_digest, replay
-from usar_replay.world import scenario
+from usar_replay.world import scenario, scenario_toml
 from usar_replay.world.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "ros2_final"
@@ -52,7 +52,7 @@ def small_camera(scn: scenario.Scenario) -> scenario.Scenario:
 def test_world_round_trips_through_toml_and_is_playable() -> None:
     world = ros2_final_world()
     assert world.assignment == "ros2-final"
-    assert scenario.from_toml(scenario.to_toml(world)) == world
+    assert scenario_toml.from_toml(scenario_toml.to_toml(world)) == world
     assert check_ros2(world) is None
     task = task_of(world)
     assert task.frame_id == "origin1" and task.marker_id == 1
@@ -65,14 +65,14 @@ def test_world_round_trips_through_toml_and_is_playable() -> None:
 
 def test_usar_scenarios_are_unchanged_in_toml() -> None:
     """The new fields stay out of a US&R file, so existing scenarios and logs read the same."""
-    text = scenario.to_toml(scenario.course_world())
+    text = scenario_toml.to_toml(scenario.course_world())
     assert "assignment" not in text and "[task" not in text
 
 
 def test_unknown_assignment_and_missing_task_fields_are_named() -> None:
-    text = scenario.to_toml(ros2_final_world())
+    text = scenario_toml.to_toml(ros2_final_world())
     with pytest.raises(InvalidScenario, match=r"ros2-finale.*did you mean 'ros2-final'"):
-        scenario.from_toml(text.replace('"ros2-final"', '"ros2-finale"'))
+        scenario_toml.from_toml(text.replace('"ros2-final"', '"ros2-finale"'))
     broken = dataclasses.replace(
         ros2_final_world(), task=tuple(kv for kv in ros2_final_world().task if kv[0] != "origin3.x")
     )
@@ -176,6 +176,10 @@ def test_builtin_mission_gets_60_of_60(builtin_log: tuple[Path, RecordResult]) -
     reached = report.check("aruco_target.reached").evidence_ns
     detected = report.check("marker.detected").evidence_ns
     assert reached is not None and detected is not None and detected > reached
+    # `usar record`'s summary counts the project's marker as its rubric does (it has no
+    # /explorer/marker_poses)
+    assert [f.marker_id for f in result.found] == [task_of(ros2_final_world()).marker_id]
+    assert result.markers_found == {} and result.markers_total == 1
 
 
 def test_builtin_log_has_the_projects_topics(builtin_log: tuple[Path, RecordResult]) -> None:
@@ -233,6 +237,60 @@ def test_view_saves_the_run(builtin_log: tuple[Path, RecordResult], tmp_path: Pa
     assert out.stat().st_size > 100_000
 
 
+def _pixels_of(png: bytes, color: str) -> int:
+    """How many pixels of the picture are ``color`` (``#rrggbb``, within anti-aliasing)."""
+    import cv2
+    import numpy as np
+
+    bgr = cv2.imdecode(np.frombuffer(png, dtype=np.uint8), cv2.IMREAD_COLOR)
+    want = np.array([int(color[i : i + 2], 16) for i in (5, 3, 1)], dtype=np.int16)
+    return int(np.count_nonzero(np.all(np.abs(bgr.astype(np.int16) - want) <= 12, axis=2)))
+
+
+def test_report_draws_robot1s_path(builtin_log: tuple[Path, RecordResult]) -> None:
+    """The HTML report takes the robot, its camera and its colour from the assignment: robot1's
+    true path is on the map, its evidence points too, and its first detection frame is shown."""
+    from usar_replay.grading import htmlreport
+
+    path, _ = builtin_log
+    run = open_run(path)
+    world = run.require_scenario()
+    report = grade_file(path)
+    pic = htmlreport.collect(run)
+    assert list(pic.paths) == ["robot1"] and len(pic.paths["robot1"]) > 200
+    assert [d.marker_id for d in pic.detections] == [1]
+    page = htmlreport.run_page(run, report, pic)
+    assert "marker 1: first detected at" in page and "No marker was detected" not in page
+    # the path is drawn in robot1's colour: far more of it than the start square and legend
+    color = htmlreport.robot_color(assignment.ROS2_FINAL, "robot1")
+    assert color != htmlreport.OTHER_ROBOT_COLOR
+    drawn = _pixels_of(htmlreport.map_png(world, report, pic), color)
+    no_path = htmlreport.RunPicture(paths={"robot1": pic.paths["robot1"][:1]})
+    assert drawn > _pixels_of(htmlreport.map_png(world, report, no_path), color) + 500
+
+
+def test_scene_draws_robot1(builtin_log: tuple[Path, RecordResult]) -> None:
+    """The viewer's scene takes robot1's frames, camera and colour from the assignment: its true
+    poses and path, its body under ``robot1/base_footprint``, its detections' outlines."""
+    from usar_replay.viewer.scene import OTHER_ROBOT_COLOR, Scene
+
+    path, _ = builtin_log
+    run = open_run(path)
+    scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
+    for m in run.messages():
+        scene.feed(m.topic, m.msg, m.log_time_ns)
+    scene.close()
+    assert scene.robots == ["robot1"]
+    assert len(scene.truth["robot1"].times) > 200
+    assert len(scene.paths["robot1"].kept) > 20 and len(scene.paths["robot1"].rows.times) > 10
+    base = scene.frame_paths[contract.ROS2_BASE_FRAME]
+    assert base.startswith("/map/") and base.endswith("/robot1/base_footprint")
+    assert scene.body_entities() == {"robot1": base + "/robot_body"}
+    assert scene.robot_color("robot1") != OTHER_ROBOT_COLOR
+    assert scene.pinhole_entity.endswith("/robot1/camera_rgb_optical_frame/pinhole")
+    assert "id 1" in scene.detections.labels
+
+
 # --- faulty examples: each loses exactly its lines ----------------------------------------------
 
 
@@ -244,6 +302,20 @@ def _record_example(tmp_path: Path, name: str, max_sim_time_s: float | None = No
     )
     assert result.outcome in ("done", "max_sim_time"), result.outcome_reason
     return grade_file(path)
+
+
+def test_without_aruco_markers_the_detection_line_says_why() -> None:
+    """Nothing ever on /aruco_markers: the run is graded and marker.detected asks about the
+    detector node; one message with another ID is "IDs seen"."""
+    from usar_replay.grading.rubric_ros2 import NO_DETECTOR, Grader
+
+    world = ros2_final_world()
+    g = Grader(world)
+    g.feed(contract.truth_pose(contract.ROS2_ROBOT), msgs.PoseStamped(), 1_000_000_000)
+    assert g.report("x").check("marker.detected").measured == NO_DETECTOR
+    other = (task_of(world).marker_id + 1) % 4
+    g.feed(contract.ARUCO_MARKERS, msgs.ArucoMarkers(marker_ids=(other,)), 2_000_000_000)
+    assert g.report("x").check("marker.detected").measured == f"IDs seen: {other}"
 
 
 def test_no_odom_broadcaster_never_localises(tmp_path: Path) -> None:

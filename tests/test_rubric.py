@@ -217,6 +217,40 @@ def test_only_on_detection_counts_broadcasts_without_one_or_off_the_camera() -> 
     assert line.evidence_ns == 7 * S
 
 
+def test_only_on_detection_gives_no_credit_when_nothing_was_broadcast() -> None:
+    """A run that never broadcast (a mission that crashed at its first target) has shown
+    nothing this line judges: it fails, measured "nothing broadcast", with no points."""
+    g = Grader(world())
+    drive(g, "explorer", [EXPLORER_HOME, TARGETS[0]], S)
+    detect(g, [0], 3 * S)  # detected, but never broadcast
+    line = only_on_detection(g)
+    assert not line.passed and line.points == 0 and line.max_points == 4
+    assert line.measured == "nothing broadcast as marker_frame"
+    assert line.value is None and line.evidence_ns is None  # nothing measured
+    assert "marker_frame.only_on_detection" in judge_failed(g)
+
+
+def test_without_the_detector_node_the_detection_lines_say_so() -> None:
+    """No message at all on /fiducial_transforms (no ArucoDetect() in main()): every
+    detection line fails and asks whether the detector node was started; an empty detection
+    (the detector ran and saw nothing) is "never detected"."""
+    g = Grader(world())
+    drive(g, "explorer", [EXPLORER_HOME, TARGETS[0]], S)
+    for mid in MARKERS:
+        line = marker_detected(g, mid)
+        assert not line.passed and line.points == 0
+        assert line.measured == (
+            "no /fiducial_transforms in the log: did the mission start the detector node "
+            "(ArucoDetect)?"
+        )
+    detect(g, [], 3 * S)
+    assert marker_detected(g, 0).measured == "never detected"
+
+
+def judge_failed(g: Grader) -> list[str]:
+    return [c.id for c in judge(g) if not c.passed]
+
+
 def test_explorer_home_before_the_follower_moved() -> None:
     g = Grader(world())
     drive(g, "follower", [FOLLOWER_HOME], S)

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from usar_replay.core.errors import InvalidScenario
 from usar_replay.world import scenario as scn
+from usar_replay.world import scenario_toml
 
 
 def test_course_world_facts() -> None:
@@ -27,10 +28,10 @@ def test_course_world_facts() -> None:
 
 def test_toml_round_trip_course(tmp_path: Path) -> None:
     c = scn.course_world()
-    assert scn.from_toml(scn.to_toml(c)) == c
+    assert scenario_toml.from_toml(scenario_toml.to_toml(c)) == c
     path = tmp_path / "course.toml"
-    scn.save(c, path)
-    assert scn.load(path) == c
+    scenario_toml.save(c, path)
+    assert scenario_toml.load(path) == c
     assert "[aruco_lookup_locations]" in path.read_text()
 
 
@@ -58,11 +59,11 @@ def test_toml_round_trip_random(
         targets=tuple(targets),
         seed=seed,
     )
-    assert scn.from_toml(scn.to_toml(c)) == c
+    assert scenario_toml.from_toml(scenario_toml.to_toml(c)) == c
 
 
 def _broken(edit: str, new: str) -> str:
-    text = scn.to_toml(scn.course_world())
+    text = scenario_toml.to_toml(scn.course_world())
     assert edit in text
     return text.replace(edit, new, 1)
 
@@ -96,7 +97,7 @@ def _broken(edit: str, new: str) -> str:
 )
 def test_invalid_files_name_the_field(edit: str, new: str, expected: str) -> None:
     with pytest.raises(InvalidScenario) as info:
-        scn.from_toml(_broken(edit, new), source="s.toml")
+        scenario_toml.from_toml(_broken(edit, new), source="s.toml")
     text = str(info.value)
     assert text.startswith("s.toml: ") and expected in text
     assert "\n" not in text
@@ -104,4 +105,4 @@ def test_invalid_files_name_the_field(edit: str, new: str, expected: str) -> Non
 
 def test_missing_file_is_an_invalid_scenario(tmp_path: Path) -> None:
     with pytest.raises(InvalidScenario, match="no such scenario file"):
-        scn.load(tmp_path / "nope.toml")
+        scenario_toml.load(tmp_path / "nope.toml")

@@ -12,8 +12,9 @@ import pytest
 from clitools import one_error_line, usar
 
 from usar_replay.world import scenario as scn
+from usar_replay.world import scenario_toml
 
-COURSE = scn.to_toml(scn.course_world())
+COURSE = scenario_toml.to_toml(scn.course_world())
 
 
 def _edit(old: str, new: str) -> str:
@@ -45,7 +46,7 @@ def test_out_of_range_numbers_are_refused_naming_the_field(
     old: str, new: str, expected: str
 ) -> None:
     with pytest.raises(scn.InvalidScenario) as info:
-        scn.from_toml(_edit(old, new), source="s.toml")
+        scenario_toml.from_toml(_edit(old, new), source="s.toml")
     assert str(info.value).startswith("s.toml: ") and expected in str(info.value)
     assert "\n" not in str(info.value)
 
@@ -58,7 +59,7 @@ def test_too_many_objects_are_refused_before_parsing() -> None:
     )
     n = len(scn.course_world().boxes) + 1001
     with pytest.raises(scn.InvalidScenario, match=f"boxes: holds {n}; a scenario has 0 to 1000"):
-        scn.from_toml(COURSE + "\n" + boxes)
+        scenario_toml.from_toml(COURSE + "\n" + boxes)
 
 
 def test_a_huge_file_is_refused_unread(tmp_path: Path) -> None:
@@ -117,5 +118,5 @@ def test_check_passes_the_course_world() -> None:
 
 def test_scenario_toml_has_units_and_loads_back() -> None:
     assert "# s, the mission's time limit" in COURSE and "px (16..4096)" in COURSE
-    assert scn.from_toml(COURSE) == scn.course_world()
+    assert scenario_toml.from_toml(COURSE) == scn.course_world()
     assert max(len(line) for line in COURSE.splitlines()) <= 100

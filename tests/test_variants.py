@@ -9,7 +9,8 @@ import pytest
 
 from usar_replay.core.errors import InvalidScenario
 from usar_replay.world.nav import OccupancyGrid
-from usar_replay.world.scenario import course_world, from_toml, to_toml
+from usar_replay.world.scenario import course_world
+from usar_replay.world.scenario_toml import from_toml, to_toml
 from usar_replay.world.variants import (
     MAX_DRIVE_FRACTION,
     MAX_RANGE,

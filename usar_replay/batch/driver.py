@@ -39,7 +39,7 @@ from usar_replay.batch.run_one import max_points
 from usar_replay.core.errors import UsageError
 from usar_replay.core.outfiles import write_text
 
-__all__ = ["BatchSummary", "grade_class", "plan_class"]
+__all__ = ["BatchSummary", "grade_class", "plan_class", "require_sandbox"]
 
 SUMMARY_CSV = "summary.csv"
 SUMMARY_TXT = "summary.txt"
@@ -100,6 +100,8 @@ def plan_class(
             f"-o {out_dir}: the output folder and {submissions_dir} must not contain each other; "
             "choose an output folder elsewhere"
         )
+    if (limits or Limits()).sandbox:
+        require_sandbox()
     subs = discover(submissions_dir)
     worlds = make_worlds(seeds, scenarios)
     return make_plan(
@@ -111,6 +113,19 @@ def plan_class(
         limits=limits,
         submissions_root=submissions_dir,
     )
+
+
+def require_sandbox() -> None:
+    """Refuse to grade untrusted code without the kernel sandbox (usar_replay.node.jail): a
+    :class:`UsageError` (exit 2) that says how to get it, or to go without on purpose."""
+    from usar_replay.node.jail import INSTALL_HINT, bwrap_available
+
+    ok, why = bwrap_available()
+    if not ok:
+        raise UsageError(
+            f"{why}: usar batch will not grade untrusted code without a kernel sandbox; "
+            f"install it ({INSTALL_HINT}) or pass --no-sandbox"
+        )
 
 
 class _Progress:

@@ -113,17 +113,7 @@ def execute(job_json: str) -> dict[str, Any]:
     if code == 0:
         grade = read_json(job.path(".grade.json")) or {}
         rec = read_json(job.path(".run.json")) or {}
-        return asdict(
-            RunResult(
-                job.team,
-                job.world,
-                "graded",
-                str(grade.get("outcome", "")),
-                float(grade.get("points", 0.0)),
-                float(grade.get("max_points", 0.0)),
-                float(rec.get("wall_s", 0.0)),
-            )
-        )
+        return asdict(RunResult.from_files(job.team, job.world, "graded", grade, rec))
     if code in (130, -signal.SIGINT) or (_stop.is_set() and not wall_limited):
         return asdict(RunResult(job.team, job.world, "interrupted"))
     why = f"the run's process exited with code {code}"

@@ -177,6 +177,23 @@ class RunResult:
         """Did the team's code fail here (not done) or usar (error)?"""
         return self.state == "error" or self.outcome not in ("done", "")
 
+    @classmethod
+    def from_files(
+        cls, team: str, world: str, state: str, grade: dict[str, Any], record: dict[str, Any]
+    ) -> RunResult:
+        """The result of a run whose ``.grade.json`` and ``.run.json`` are written: the planner
+        (a run finished before) and the engines (a run just graded) read them the same way, so a
+        skipped run and a fresh one report the same numbers."""
+        return cls(
+            team,
+            world,
+            state,
+            str(grade.get("outcome", "")),
+            float(grade.get("points", 0.0)),
+            float(grade.get("max_points", 0.0)),
+            float(record.get("wall_s", 0.0)),
+        )
+
 
 @dataclass(slots=True)
 class Plan:
@@ -305,7 +322,8 @@ def parse_seeds(text: str) -> list[int]:
 def make_worlds(seeds: Sequence[int], scenario_files: Sequence[str]) -> list[World]:
     """The worlds: each seed as a variant of the course world, then each scenario file (the
     course world alone when neither is given)."""
-    from usar_replay.world.scenario import course_world, load, to_toml
+    from usar_replay.world.scenario import course_world
+    from usar_replay.world.scenario_toml import load, to_toml
 
     worlds: list[World] = []
     if seeds:
@@ -416,15 +434,7 @@ def make_plan(
                 plan.jobs.append(RunJob(**{**asdict(job), "grade_only": True}))
                 continue
             plan.finished.append(
-                RunResult(
-                    sub.team,
-                    world.name,
-                    "finished",
-                    str(grade.get("outcome", "")),
-                    float(grade.get("points", 0.0)),
-                    float(grade.get("max_points", 0.0)),
-                    float(record.get("wall_s", 0.0)),
-                )
+                RunResult.from_files(sub.team, world.name, "finished", grade, record)
             )
     return plan
 

@@ -60,7 +60,7 @@ def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any
     rename there is a fix here). A log that cannot be graded at all (the mission crashed before
     the first tick, no log) gets every line of the rubric failed with 0 points."""
     from usar_replay.grading.grade import Grader, grade_file, load_thresholds
-    from usar_replay.world.scenario import from_toml
+    from usar_replay.world.scenario_toml import from_toml
 
     thresholds = None
     if thresholds_toml:
@@ -135,6 +135,10 @@ def _mission_limits(job: RunJob) -> Any:
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
         sandbox=sandbox,
+        # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
+        # grade and log are written by this process, outside it); never run bare by accident
+        jail="required" if lim.get("sandbox", True) else "off",
+        read_roots=(str(Path(job.submission_path).resolve()),),
     )
 
 
@@ -158,7 +162,7 @@ def record_run(job: RunJob) -> dict[str, Any]:
     from usar_replay.core.settings import RunSettings
     from usar_replay.core.settings import from_toml as settings_from_toml
     from usar_replay.pipeline.record import record
-    from usar_replay.world.scenario import from_toml
+    from usar_replay.world.scenario_toml import from_toml
 
     log = job.path(".mcap")
     for stale in (job.path(".run.json"), job.path(".grade.json"), log):
@@ -246,7 +250,7 @@ if __name__ == "__main__":
 def max_points(scenario_toml: str) -> float:
     """The rubric's full marks on a world (for runs that have no grade)."""
     from usar_replay.grading.grade import Grader
-    from usar_replay.world.scenario import from_toml
+    from usar_replay.world.scenario_toml import from_toml
 
     report = Grader(from_toml(scenario_toml)).report("", log_complete=False)
     return round(sum(c.max_points for c in report.checks), 3)

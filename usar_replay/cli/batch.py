@@ -49,7 +49,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--wall-limit", type=float, default=3600.0, metavar="S", help="wall s per run (3600)"
     )
-    p.add_argument("--no-sandbox", action="store_true", help="let missions read other teams' files")
+    p.add_argument(
+        "--no-sandbox", action="store_true", help="run missions without bwrap and the guard"
+    )
     p.add_argument("--gradescope", action="store_true", help="write TEAM/results.json per team")
     p.add_argument(
         "--visibility",

@@ -52,10 +52,14 @@ def parse_camera(text: str) -> tuple[int, int, float]:
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
     from usar_replay.grading import assignment
-    from usar_replay.world import scenario as scn
+    from usar_replay.world import scenario_toml
 
     kind = getattr(args, "assignment", None)
-    base = scn.load(args.scenario) if args.scenario else assignment.by_name(kind or "usar").world()
+    base = (
+        scenario_toml.load(args.scenario)
+        if args.scenario
+        else assignment.by_name(kind or "usar").world()
+    )
     if kind and base.assignment != kind:
         raise UsageError(
             f"{args.scenario} is a {base.assignment!r} world, not {kind!r}; drop --assignment"

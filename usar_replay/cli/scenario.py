@@ -41,7 +41,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def run(args: argparse.Namespace) -> int:
     from usar_replay.core.outfiles import write_text
-    from usar_replay.world.scenario import to_toml
+    from usar_replay.world.scenario_toml import to_toml
 
     scenario = options.load_scenario(args)
     text = to_toml(scenario)

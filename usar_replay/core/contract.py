@@ -248,7 +248,7 @@ ROS2_FRAMES = RobotFrames(
 # --- the log file ---------------------------------------------------------------------------------
 
 SCENARIO_ATTACHMENT = "scenario.toml"
-"""MCAP attachment: the world the run used (``usar_replay.world.scenario`` TOML)."""
+"""MCAP attachment: the world the run used (``usar_replay.world.scenario_toml`` TOML)."""
 SETTINGS_ATTACHMENT = "settings.toml"
 """MCAP attachment: every setting of the run (``usar_replay.core.settings`` TOML); replay uses
 it."""

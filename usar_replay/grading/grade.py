@@ -22,7 +22,7 @@ from usar_replay.grading.rubric_usar import (
     REQUIRED_TOPICS,
     Grader,
 )
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, GradeReport, Rubric, RubricGrader
 from usar_replay.log.run import Run, open_run
 from usar_replay.world.scenario import Scenario
 
@@ -38,6 +38,7 @@ __all__ = [
     "grade_file",
     "grade_run",
     "load_thresholds",
+    "observe_run",
     "rubric_for",
 ]
 
@@ -55,15 +56,28 @@ def rubric_for(scenario: Scenario) -> Rubric:
     return of(scenario).rubric()
 
 
-def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
-    """Grade an opened recording as recorded (no replay). A damaged log is graded as far as it
-    goes and says so; a complete log that lacks a topic the rubric needs raises
-    :class:`MissingTopic`."""
-    began = time.perf_counter()  # only for JUnit's `time`: never part of the verdict
+def observe_run(run: Run, thresholds: Thresholds | None = None) -> RubricGrader:
+    """The run's rubric grader, fed every message of the log it reads: the rubric's own
+    observations (``usar record``'s summary counts markers with them). Nothing is required: a
+    log without a topic gives a grader that saw none of it."""
     scenario = run.require_scenario()
     rubric = rubric_for(scenario)
     grader = rubric.grader(scenario, thresholds)
     grader.start_ns = run.start_ns  # the run's clock starts with the log, whatever topic
+    feed = grader.feed
+    for topic, msg, t in run.reader.decoded(rubric.grade_topics):
+        feed(topic, msg, t)
+    return grader
+
+
+def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
+    """Grade an opened recording as recorded (no replay). A damaged log is graded as far as it
+    goes and says so. A complete log without a topic the mission publishes (no detector node:
+    no ``/fiducial_transforms``) is a graded run whose lines that need it fail and say why; one
+    without a topic the simulator always writes (the rubric's ``required_topics``: ground
+    truth) is not the log of a run and raises :class:`MissingTopic`."""
+    began = time.perf_counter()  # only for JUnit's `time`: never part of the verdict
+    rubric = rubric_for(run.require_scenario())
     if run.damage is None:
         missing = [t for t in rubric.required_topics if t not in run.topics]
         if missing:
@@ -71,9 +85,7 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
                 f"{run.path}: topic {missing[0]} is missing; it cannot be graded"
                 + (f" (also missing: {', '.join(missing[1:])})" if missing[1:] else "")
             )
-    feed = grader.feed
-    for topic, msg, t in run.reader.decoded(rubric.grade_topics):
-        feed(topic, msg, t)
+    grader = observe_run(run, thresholds)
     problem = run.problem()
     report: GradeReport = grader.report(
         str(run.path), log_complete=not problem, log_problem=problem

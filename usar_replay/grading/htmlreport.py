@@ -3,10 +3,15 @@
 Why a page: the rerun viewer is the place to dig into a run, but it takes a while to draw
 without a GPU and needs an installed viewer; a TA marking forty runs, or a student reading
 their grade, needs something a browser opens at once and that can be mailed. Each page holds a
-map of the run (walls, obstacles, targets, true and stored markers, both robots' true paths,
+map of the run (walls, obstacles, targets, true and stored markers, every robot's true path,
 and the evidence point of every rubric line, numbered as in the table), the rubric table, and
 the camera frame in which each marker was first detected. Everything is embedded (the picture
 as PNG, the frames as the recorded image bytes), so a page is one file with no links out.
+
+The robots, their camera topic and their colours come from the run's assignment
+(:func:`usar_replay.grading.assignment.of`): the US&R explorer and follower, or the ROS 2 final
+project's ``robot1``. A robot's colour is the palette's entry at its index in the assignment, so
+the first robot of every assignment looks the same.
 
 matplotlib draws the map with its Agg backend (no display needed); this module is its only
 importer.
@@ -25,6 +30,8 @@ from pathlib import Path
 
 from usar_replay import __version__
 from usar_replay.core import contract, msgs
+from usar_replay.grading.assignment import Assignment
+from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.grading.verdict import Check, GradeReport
 from usar_replay.log.run import Run
 from usar_replay.world.scenario import Box, Cylinder, Scenario, Sphere
@@ -34,8 +41,18 @@ __all__ = ["RunPicture", "collect", "index_page", "map_png", "run_page"]
 FRAME_MEMORY = 64
 """Camera frames kept while waiting for their detections (a detection names its image's stamp
 and arrives a few frames later at most)."""
-_EXPLORER_COLOR = "#1f77b4"
-_FOLLOWER_COLOR = "#9467bd"
+ROBOT_PALETTE = ("#1f77b4", "#9467bd", "#8c564b", "#e377c2")
+"""A robot's path colour, by its index in the assignment's robots (US&R: explorer blue, follower
+purple; ROS 2: robot1 blue)."""
+OTHER_ROBOT_COLOR = "#7f7f7f"
+
+
+def robot_color(asg: Assignment, robot: str) -> str:
+    """The robot's colour on the map (grey for a robot the assignment does not name)."""
+    names = asg.robot_names
+    if robot not in names:
+        return OTHER_ROBOT_COLOR
+    return ROBOT_PALETTE[names.index(robot) % len(ROBOT_PALETTE)]
 
 
 @dataclass(slots=True)
@@ -69,12 +86,26 @@ class RunPicture:
         return best if best is not None else (path[0][1:] if path else None)
 
 
+def _detected(topic: str, msg: msgs.Message | None) -> tuple[int, tuple[int, ...]] | None:
+    """The image stamp and marker IDs of a detector's message: US&R's ``aruco_detect``
+    (``/fiducial_transforms``) or the ROS 2 project's ``ros2_aruco`` (``/aruco_markers``); None
+    for any other message."""
+    if topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
+        return msg.header.stamp.ns, tuple(f.fiducial_id for f in msg.transforms)
+    if topic == contract.ARUCO_MARKERS and isinstance(msg, msgs.ArucoMarkers):
+        return msg.header.stamp.ns, msg.marker_ids
+    return None
+
+
 def collect(run: Run) -> RunPicture:
-    """One pass over the log for the picture: true paths, stored markers, detection frames."""
-    pic = RunPicture(paths={r: [] for r in contract.ROBOTS})
-    truth = {contract.truth_pose(r): r for r in contract.ROBOTS}
+    """One pass over the log for the picture: true paths, stored markers, detection frames
+    (the robots and the camera are the run's assignment's)."""
+    asg = assignment_of(run.require_scenario())
+    pic = RunPicture(paths={r: [] for r in asg.robot_names})
+    truth = {contract.truth_pose(r): r for r in asg.robot_names}
     frames: dict[int, msgs.CompressedImage] = {}
-    topics = [*truth, contract.MARKER_POSES, contract.IMAGE, contract.FIDUCIALS]
+    detectors = [contract.FIDUCIALS, contract.ARUCO_MARKERS]
+    topics = [*truth, contract.MARKER_POSES, asg.image_topic, *detectors]
     for m in run.messages(topics):
         msg = m.msg
         if m.topic in truth and isinstance(msg, msgs.PoseStamped):
@@ -84,15 +115,14 @@ def collect(run: Run) -> RunPicture:
             frames[msg.header.stamp.ns] = msg
             if len(frames) > FRAME_MEMORY:
                 del frames[next(iter(frames))]
-        elif m.topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
+        elif (found := _detected(m.topic, msg)) is not None:
+            stamp_ns, ids = found
             seen = {d.marker_id for d in pic.detections}
-            image = frames.get(msg.header.stamp.ns)
-            for f in msg.transforms:
-                if f.fiducial_id not in seen and image is not None:
-                    seen.add(f.fiducial_id)
-                    pic.detections.append(
-                        Detection(f.fiducial_id, m.log_time_ns, image.format, image.data)
-                    )
+            image = frames.get(stamp_ns)
+            for mid in ids:
+                if mid not in seen and image is not None:
+                    seen.add(mid)
+                    pic.detections.append(Detection(mid, m.log_time_ns, image.format, image.data))
         elif m.topic == contract.MARKER_POSES and isinstance(msg, msgs.FiducialTransformArray):
             for f in msg.transforms:
                 pic.stored[f.fiducial_id] = (f.transform.translation.x, f.transform.translation.y)
@@ -103,13 +133,21 @@ def collect(run: Run) -> RunPicture:
 # --- the map --------------------------------------------------------------------------------------
 
 
-def _robot_of(check: Check) -> str:
-    """Whose position shows a line's evidence."""
-    if check.id.startswith("follower.") or check.id == "time_limit":
-        return "follower"
-    if check.evidence == "follower moved":
-        return "follower"
-    return "explorer"
+def _robot_of(check: Check, asg: Assignment) -> str:
+    """Whose position shows a line's evidence: the robot whose move the evidence cites
+    (``follower moved``), else the robot the line is named after (``follower.home``), else for
+    ``time_limit`` the last robot (US&R's mission ends when the follower is home), else the
+    camera robot (it detects, broadcasts and stores the markers)."""
+    robots = asg.robot_names
+    for r in robots:
+        if check.evidence == f"{r} moved":
+            return r
+    named = check.id.partition(".")[0]
+    if named in robots:
+        return named
+    if check.id == "time_limit":
+        return robots[-1]
+    return asg.camera_robot
 
 
 def _box_corners(b: Box) -> list[tuple[float, float]]:
@@ -138,13 +176,14 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
     round_things: list[Cylinder | Sphere] = [*scenario.cylinders, *scenario.spheres]
     for r in round_things:
         ax.add_patch(patches.Circle((r.x, r.y), r.radius, color="#b08d57", lw=0))
-    for robot, color in (("explorer", _EXPLORER_COLOR), ("follower", _FOLLOWER_COLOR)):
+    asg = assignment_of(scenario)
+    for robot, (sx, sy, _yaw) in zip(asg.robot_names, asg.starts(scenario), strict=True):
+        color = robot_color(asg, robot)
         path = pic.paths.get(robot, [])
         if path:
             ax.plot([p[1] for p in path], [p[2] for p in path], color=color, lw=1.6,
                     label=f"{robot} (true path)")  # fmt: skip
-        start = getattr(scenario, robot)
-        ax.plot(start.x, start.y, marker="s", ms=9, mfc="none", mec=color, mew=2)
+        ax.plot(sx, sy, marker="s", ms=9, mfc="none", mec=color, mew=2)
     for k, (x, y) in enumerate(scenario.targets):
         ax.plot(x, y, marker="x", ms=9, mew=2, color="black")
         ax.annotate(f"target_{k + 1}", (x, y), xytext=(5, -12), textcoords="offset points",
@@ -159,7 +198,7 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
         ax.plot(x, y, marker="o", ms=5, color="#ff7f0e", label="stored marker" if not i else None)
     spots: dict[tuple[float, float], list[tuple[int, bool]]] = {}
     for n, c in enumerate(report.checks, start=1):
-        at = None if c.evidence_ns is None else pic.position(_robot_of(c), c.evidence_ns)
+        at = None if c.evidence_ns is None else pic.position(_robot_of(c, asg), c.evidence_ns)
         if at is not None:  # lines evidenced at one place share a circle: "7,8"
             spots.setdefault((round(at[0], 2), round(at[1], 2)), []).append((n, c.passed))
     for at, lines in spots.items():

@@ -43,20 +43,26 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import wrap_angle, yaw_from_quat
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.ros2_world import task_of
 from usar_replay.world.scenario import Scenario
 
-__all__ = [
-    "RUBRIC","GRADE_TOPICS", "POINTS", "REQUIRED_TOPICS", "Grader"]
+__all__ = ["GRADE_TOPICS", "NO_DETECTOR", "POINTS", "REQUIRED_TOPICS", "RUBRIC", "Grader"]
 
 TRUTH = contract.truth_pose(contract.ROS2_ROBOT)
 ODOM = contract.odom(contract.ROS2_ROBOT)
 GRADE_TOPICS = (contract.TF_STATIC, contract.TF, contract.ARUCO_MARKERS, ODOM, TRUTH)
 """The topics the grader reads; everything else is skipped without decoding."""
 REQUIRED_TOPICS = (TRUTH, ODOM)
-"""Without these a log cannot be graded (``/tf`` and ``/aruco_markers`` are the mission's: a
-mission that never publishes them fails the lines that need them)."""
+"""Without these a log cannot be graded: the simulator writes them from the first tick.
+``/tf`` and ``/aruco_markers`` are the mission's: a mission that never publishes them is graded,
+and fails the lines that need them (the detection line saying so: :data:`NO_DETECTOR`)."""
+NO_DETECTOR = (
+    f"no {contract.ARUCO_MARKERS} in the log: no marker seen, or did the mission start the "
+    "detector node (ArucoNode)?"
+)
+"""What ``marker.detected`` measures when nothing was ever published on ``/aruco_markers``
+(aruco_node publishes only frames with a marker, so this is also a detector that saw none)."""
 POINTS = {
     "tf.odom_to_base": 10.0,
     "aruco_target.reached": 10.0,
@@ -95,6 +101,30 @@ class _Worst:
                 self.problem = problem
 
 
+def _line(
+    cid: str,
+    description: str,
+    passed: bool,
+    measured: str,
+    threshold: str,
+    evidence_ns: int | None,
+    detail: str = "",
+) -> Check:
+    """A rubric line worth :data:`POINTS` ``[cid]``: all of them when it passed, none otherwise."""
+    pts = POINTS[cid]
+    return Check(
+        cid,
+        description,
+        passed,
+        pts if passed else 0.0,
+        pts,
+        measured,
+        threshold,
+        evidence_ns,
+        detail,
+    )
+
+
 class Grader:
     """Feeds on a ``ros2-final`` log's messages in log order; :meth:`report` gives the rubric."""
 
@@ -111,6 +141,8 @@ class Grader:
         self.target_closest = math.inf
         self.detected_ns: int | None = None
         self.detected_ids: list[int] = []
+        self.marker_messages = 0
+        """Messages on ``/aruco_markers`` (0: the detector never published)."""
         self.first_destination: tuple[float, float, str, int] | None = None
         self.destination_tf = _Worst()
         self.reached_ns: int | None = None
@@ -150,6 +182,7 @@ class Grader:
         elif topic == TRUTH and isinstance(msg, msgs.PoseStamped):
             self._on_truth((msg.pose.position.x, msg.pose.position.y), t_ns)
         elif topic == contract.ARUCO_MARKERS and isinstance(msg, msgs.ArucoMarkers):
+            self.marker_messages += 1
             for mid in msg.marker_ids:
                 if mid not in self.detected_ids:
                     self.detected_ids.append(int(mid))
@@ -211,39 +244,34 @@ class Grader:
 
     # -- verdict ------------------------------------------------------------------------------
 
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The project's one marker, once ``marker.detected`` holds (its ID on
+        ``/aruco_markers`` after reaching ``aruco_target``); the project never says where it
+        is, so no error."""
+        if self.detected_ns is None:
+            return ()
+        when = f"{self.detected_ns / 1e9:.1f} s"  # sim time, as the rubric lines say it
+        text = f"detected on {contract.ARUCO_MARKERS} at aruco_target, at {when}"
+        return (FoundMarker(self.task.marker_id, text),)
+
     def report(
         self, source: str, *, log_complete: bool = True, log_problem: str = ""
     ) -> GradeReport:
-        """The rubric as judged from what was fed so far (a truncated log: as far as it goes)."""
-        th = self.th
-        t0 = self.start_ns or 0
-        task = self.task
-        checks: list[Check] = []
+        """The rubric as judged from what was fed so far (a truncated log: as far as it goes):
+        one line per phase of the project, in the table's order."""
+        checks = (
+            self._odom_to_base(),
+            self._aruco_target_reached(),
+            self._marker_detected(),
+            self._destination_chosen(),
+            self._final_destination_broadcast(),
+            self._destination_reached(),
+            self._time_limit(),
+        )
+        return GradeReport(source, checks, self.start_ns or 0, log_complete, log_problem)
 
-        def add(
-            cid: str,
-            description: str,
-            passed: bool,
-            measured: str,
-            threshold: str,
-            evidence_ns: int | None,
-            detail: str = "",
-        ) -> None:
-            pts = POINTS[cid]
-            checks.append(
-                Check(
-                    cid,
-                    description,
-                    passed,
-                    pts if passed else 0.0,
-                    pts,
-                    measured,
-                    threshold,
-                    evidence_ns,
-                    detail,
-                )
-            )
-
+    def _odom_to_base(self) -> Check:
+        """``tf.odom_to_base``: the odometry broadcaster connected the tree, matching odometry."""
         o = self.odom_tf
         if o.count == 0:
             measured, detail = "never broadcast", "nothing connects robot1/odom to base_footprint"
@@ -251,7 +279,7 @@ class Grader:
             measured, detail = f"{o.count} broadcasts", f"worst: {o.problem}"
         else:
             measured, detail = f"worst {o.worst * 100:.2f} cm off odometry", ""
-        add(
+        return _line(
             "tf.odom_to_base",
             f"{contract.ROS2_ODOM_FRAME} -> {contract.ROS2_BASE_FRAME} broadcast from odometry",
             o.count > 0 and o.worst <= ODOM_MATCH_M,
@@ -260,16 +288,23 @@ class Grader:
             o.worst_ns if o.count and o.worst > ODOM_MATCH_M else o.first_ns,
             detail,
         )
-        tx, ty = task.aruco_target
-        add(
+
+    def _aruco_target_reached(self) -> Check:
+        """``aruco_target.reached``: the robot's true pose came near the first goal."""
+        tx, ty = self.task.aruco_target
+        return _line(
             "aruco_target.reached",
             f"reach aruco_target ({tx:.3f}, {ty:.3f})",
             self.target_ns is not None,
             "reached" if self.target_ns is not None else f"closest {self.target_closest:.3f} m",
-            f"<= {th.target_reached_m:g} m",
+            f"<= {self.th.target_reached_m:g} m",
             self.target_ns,
         )
-        add(
+
+    def _marker_detected(self) -> Check:
+        """``marker.detected``: the world's marker ID on ``/aruco_markers`` after the goal."""
+        task = self.task
+        return _line(
             "marker.detected",
             f"detect marker {task.marker_id} on /aruco_markers at aruco_target",
             self.detected_ns is not None,
@@ -279,10 +314,16 @@ class Grader:
                 f"IDs seen: {', '.join(map(str, self.detected_ids))}"
                 if self.detected_ids
                 else "never detected"
+                if self.marker_messages
+                else NO_DETECTOR
             ),
             f"ID {task.marker_id} after reaching aruco_target",
             self.detected_ns,
         )
+
+    def _destination_chosen(self) -> Check:
+        """``destination.chosen``: the first broadcast carries the detected ID's parameters."""
+        task = self.task
         want = task.destinations[task.marker_id]
         first = self.first_destination
         if first is None:
@@ -295,7 +336,7 @@ class Grader:
             measured_c = f"({first[0]:.3f}, {first[1]:.3f})" + (
                 f" = aruco_{which[0]}" if which else ""
             )
-        add(
+        return _line(
             "destination.chosen",
             f"final_destination.aruco_{task.marker_id} chosen for marker {task.marker_id}",
             chosen,
@@ -303,6 +344,11 @@ class Grader:
             f"({want[0]:g}, {want[1]:g})",
             None if first is None else first[3],
         )
+
+    def _final_destination_broadcast(self) -> Check:
+        """``final_destination.broadcast``: every broadcast, looked up in ``map``, is near the
+        true destination and a child of the parameter's frame."""
+        th, task = self.th, self.task
         d = self.destination_tf
         dx, dy = self.truth_destination
         if d.count == 0:
@@ -311,7 +357,7 @@ class Grader:
             measured_b = f"worst: {d.problem}"
         else:
             measured_b = f"worst {d.worst:.3f} m from the truth"
-        add(
+        return _line(
             "final_destination.broadcast",
             f"final_destination in {task.frame_id}, at ({dx:.3f}, {dy:.3f}) in map",
             d.count > 0 and d.worst <= th.marker_map_error_m,
@@ -319,8 +365,12 @@ class Grader:
             f"<= {th.marker_map_error_m:g} m, parent {task.frame_id}",
             d.worst_ns if d.count else None,
         )
+
+    def _destination_reached(self) -> Check:
+        """``destination.reached``: after the detection, the robot came near the destination."""
+        dx, dy = self.truth_destination
         reached = self.reached_ns
-        add(
+        return _line(
             "destination.reached",
             f"reach the final destination ({dx:.3f}, {dy:.3f})",
             reached is not None,
@@ -331,12 +381,17 @@ class Grader:
                 if self.destination_closest_ns is not None
                 else "never went for it"
             ),
-            f"<= {th.target_reached_m:g} m",
+            f"<= {self.th.target_reached_m:g} m",
             reached if reached is not None else self.destination_closest_ns,
         )
+
+    def _time_limit(self) -> Check:
+        """``time_limit``: the destination was reached within the scenario's time limit."""
+        t0 = self.start_ns or 0
+        reached = self.reached_ns
         limit_ns = t0 + int(self.scenario.time_limit_s * 1e9)
         in_time = reached is not None and reached <= limit_ns
-        add(
+        return _line(
             "time_limit",
             f"final destination reached within {self.scenario.time_limit_s:g} s",
             in_time,
@@ -344,7 +399,6 @@ class Grader:
             f"<= {self.scenario.time_limit_s:g} s",
             reached,
         )
-        return GradeReport(source, tuple(checks), t0, log_complete, log_problem)
 
 
 RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)

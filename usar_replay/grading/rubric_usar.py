@@ -28,8 +28,10 @@ line (``Check.id``)                  points  passes when
 ``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k and
                                              every such broadcast, looked up in ``map``, lies
                                              within ``marker_map_error_m`` of the true marker
-``marker_frame.only_on_detection``   4       every ``marker_frame`` is a child of the camera's
-                                             optical frame, stamped with a detected frame
+``marker_frame.only_on_detection``   4       ``marker_frame`` was broadcast, and every such
+                                             broadcast is a child of the camera's optical
+                                             frame, stamped with a detected frame ("nothing
+                                             broadcast" fails: no credit without evidence)
 ``explorer.home_before_follower``    4       after its last target the explorer came within
                                              ``home_m`` of its start before the follower moved
 ``follower.marker_k``                12      the follower came within ``follower_visit_m`` of
@@ -58,7 +60,7 @@ from dataclasses import dataclass, field, replace
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
-from usar_replay.grading.verdict import Check, GradeReport, Rubric
+from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.scenario import Scenario
 
 __all__ = [
@@ -66,6 +68,7 @@ __all__ = [
     "DETECTION_MEMORY_NS",
     "GRADE_TOPICS",
     "MAX_VISITS",
+    "NO_DETECTOR",
     "REQUIRED_TOPICS",
     "Disc",
     "Grader",
@@ -93,9 +96,18 @@ GRADE_TOPICS = (
     *(contract.cmd_vel(r) for r in contract.ROBOTS),
 )
 """The topics the rubric reads; everything else in a log is skipped without decoding."""
-REQUIRED_TOPICS = (EXPLORER_TRUTH, FOLLOWER_TRUTH, contract.TF, contract.FIDUCIALS)
-"""Without these a log cannot be graded at all (``/tf_static`` may be absent: a world whose
-chain is all dynamic is still gradable)."""
+REQUIRED_TOPICS = (EXPLORER_TRUTH, FOLLOWER_TRUTH, contract.TF)
+"""Without these a log cannot be graded at all: the simulator writes them from the first tick
+(ground truth, and ``/tf`` for its odom links), so a complete log without one is not a log of a
+run. Every topic the mission writes is optional: a mission that never started the detector
+node has no ``/fiducial_transforms``, and is graded (its detection lines fail with
+:data:`NO_DETECTOR`). ``/tf_static`` may be absent too: a world whose chain is all dynamic is
+still gradable."""
+NO_DETECTOR = (
+    f"no {contract.FIDUCIALS} in the log: did the mission start the detector node (ArucoDetect)?"
+)
+"""What the detection lines measure when the detector never published (a mission without
+``ArucoDetect()`` in its ``main()``)."""
 MAX_VISITS = 256
 """Entry times kept per disc; past this the newest replaces the last kept (the bound only keeps
 memory flat on a pathological log)."""
@@ -200,6 +212,8 @@ class Grader:
         self.follower_moved_ns: int | None = None
         self.detected_ns: dict[int, int] = {}
         self.detected_frames: dict[int, int] = {}
+        self.fiducial_messages = 0
+        """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
         self._recent: dict[int, tuple[msgs.FiducialTransform, ...]] = {}
         """Detections by image stamp, the last :data:`DETECTION_MEMORY_NS` only."""
         self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
@@ -267,6 +281,7 @@ class Grader:
             self.feed(topic, msg, t)
 
     def _on_fiducials(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
+        self.fiducial_messages += 1
         for f in msg.transforms:
             self.detected_ns.setdefault(f.fiducial_id, t_ns)
             self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
@@ -330,6 +345,19 @@ class Grader:
             err = math.dist((p.x, p.y, p.z), self.markers[mid])
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
+
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The markers broadcast as ``marker_frame`` (attributed as :func:`marker_broadcast`
+        does), with the worst error of their broadcasts looked up in ``map``."""
+        return tuple(
+            FoundMarker(
+                mid,
+                _broadcast_text(b),
+                b.worst_m if math.isfinite(b.worst_m) else None,
+            )
+            for mid, b in self.broadcasts.items()
+            if b.count
+        )
 
     def resolved_thresholds(self) -> Thresholds:
         """The thresholds judged by, with the scenario's time limit filled in."""
@@ -502,7 +530,13 @@ def marker_detected(g: Grader, mid: int) -> Check:
         passed=t is not None,
         points=each if t is not None else 0.0,
         max_points=each,
-        measured="never detected" if t is None else f"in {_n(frames, 'frame')}, first at {_s(t)}",
+        measured=(
+            NO_DETECTOR
+            if not g.fiducial_messages
+            else "never detected"
+            if t is None
+            else f"in {_n(frames, 'frame')}, first at {_s(t)}"
+        ),
         threshold=f"at least 1 frame on {contract.FIDUCIALS}",
         evidence_ns=t,
         value=float(frames),
@@ -513,17 +547,21 @@ def marker_detected(g: Grader, mid: int) -> Check:
     )
 
 
+def _broadcast_text(b: Broadcasts) -> str:
+    """What a marker's broadcasts measured, in words (the line's and the record summary's)."""
+    if b.count == 0:
+        return "no broadcast"
+    if b.failed_lookups:
+        return f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
+    return f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+
+
 def marker_broadcast(g: Grader, mid: int) -> Check:
     """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
     ok = b.count > 0 and b.worst_m <= limit
-    if b.count == 0:
-        measured = "no broadcast"
-    elif b.failed_lookups:
-        measured = f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
-    else:
-        measured = f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+    measured = _broadcast_text(b)
     each = 8.0 / max(len(g.markers), 1)
     evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
     return Check(
@@ -544,22 +582,33 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
 
 
 def only_on_detection(g: Grader) -> Check:
-    """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera."""
+    """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera.
+
+    A line that judges broadcasts gives no credit when there were none: a mission that never
+    broadcast (it crashed at its first target, or has no broadcaster yet) has shown nothing this
+    line can judge, so it fails with "nothing broadcast" rather than passing by default."""
     bad = g.bad_broadcasts
     first_bad = min(
         (t for t in (g.without_detection_ns, g.wrong_parent_ns) if t is not None), default=None
     )
+    ok = bad == 0 and g.broadcast_count > 0
+    if g.broadcast_count == 0:
+        measured = f"nothing broadcast as {contract.MARKER_FRAME}"
+    else:
+        measured = (
+            f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
+            f"detection, {g.wrong_parent} with another parent"
+        )
     return Check(
         id="marker_frame.only_on_detection",
         description=f"{contract.MARKER_FRAME} broadcast only with a detection, child of the camera",
-        passed=bad == 0,
-        points=4.0 if bad == 0 else 0.0,
+        passed=ok,
+        points=4.0 if ok else 0.0,
         max_points=4.0,
-        measured=f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
-        f"detection, {g.wrong_parent} with another parent",
+        measured=measured,
         threshold=f"0 without a detection; parent {contract.OPTICAL_FRAME}",
         evidence_ns=first_bad,
-        value=float(bad),
+        value=float(bad) if g.broadcast_count else None,  # nothing broadcast: nothing measured
         unit="broadcasts",
         limit=0.0,
         op="<=",

@@ -15,7 +15,7 @@ from usar_replay.core import msgs
 from usar_replay.core.settings import Thresholds
 from usar_replay.world.scenario import Scenario
 
-__all__ = ["Check", "GradeReport", "Rubric", "RubricGrader"]
+__all__ = ["Check", "FoundMarker", "GradeReport", "Rubric", "RubricGrader"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,12 +83,30 @@ class GradeReport:
         return [c.id for c in self.checks if not c.passed]
 
 
+@dataclass(frozen=True, slots=True)
+class FoundMarker:
+    """A marker the run found, as its rubric counts it: what ``usar record``'s summary shows,
+    so that it agrees with ``usar grade`` for any mission (not only one that publishes the
+    built-in mission's ``/explorer/marker_poses``)."""
+
+    marker_id: int
+    text: str
+    """The rubric's words for the evidence (``3 broadcasts, worst error 0.8 cm``)."""
+    error_m: float | None = None
+    """The worst distance of what the run said about the marker's place from the truth, where
+    the rubric measures one."""
+
+
 class RubricGrader(Protocol):
     """A streaming grader: fed one message at a time, then asked for the report."""
 
     start_ns: int | None
 
     def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None: ...
+
+    def found_markers(self) -> tuple[FoundMarker, ...]:
+        """The markers found so far, as this rubric counts them, by ID."""
+        ...
 
     def report(
         self, source: str, *, log_complete: bool = True, log_problem: str = ""

@@ -26,7 +26,7 @@ from usar_replay.core import msg_text, msgs
 from usar_replay.core.errors import IncompleteLog, UsageError
 from usar_replay.log.run import Run
 
-__all__ = ["EchoRequest", "blocks", "find_topic", "nearest_first"]
+__all__ = ["EchoRequest", "blocks", "find_topic"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,32 +43,28 @@ class EchoRequest:
     width: int = msg_text.WIDTH
 
 
-def nearest_first(word: str, choices: Sequence[str]) -> list[str]:
-    """``choices`` with the closest to ``word`` first (difflib, as the scenario loader's
-    suggestions), the rest in their given order."""
-    import difflib
-
-    close = difflib.get_close_matches(word, choices, n=3, cutoff=0.5)
-    return close + [c for c in choices if c not in close]
-
-
 def find_topic(run: Run, topic: str) -> str:
     """The log's name for ``topic`` (``explorer/cmd_vel`` finds ``/explorer/cmd_vel``).
 
-    An unknown topic is a :class:`UsageError` listing the log's topics, the closest first; in
+    An unknown topic is a :class:`UsageError` naming the closest of the log's topics; in
     a damaged log it is :class:`IncompleteLog` (the topic may lie past the damage).
     """
     topics = list(run.topics)
     for name in (topic, "/" + topic.lstrip("/")):
         if name in run.topics:
             return name
-    listed = ", ".join(nearest_first(topic, topics)) or "none"
+    # the closest match only: the whole list (20-odd topics) would not fit a 100-column line
+    import difflib
+
+    close = difflib.get_close_matches(topic, topics, n=1, cutoff=0.5)
+    hint = f"did you mean {close[0]}? " if close else ""
+    hint += f"(`usar info` lists all {len(topics)})"
     if run.damage is not None:
         raise IncompleteLog(
             f"{run.path}: no topic {topic} in the readable part of the log "
-            f"({run.damage.describe()}); its topics: {listed}"
+            f"({run.damage.describe()}); {hint}"
         )
-    raise UsageError(f"{run.path}: no topic {topic}; its topics: {listed}")
+    raise UsageError(f"{run.path}: no topic {topic}; {hint}")
 
 
 def _paths(run: Run, topic: str, fields: Sequence[str]) -> list[msg_text.FieldPath]:

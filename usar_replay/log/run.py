@@ -28,7 +28,8 @@ from usar_replay.core.errors import IncompleteLog, LogError, MissingTopic, Usage
 from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import from_toml as settings_from_toml
 from usar_replay.log import bag
-from usar_replay.world.scenario import Scenario, from_toml
+from usar_replay.world.scenario import Scenario
+from usar_replay.world.scenario_toml import from_toml
 
 __all__ = ["MissionInfo", "Run", "open_run"]
 

@@ -7,15 +7,22 @@ time and the messages the simulator published then, in the simulator's order
 (:data:`usar_replay.core.contract.SIM_TOPICS`). For each tick:
 
 1. the clock moves to the tick's time (``node.get_clock().now()``);
-2. every timer due at or before that time fires once, earliest due first, ties in the order
+2. at the first tick only: what the nodes published while they were being created (a logger
+   line, a ``StaticTransformBroadcaster.sendTransform``, a ``publish`` in ``__init__``) is
+   delivered, in the order it was published, to the subscriptions that exist by then (created
+   before or after the publish), and opens the first tick's output; so a static transform
+   sent in a constructor reaches every ``TransformListener`` before any callback runs, as
+   ``/tf_static``'s latching makes it in ROS. Before the first tick the clock reads 0, as
+   rclpy's sim clock does before ``/clock`` arrives, so such messages are stamped 0;
+3. every timer due at or before that time fires once, earliest due first, ties in the order
    the timers were created;
-3. each input message goes to the subscriptions on its topic in the order they were created
+4. each input message goes to the subscriptions on its topic in the order they were created
    (nodes in creation order, each node's subscriptions in creation order);
-4. whatever a callback publishes on a topic that a node of this mission subscribes to is
+5. whatever a callback publishes on a topic that a node of this mission subscribes to is
    delivered right after that callback returns, before the next message, first published first
    (ROS's intra-process delivery, made deterministic); so a ``TransformBroadcaster`` feeds the
    node's own ``TransformListener`` before the next input;
-5. everything published during the tick is the tick's output, in publish order: it is written
+6. everything published during the tick is the tick's output, in publish order: it is written
    to the log at the tick's sim time and, live, ``cmd_vel`` goes to the simulator before the
    next physics step.
 
@@ -185,15 +192,23 @@ class Executor:
         """
         if t_ns < self.now_ns:
             raise ValueError(f"time went backwards: {t_ns} < {self.now_ns}")
+        # outputs published before the first tick (in main(), by the constructors) are kept
+        # for it: the first tick's output starts with them (step 2 of the module docstring)
+        pending: list[Output] = []
         if not self._started:
             # the sim clock starts with the first tick: timers created before it (in main())
             # count their first period from then, as rclpy's do once /clock arrives
             self._started = True
             for tm in self._timers:
                 tm.next_due_ns = t_ns + tm.timer_period_ns
+            pending = self._outputs
+            # to the subscriptions that exist now, whenever they were created (what /tf_static's
+            # latching does in ROS, and what a node created after the publisher expects)
+            self._queue = deque(pending)
         self.now_ns = t_ns
-        self._outputs = []
+        self._outputs = pending
         self._local = 0
+        self._drain()  # the constructors' local deliveries, before any timer or input
         self._fire_timers(t_ns)
         for topic, msg in inputs:
             self._deliver(topic, msg)

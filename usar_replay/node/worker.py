@@ -14,6 +14,11 @@ with usar's own schemas and checks against the :class:`PublishPolicy` again: not
 mission process is ever unpickled. Parent -> child setup data (parameters, the target) is
 pickled, which is safe in that direction.
 
+Where: in the kernel sandbox of :mod:`usar_replay.node.jail` (bubblewrap) by default, with the
+mission's file's folder read-only, a private work dir as its working directory, no network, no
+view of any usar process and a handful of environment variables; the socket to the parent is the
+one thing it shares with usar. See :attr:`MissionLimits.jail`.
+
 A crash's traceback is the user's own: the frames of their code are shown, usar's plumbing in
 between is left out.
 """
@@ -27,13 +32,15 @@ import importlib.util
 import multiprocessing.connection
 import os
 import pickle
+import shutil
 import socket
 import struct
 import subprocess
 import sys
+import tempfile
 import traceback
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -41,6 +48,7 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.core import cdr, msgs
 from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.node import jail
 from usar_replay.node.executor import Executor, PublishPolicy
 from usar_replay.node.sandbox import SandboxPolicy
 
@@ -50,6 +58,7 @@ __all__ = [
     "MissionLimits",
     "MissionProcess",
     "MissionTarget",
+    "hide_from_mission",
     "resolve_target",
 ]
 
@@ -136,6 +145,16 @@ class MissionLimits:
     process is killed and the run is ``hung`` (a batch sets it: see usar_replay.batch.plan)."""
     sandbox: SandboxPolicy | None = None
     """Files, processes and network the mission may not touch (usar_replay.node.sandbox)."""
+    jail: str = "auto"
+    """The kernel sandbox (usar_replay.node.jail): ``auto`` uses it when bwrap works here (else
+    one warning on stderr, and the environment variable ``USAR_SANDBOX=off`` turns it off),
+    ``required`` refuses to start without it (a batch), ``off`` never uses it."""
+    read_roots: tuple[str, ...] = ()
+    """What the jailed mission may read besides Python (default: its file's folder, or the
+    folder its module was found in); a batch gives the team's submission."""
+    hidden: tuple[str, ...] = ()
+    """Files the jailed mission may not read even when they lie in a readable folder (the log
+    being written, or replayed, next to the mission's file)."""
 
 
 class MissionEnded(UsarError):
@@ -254,6 +273,7 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
     os.environ.setdefault("OPENCV_FOR_THREADS_NUM", "1")
     _limit_memory(int(setup["memory_mb"]))
     _limit_cpu(int(setup.get("cpu_s", 0)))
+    jail.apply_rlimits(setup.get("rlimits", {}))  # in the sandbox: all of its limits
     target: MissionTarget = setup["target"]
     policy = PublishPolicy(sim_topics=setup["sim_topics"], sim_frames=setup["sim_frames"])
     executor = Executor(setup["parameters"], policy)
@@ -311,6 +331,84 @@ def _serve(conn: multiprocessing.connection.Connection, executor: Executor) -> N
 # --- the parent ---------------------------------------------------------------------------------
 
 
+_warned = False
+
+
+def _use_jail(limits: MissionLimits) -> bool:
+    """Run this mission in the kernel sandbox? (see :attr:`MissionLimits.jail`)"""
+    global _warned
+    mode = limits.jail
+    if mode == "auto" and os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
+        mode = "off"
+    if mode == "off":
+        return False
+    ok, why = jail.bwrap_available()
+    if ok:
+        return True
+    if mode == "required":
+        raise UsageError(
+            f"{why}: usar will not run untrusted mission code without a kernel sandbox; "
+            f"install it ({jail.INSTALL_HINT}) or pass --no-sandbox"
+        )
+    if not _warned:
+        _warned = True
+        print(
+            f"usar: warning: {why}; the mission runs without a kernel sandbox "
+            f"({jail.INSTALL_HINT} to get one; USAR_SANDBOX=off silences this)",
+            file=sys.stderr,
+        )
+    return False
+
+
+def _module_root(target: MissionTarget) -> str:
+    """The folder a module target was found under (its top package's parent)."""
+    if not target.path:
+        return ""
+    path = Path(target.path)
+    depth = target.module.count(".") + (2 if path.name == "__init__.py" else 1)
+    return str(path.parents[depth - 1]) if len(path.parents) >= depth else ""
+
+
+def _submission_roots(target: MissionTarget) -> list[str]:
+    """What the jailed mission reads by default: its file's folder (helpers next to it), or
+    the folder its module was found in; nothing for usar's own missions."""
+    if target.module == "usar_user_mission":
+        return [str(Path(target.path).parent)]
+    if target.module.startswith("usar_replay."):
+        return []  # bound with usar's package (its parent may be a whole checkout)
+    root = _module_root(target)
+    return [root] if root else []
+
+
+def _mission_env(target: MissionTarget) -> dict[str, str]:
+    """The mission's whole environment in the jail: nothing of the caller's but the thread
+    settings (and PYTHONHASHSEED, which decides set order in the mission's own code)."""
+    path = [str(Path(jail.package_dir()).parent)]
+    if target.module != "usar_user_mission" and not target.module.startswith("usar_replay."):
+        root = _module_root(target)
+        if root:
+            path.append(root)
+    env = {
+        "PATH": "/usr/local/bin:/usr/bin:/bin",
+        "PYTHONPATH": os.pathsep.join(path),
+        "LANG": "C.UTF-8",
+        "HOME": "/tmp",
+        "TMPDIR": "/tmp",
+        "PYTHONDONTWRITEBYTECODE": "1",
+    }
+    for name in ("OMP_NUM_THREADS", "OPENCV_FOR_THREADS_NUM"):
+        env[name] = os.environ.get(name, "1")
+    if "PYTHONHASHSEED" in os.environ:
+        env["PYTHONHASHSEED"] = os.environ["PYTHONHASHSEED"]
+    return env
+
+
+def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimits:
+    """``limits`` with ``paths`` (the log being written) hidden from the jailed mission."""
+    base = limits or MissionLimits()
+    return replace(base, hidden=(*base.hidden, *paths))
+
+
 class MissionProcess:
     """The parent's handle on a mission process. Use as a context manager::
 
@@ -331,6 +429,22 @@ class MissionProcess:
         self.limits = limits or MissionLimits()
         self.policy = PublishPolicy(sim_topics=sim_topics, sim_frames=sim_frames)
         self.shutdown_requested = False
+        self._work: str | None = None
+        self._jail: jail.Jail | None = None
+        policy = self.limits.sandbox
+        jailed = _use_jail(self.limits)
+        if jailed:
+            # the mission's own writable folder (its working directory), removed at close
+            self._work = tempfile.mkdtemp(prefix="usar-mission-")
+            if policy is not None:
+                policy = replace(
+                    policy,
+                    write_roots=(*policy.write_roots, self._work),
+                    own_roots=(*policy.own_roots, self._work),
+                )
+            self._jail = jail.Jail(
+                jail.JailLimits(memory_mb=self.limits.memory_mb, cpu_s=self.limits.cpu_s)
+            )
         self._setup = {
             "target": target,
             "parameters": parameters,
@@ -338,27 +452,58 @@ class MissionProcess:
             "sim_frames": tuple(sim_frames),
             "memory_mb": self.limits.memory_mb,
             "cpu_s": self.limits.cpu_s,
-            "sandbox": self.limits.sandbox,
+            "rlimits": self._jail.rlimits() if self._jail else {},
+            "sandbox": policy,
             "usar_version": __version__,
         }
         parent_sock, child_sock = socket.socketpair()
         with child_sock:
-            self._proc = self._spawn(child_sock.fileno())
+            # a fresh interpreter running this module: no fork of usar's state (pybullet, an
+            # open log), no re-import of the caller's __main__ (multiprocessing's spawn does);
+            # the socket keeps its number through bwrap, which passes inherited descriptors on
+            argv = self._argv(child_sock.fileno())
+            env: dict[str, str] | None = None
+            if self._jail is not None and self._work is not None:
+                roots = self.limits.read_roots or _submission_roots(target)
+                # bwrap gets the mission's environment too: its init process stays in the
+                # sandbox, where /proc/1/environ would show the caller's variables
+                env = _mission_env(target)
+                argv = jail.jail_argv(
+                    argv,
+                    ro_binds=[*jail.python_binds(), *roots],
+                    work_dir=self._work,
+                    env=env,
+                    limits=self._jail.limits,
+                    hidden=self.limits.hidden,
+                    info_fd=self._jail.info_fd,
+                )
+            try:
+                fds = (child_sock.fileno(), *((self._jail.info_fd,) if self._jail else ()))
+                self._proc = subprocess.Popen(
+                    self._jail.launch(argv) if self._jail else argv,
+                    pass_fds=fds,
+                    stdin=subprocess.DEVNULL,
+                    env=env,
+                )
+            except BaseException:
+                self._cleanup()
+                raise
+            if self._jail is not None:
+                self._jail.started()
         self._conn = multiprocessing.connection.Connection(parent_sock.detach())
         self._conn.send_bytes(pickle.dumps(self._setup))
         self._in_flight = 0
-        self._wait(self.limits.startup_timeout_s, "starting (import and main())")
+        try:
+            self._wait(self.limits.startup_timeout_s, "starting (import and main())")
+        except BaseException:
+            self.close()
+            raise
 
-    def _spawn(self, fd: int) -> subprocess.Popen[bytes]:
-        """Start the process that serves the tick protocol on socket ``fd``: here a fresh
-        interpreter running this module (no fork of usar's state: pybullet, an open log; no
-        re-import of the caller's ``__main__``, as multiprocessing's spawn does). Another front
-        end (the ROS 1 bridge, :mod:`usar_replay.ros1.process`) starts its own process here."""
-        return subprocess.Popen(
-            [sys.executable, "-m", "usar_replay.node.worker", str(fd)],
-            pass_fds=(fd,),
-            stdin=subprocess.DEVNULL,
-        )
+    def _argv(self, fd: int) -> list[str]:
+        """The command that serves the tick protocol on socket ``fd``: here a fresh interpreter
+        running this module. Another front end (the ROS 1 bridge,
+        :mod:`usar_replay.ros1.process`) starts its own process here."""
+        return [sys.executable, "-m", "usar_replay.node.worker", str(fd)]
 
     def __enter__(self) -> MissionProcess:
         return self
@@ -376,23 +521,35 @@ class MissionProcess:
             self._proc.kill()
             self._proc.wait(timeout=5.0)
         self._conn.close()
+        self._cleanup()
+
+    def _cleanup(self) -> None:
+        """Remove the jail's cgroup (killing what is left in it) and the private work dir."""
+        if self._jail is not None:
+            self._jail.close()
+        if self._work is not None:
+            shutil.rmtree(self._work, ignore_errors=True)
+            self._work = None
 
     def _died(self, doing: str) -> MissionEnded:
         try:
             code: int | None = self._proc.wait(timeout=2.0)
         except subprocess.TimeoutExpired:
             code = None
-        if code is not None and code < 0:
+        signum = jail.signal_of_exit(code) if self._jail else (-code if code and code < 0 else None)
+        if signum is not None:
             import signal
 
             name = (
-                signal.Signals(-code).name if -code in signal.Signals._value2member_map_ else code
+                signal.Signals(signum).name
+                if signum in signal.Signals._value2member_map_
+                else signum
             )
-            if -code == signal.SIGXCPU:
+            if signum == signal.SIGXCPU:
                 return MissionEnded(
                     "hung", f"the mission process used up its CPU-time limit while {doing}"
                 )
-            if -code == signal.SIGKILL:
+            if signum == signal.SIGKILL:
                 return MissionEnded(
                     "out_of_memory",
                     f"the mission process was killed ({name})"

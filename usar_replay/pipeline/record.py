@@ -34,6 +34,7 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
 from usar_replay.node.worker import (
@@ -41,13 +42,15 @@ from usar_replay.node.worker import (
     MissionLimits,
     MissionProcess,
     MissionTarget,
+    hide_from_mission,
     resolve_target,
 )
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
 from usar_replay.world.nav import OccupancyGrid, grid_to_msg
-from usar_replay.world.scenario import Scenario, to_toml
+from usar_replay.world.scenario import Scenario
+from usar_replay.world.scenario_toml import to_toml
 
 __all__ = [
     "OUTCOMES",
@@ -97,9 +100,15 @@ class RecordResult:
     frames: int
     messages: int
     markers_found: dict[int, tuple[float, float, float]]
+    """What the mission stored on ``/explorer/marker_poses`` (the built-in mission's topic;
+    empty for a mission that does not publish it), by ID."""
     marker_errors_m: dict[int, float]
+    """The stored poses' distances from the true markers, by ID."""
     renderer: str
     mission: str
+    found: tuple[FoundMarker, ...] = ()
+    """The markers found as the rubric counts them (``usar grade`` agrees), for any mission."""
+    markers_total: int = 0
 
     @property
     def mission_done(self) -> bool:
@@ -272,19 +281,23 @@ def record(
             raise
         _close_run(writer, run)
         message_count = writer.message_count
+    wall_time = time.perf_counter() - wall_start
+    found = _found_as_graded(Path(out))
     return RecordResult(
         path=Path(out),
         status="complete",
         outcome=run.outcome,
         outcome_reason=run.reason,
         sim_duration_s=(run.last_t - run.t0) / 1e9,
-        wall_time_s=time.perf_counter() - wall_start,
+        wall_time_s=wall_time,
         frames=run.frames,
         messages=message_count,
         markers_found=dict(sorted(run.markers.items())),
         marker_errors_m=_marker_errors(scenario, run.markers),
         renderer=renderer,
         mission=target.spec,
+        found=found,
+        markers_total=len(scenario.markers),
     )
 
 
@@ -358,8 +371,10 @@ def _tick_loop(
     steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
     end_ns = run.t0 + int(limit_s * 1e9)
     params = mission_parameters(scenario, settings)
+    # the log being written holds the truth: unreadable to the mission even next to its file
+    hidden = hide_from_mission(limits, str(writer.part_path))
     with process(
-        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=limits
+        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=hidden
     ) as proc:
         latency = rs.actuation_latency_ticks
         tick: _Observed | None = _observe(sim, scenario, asg, first)
@@ -460,6 +475,15 @@ def _time(t_ns: int) -> msgs.Time:
     return msgs.Time.from_ns(t_ns)
 
 
+def _found_as_graded(path: Path) -> tuple[FoundMarker, ...]:
+    """The markers the fresh log shows found, observed by its own rubric: the summary must
+    count what ``usar grade`` counts, whatever topics the mission publishes."""
+    from usar_replay.grading.grade import observe_run
+    from usar_replay.log.run import open_run
+
+    return observe_run(open_run(path)).found_markers()
+
+
 def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     """The end-of-run summary for people (fits 100 columns; a crash's traceback is shown as
     the user's own)."""
@@ -469,12 +493,19 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
         f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
         f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
-        f"Markers found: {len(result.markers_found)}",
+        f"Markers found: {len(result.found)}/{result.markers_total} (as `usar grade` counts them)",
     ]
-    for mid, pos in result.markers_found.items():
-        err = result.marker_errors_m.get(mid)
-        err_s = f", error {err * 100:.1f} cm" if err is not None else ""
-        lines.append(f"  marker {mid}: ({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}")
+    found = {f.marker_id: f.text for f in result.found}
+    for mid in sorted({*found, *result.markers_found}):
+        lines.append(f"  marker {mid}: {found.get(mid, 'not found as the rubric counts it')}")
+        pos = result.markers_found.get(mid)
+        if pos is not None:
+            err = result.marker_errors_m.get(mid)
+            err_s = f", error {err * 100:.1f} cm" if err is not None else ""
+            lines.append(
+                f"    stored on {contract.MARKER_POSES} at "
+                f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
+            )
     out = file or sys.stdout
     print("\n".join(lines), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):

@@ -49,6 +49,7 @@ from usar_replay.node.worker import (
     MissionLimits,
     MissionProcess,
     MissionTarget,
+    hide_from_mission,
     resolve_target,
 )
 
@@ -463,7 +464,7 @@ def replay(
         asg.parameters(scenario, use),
         sim_topics=asg.sim_topics,
         sim_frames=asg.sim_frames,
-        limits=limits,
+        limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
             last = _drive(run, proc, replayer, window)

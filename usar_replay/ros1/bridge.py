@@ -471,10 +471,17 @@ def main(argv: list[str]) -> None:
     """``python -m usar_replay.ros1.bridge FD CONFIG``: set up, serve ticks, clean up."""
     for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(signum, signal.SIG_IGN)  # the recorder ends this process, not a Ctrl-C
+    with contextlib.suppress(OSError):
+        os.setsid()  # one process group with the graph: the recorder kills it as one
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     conn = multiprocessing.connection.Connection(int(argv[1]))
     setup = pickle.loads(conn.recv_bytes())  # from the recorder, which is trusted
     config = json.loads(Path(argv[2]).read_text(encoding="utf-8"))
+    # rospy's and the master's chatter go to the run's folder, not the user's terminal
+    log = os.open(Path(config["run_dir"]) / "bridge.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+    os.dup2(log, 1)
+    os.dup2(log, 2)
+    os.close(log)
     bridge = Bridge(conn, setup, config)
     try:
         bridge.start()

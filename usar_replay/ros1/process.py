@@ -16,7 +16,6 @@ import json
 import os
 import shutil
 import signal
-import subprocess
 import sys
 import tempfile
 from collections.abc import Sequence
@@ -98,26 +97,21 @@ class Ros1Process(MissionProcess):
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
             limits = limits or MissionLimits()
             startup = max(limits.startup_timeout_s, options.connect_timeout_s + 30.0)
-            limits = dataclasses.replace(limits, startup_timeout_s=startup)
+            # the kernel sandbox (bubblewrap) is for Python missions; the graph gets its own
+            # network namespace instead (usar_replay.ros1.isolation)
+            limits = dataclasses.replace(limits, startup_timeout_s=startup, jail="off")
             super().__init__(
                 target, parameters, sim_topics=sim_topics, sim_frames=sim_frames, limits=limits
             )
         except BaseException:
-            self._cleanup()
+            self._remove_run_dir()
             raise
 
-    def _spawn(self, fd: int) -> subprocess.Popen[bytes]:
-        """The bridge, in its own network namespace, with its output in the workspace."""
+    def _argv(self, fd: int) -> list[str]:
+        """The bridge, in its own network namespace (it writes its output to the run's folder
+        and leads its own session, so the graph it starts is one process group)."""
         cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
-        with (self.run_dir / "bridge.log").open("wb") as log:
-            return subprocess.Popen(
-                isolated_command(cmd, isolate=self.options.isolate),
-                pass_fds=(fd,),
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                start_new_session=True,
-            )
+        return isolated_command(cmd, isolate=self.options.isolate)
 
     def close(self) -> None:
         try:
@@ -126,8 +120,8 @@ class Ros1Process(MissionProcess):
             # the bridge leads its own process group: whatever of the graph outlived it goes too
             with contextlib.suppress(OSError):
                 os.killpg(self._proc.pid, signal.SIGKILL)
-            self._cleanup()
+            self._remove_run_dir()
 
-    def _cleanup(self) -> None:
+    def _remove_run_dir(self) -> None:
         if not self.options.keep_workspace:
             shutil.rmtree(self.run_dir, ignore_errors=True)

@@ -15,8 +15,14 @@ The scene, on one time axis (the log's sim time in nanoseconds):
 * the true markers, the markers the explorer stored, and every broadcast ``marker_frame`` looked
   up in ``map`` at its own stamp with :class:`usar_replay.core.tf_tree.Buffer`, labelled with the
   nearest true marker and the distance to it;
-* the camera images (the recorded bytes, never decoded here) with each detection's outline;
+* the camera images (the recorded bytes, never decoded here) with each detection's outline
+  (``aruco_detect``'s ``/fiducial_transforms`` or ``ros2_aruco``'s ``/aruco_markers``);
 * ``cmd_vel`` as scalars, ``/rosout``, goal outcomes, notes and rubric lines as text rows.
+
+The robots, their frames, the camera and the robots' colours come from the scenario's assignment
+(:func:`usar_replay.grading.assignment.of`; US&R when the log has no scenario): a ROS 2 final
+project run draws ``robot1`` as a US&R run draws the explorer and the follower. A robot's colour is
+:data:`ROBOT_PALETTE` at its index in the assignment.
 
 Everything is collected as plain lists while the log streams by (each entity then goes to the
 viewer in one columnar call); only images are taken out early (:meth:`Scene.take_images`) so
@@ -27,7 +33,7 @@ from __future__ import annotations
 
 import math
 import string
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -37,7 +43,7 @@ from scipy.spatial.transform import Rotation
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.tf_tree import Buffer, TransformException
-from usar_replay.grading.assignment import USAR
+from usar_replay.grading.assignment import USAR, Assignment
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.world.scenario import Scenario
 
@@ -91,10 +97,14 @@ NOTES_ENTITY = LOGS_ENTITY + "/view"
 
 # --- colours -------------------------------------------------------------------------------------
 
-ROBOT_COLORS: dict[str, tuple[int, int, int]] = {
-    "explorer": (255, 140, 0),
-    "follower": (30, 144, 255),
-}
+ROBOT_PALETTE: tuple[tuple[int, int, int], ...] = (
+    (255, 140, 0),
+    (30, 144, 255),
+    (60, 200, 200),
+    (220, 120, 220),
+)
+"""Robot colours by the robot's index in its assignment (US&R: explorer orange, follower blue;
+ROS 2: robot1 orange)."""
 OTHER_ROBOT_COLOR = (160, 160, 160)
 WALL_COLOR = (219, 217, 204)
 FLOOR_COLOR = (92, 86, 78)
@@ -110,8 +120,12 @@ _ROS_LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "CRITICAL"}
 _GOAL_LEVELS = {0: "INFO", 1: "WARN"}
 
 
-def robot_color(robot: str) -> tuple[int, int, int]:
-    return ROBOT_COLORS.get(robot, OTHER_ROBOT_COLOR)
+def robot_color(robot: str, robots: Sequence[str]) -> tuple[int, int, int]:
+    """The colour of ``robot`` among its assignment's ``robots`` (grey for one it does not
+    name)."""
+    if robot not in robots:
+        return OTHER_ROBOT_COLOR
+    return ROBOT_PALETTE[list(robots).index(robot) % len(ROBOT_PALETTE)]
 
 
 def robot_body() -> tuple[XYZ, XYZ]:
@@ -300,6 +314,24 @@ class ImageBatch:
     media_types: list[str] = field(default_factory=list)
 
 
+# --- detections ----------------------------------------------------------------------------------
+
+_Found = tuple[int, msgs.Vector3 | msgs.Point, msgs.Quaternion]
+"""One detected marker: its ID and its pose in the camera's optical frame."""
+
+
+def _fiducial_poses(msg: msgs.FiducialTransformArray) -> list[_Found]:
+    """US&R's ``aruco_detect`` output as (ID, translation, rotation) per marker."""
+    return [(f.fiducial_id, f.transform.translation, f.transform.rotation) for f in msg.transforms]
+
+
+def _aruco_poses(msg: msgs.ArucoMarkers) -> list[_Found]:
+    """The ROS 2 project's ``ros2_aruco`` output, the same way (IDs and poses in one order)."""
+    return [
+        (mid, p.position, p.orientation) for mid, p in zip(msg.marker_ids, msg.poses, strict=False)
+    ]
+
+
 # --- the scene -----------------------------------------------------------------------------------
 
 
@@ -317,9 +349,9 @@ class Scene:
         self.camera_info: msgs.CameraInfo | None = None
         # names come from the scenario's assignment (US&R's explorer, or ROS 2's robot1)
         asg = USAR if scenario is None else assignment_of(scenario)
+        self.assignment: Assignment = asg
         self.camera_topic, self.camera_info_topic = asg.image_topic, asg.camera_info_topic
         self.camera_frame = asg.frames_of(asg.camera_robot).optical
-        self._robot_names = asg.robot_names
         self._pinhole_entity: str | None = None
         self._images = ImageBatch()
         self.pending_image_bytes = 0
@@ -342,7 +374,7 @@ class Scene:
         self.end_ns = 0
         if scenario is not None:
             self.true_marker_xyz = {m.id: (m.x, m.y, m.z) for m in scenario.markers}
-            for name in self._robot_names:
+            for name in asg.robot_names:
                 self._robot(name)
 
     def _robot(self, name: str) -> str:
@@ -367,7 +399,9 @@ class Scene:
                 self.camera_frame = msg.header.frame_id or self.camera_frame
             self.camera_info = msg
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.FIDUCIALS:
-            self._on_detections(msg, t_ns)
+            self._on_detections(_fiducial_poses(msg), t_ns)
+        elif isinstance(msg, msgs.ArucoMarkers) and topic == contract.ARUCO_MARKERS:
+            self._on_detections(_aruco_poses(msg), t_ns)
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.TRUTH_MARKERS:
             self._on_true_markers(msg, t_ns)
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.MARKER_POSES:
@@ -462,7 +496,7 @@ class Scene:
         im.media_types.append(media_type(img))
         self.pending_image_bytes += len(img.data)
 
-    def _on_detections(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
+    def _on_detections(self, found: list[_Found], t_ns: int) -> None:
         """Outline each detection by projecting its recorded pose through the camera's K.
 
         Why project rather than re-run ``detect.detect_with_corners``: it needs no image decode
@@ -477,10 +511,9 @@ class Scene:
         rows = self.detections
         rows.times.append(t_ns)
         n = 0
-        if self.camera_info is not None and msg.transforms:
+        if self.camera_info is not None and found:
             corners = marker_corners(self.marker_size)
-            for f in msg.transforms:
-                tr, q = f.transform.translation, f.transform.rotation
+            for mid, tr, q in found:
                 quat = np.array([q.x, q.y, q.z, q.w], dtype=np.float64)
                 if not np.all(np.isfinite(quat)) or not np.linalg.norm(quat) > 0.0:
                     continue
@@ -490,7 +523,7 @@ class Scene:
                 if px is None:
                     continue
                 rows.items.append(np.vstack([px, px[:1]]))
-                rows.labels.append(f"id {f.fiducial_id}")
+                rows.labels.append(f"id {mid}")
                 n += 1
         rows.lengths.append(n)
 
@@ -601,13 +634,25 @@ class Scene:
     def detections_entity(self) -> str:
         return self.pinhole_entity + "/detections"
 
+    def robot_color(self, robot: str) -> tuple[int, int, int]:
+        """The robot's colour in this run's assignment."""
+        return robot_color(robot, self.assignment.robot_names)
+
+    def base_frame(self, robot: str) -> str:
+        """The robot's ``base_footprint`` frame: its assignment's name for it (``robot1/...``),
+        the US&R naming for a robot the assignment does not name."""
+        if robot in self.assignment.robot_names:
+            return self.assignment.frames_of(robot).base
+        return contract.base_frame(robot)
+
     def body_entities(self) -> dict[str, str]:
         """``{robot: entity}`` of each robot's body, under its ``base_footprint`` frame (every
-        robot of the scenario or the contract whose base frame is on tf)."""
+        robot of the log or the assignment whose base frame is on tf)."""
         paths = self.frame_paths
         out: dict[str, str] = {}
-        for robot in [*self.robots, *(r for r in contract.ROBOTS if r not in self.robots)]:
-            base = paths.get(contract.base_frame(robot))
+        names = self.assignment.robot_names
+        for robot in [*self.robots, *(r for r in names if r not in self.robots)]:
+            base = paths.get(self.base_frame(robot))
             if base is not None:
                 out[robot] = base + "/robot_body"
         return out

@@ -35,6 +35,7 @@ import rerun.blueprint as rrb
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.viewer import scene as sc
 from usar_replay.viewer.scene import ImageBatch, Scene, Strips
@@ -105,7 +106,7 @@ def send_scene(rec: rr.RecordingStream, scene: Scene) -> None:
         linear = entity.endswith("linear_x")
         robot = entity.split("/")[2]
         name = "linear.x (m/s)" if linear else "angular.z (rad/s)"
-        color = sc.robot_color(robot) if linear else sc.ANGULAR_COLOR
+        color = scene.robot_color(robot) if linear else sc.ANGULAR_COLOR
         rec.log(entity, rr.SeriesLines(names=name, colors=color, widths=1.5), static=True)
         rec.send_columns(
             entity,
@@ -120,7 +121,9 @@ def send_scene(rec: rr.RecordingStream, scene: Scene) -> None:
         )
     scn = scene.scenario
     extent = building_extent(scn) if scn is not None and scn.walls else None
-    rec.send_blueprint(build_blueprint(scene.pinhole_entity, scene.plotted_robots(), extent))
+    camera = f"{scene.assignment.camera_robot} camera + detections"
+    blueprint = build_blueprint(scene.pinhole_entity, scene.plotted_robots(), extent, camera)
+    rec.send_blueprint(blueprint)
 
 
 def _solid_boxes(items: Sequence[Box], color: tuple[int, int, int]) -> rr.Boxes3D:
@@ -189,19 +192,19 @@ def _send_world(rec: rr.RecordingStream, scn: Scenario) -> None:
     points = rr.Points3D(
         [(x, y, 0.01) for _, (x, y, _) in homes],
         radii=0.04,
-        colors=[sc.robot_color(name) for name, _ in homes],
+        colors=[sc.robot_color(name, asg.robot_names) for name, _ in homes],
         labels=[f"{name} home" for name, _ in homes],
     )
     rec.log(sc.HOMES_ENTITY, points, static=True)
 
 
-def _body(robot: str, *, solid: bool) -> rr.Boxes3D:
+def _body(robot: str, color: tuple[int, int, int], *, solid: bool) -> rr.Boxes3D:
     centre, half = sc.robot_body()
     mode = rr.components.FillMode.Solid if solid else rr.components.FillMode.MajorWireframe
     return rr.Boxes3D(
         centers=[centre],
         half_sizes=[half],
-        colors=sc.robot_color(robot),
+        colors=color,
         fill_mode=mode,
         labels=[robot] if solid else None,
     )
@@ -225,7 +228,7 @@ def _send_tf(rec: rr.RecordingStream, scene: Scene) -> None:
             ),
         )
     for robot, entity in scene.body_entities().items():
-        rec.log(entity, _body(robot, solid=True), static=True)
+        rec.log(entity, _body(robot, scene.robot_color(robot), solid=True), static=True)
 
 
 def _send_camera(rec: rr.RecordingStream, scene: Scene) -> None:
@@ -254,22 +257,24 @@ def _send_camera(rec: rr.RecordingStream, scene: Scene) -> None:
 
 
 def _send_strips3d(
-    rec: rr.RecordingStream, entity: str, rows: Strips, robot: str, radius: float
+    rec: rr.RecordingStream,
+    entity: str,
+    rows: Strips,
+    color: tuple[int, int, int],
+    radius: float,
 ) -> None:
     n = len(rows.items)
     rec.send_columns(
         entity,
         indexes=[_duration(rows.times)],
-        columns=rr.LineStrips3D.columns(
-            strips=rows.items, colors=[sc.robot_color(robot)] * n, radii=[radius] * n
-        ),
+        columns=rr.LineStrips3D.columns(strips=rows.items, colors=[color] * n, radii=[radius] * n),
     )
 
 
 def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
     for robot, poses in sorted(scene.truth.items()):
         entity = f"{sc.TRUTH_ENTITY}/{robot}"
-        rec.log(entity + "/body", _body(robot, solid=False), static=True)
+        rec.log(entity + "/body", _body(robot, scene.robot_color(robot), solid=False), static=True)
         rec.send_columns(
             entity,
             indexes=[_duration(poses.times)],
@@ -279,7 +284,8 @@ def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
             ),
         )
     for robot, path in sorted(scene.paths.items()):
-        _send_strips3d(rec, f"{sc.TRUTH_ENTITY}/{robot}_path", path.rows, robot, 0.01)
+        entity = f"{sc.TRUTH_ENTITY}/{robot}_path"
+        _send_strips3d(rec, entity, path.rows, scene.robot_color(robot), 0.01)
     for robot, rows in sorted(scene.goals.items()):
         n = len(rows.items)
         rec.send_columns(
@@ -289,12 +295,13 @@ def _send_robots(rec: rr.RecordingStream, scene: Scene) -> None:
                 origins=[o for o, _ in rows.items],
                 vectors=[v for _, v in rows.items],
                 labels=rows.labels,
-                colors=[sc.robot_color(robot)] * n,
+                colors=[scene.robot_color(robot)] * n,
                 radii=[0.02] * n,
             ),
         )
     for robot, rows in sorted(scene.plans.items()):
-        _send_strips3d(rec, f"{sc.MAP_ENTITY}/{robot}/plan", rows, robot, 0.005)
+        entity = f"{sc.MAP_ENTITY}/{robot}/plan"
+        _send_strips3d(rec, entity, rows, scene.robot_color(robot), 0.005)
 
 
 def _send_markers(rec: rr.RecordingStream, scene: Scene) -> None:
@@ -329,6 +336,7 @@ def build_blueprint(
     pinhole_entity: str,
     robots: Sequence[str],
     extent: tuple[float, float, float, float] | None = None,
+    camera_name: str = "camera + detections",
 ) -> rrb.Blueprint:
     """The ready layout: the building in 3D and the log on the left; camera and plots right.
 
@@ -357,7 +365,7 @@ def build_blueprint(
                 row_shares=[3, 1],
             ),
             rrb.Vertical(
-                rrb.Spatial2DView(origin=pinhole_entity, name="explorer camera + detections"),
+                rrb.Spatial2DView(origin=pinhole_entity, name=camera_name),
                 *plots,
                 row_shares=[2] + [1] * len(plots),
             ),
@@ -397,31 +405,29 @@ class ViewResult:
     """The web viewer's server, kept while it serves (stopped by :func:`wait_until_interrupted`)."""
 
 
-CAMERA_INFO_TOPICS = frozenset({contract.CAMERA_INFO, contract.ROS2_CAMERA_INFO})
-
-
 class _Decoder:
     """Decodes only what the viewer draws; CameraInfo only when it changes (not its stamp).
 
     Odometry is skipped: ``odom -> base_footprint`` on ``/tf`` carries the same pose, and the two
     odometry topics are a quarter of a course log's messages. A payload that does not decode is
-    counted and skipped (the rest of the log is still shown).
+    counted and skipped (the rest of the log is still shown). The odometry and camera-info topics
+    are the run's assignment's.
     """
 
-    SKIP = frozenset(contract.odom(r) for r in (*contract.ROBOTS, contract.ROS2_ROBOT))
-
-    def __init__(self) -> None:
+    def __init__(self, asg: Assignment) -> None:
         from usar_replay.log import bag
 
         self._decode = bag.decode
+        self._skip = frozenset(contract.odom(r) for r in asg.robot_names)
+        self._camera_info_topic = asg.camera_info_topic
         self._info_tail: bytes | None = None
         self.failures = 0
         self.first_failure = ""
 
     def __call__(self, topic: str, msgtype: str, data: bytes, t_ns: int) -> msgs.Message | None:
-        if topic in self.SKIP:
+        if topic in self._skip:
             return None
-        if topic in CAMERA_INFO_TOPICS:
+        if topic == self._camera_info_topic:
             tail = data[12:]  # CDR: 4 bytes encapsulation, then the 8-byte stamp
             if tail == self._info_tail:
                 return None
@@ -454,7 +460,7 @@ def _stream(
     with rec:  # leaving the block flushes and finalises file sinks
         rec.send_recording_name(run.path.stem)
         scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
-        decode = _Decoder()
+        decode = _Decoder(scene.assignment)
         for m in run.messages(decode=False):
             scene.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
             if scene.pending_image_bytes >= IMAGE_BATCH_BYTES:

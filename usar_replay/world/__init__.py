@@ -1,6 +1,7 @@
 """world: the course's world as data and the infrastructure the course provides.
 
-The scenario model and its TOML file, seeded variants, the ROS 2 final project's world, the
-scenario checks, the planner (move_base's role) and the ArUco detector (aruco_detect's role).
+The scenario model (``scenario``) and its TOML file (``scenario_toml``), seeded variants, the
+ROS 2 final project's world, the scenario checks, the planner (move_base's role) and the ArUco
+detector (aruco_detect's role).
 Pure code over data: it may import only ``core`` and loads no pybullet, mcap or rerun.
 """
