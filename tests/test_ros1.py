@@ -23,7 +23,8 @@ from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
 from usar_replay.ros1 import debian
 from usar_replay.ros1.build import find_package, package_sha256
-from usar_replay.world.scenario import course_world, save
+from usar_replay.world.scenario import course_world
+from usar_replay.world.scenario_toml import save
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ros1" / "usar_course"
 
