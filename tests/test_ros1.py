@@ -124,6 +124,18 @@ def test_package_hash_covers_the_sources(tmp_path: Path) -> None:
     assert package_sha256(pkg) != before
 
 
+def test_batch_finds_a_catkin_package_in_a_team_folder(tmp_path: Path) -> None:
+    from usar_replay.batch.plan import discover
+
+    shutil.copytree(EXAMPLE, tmp_path / "subs" / "team1")
+    (tmp_path / "subs" / "team2" / "src").mkdir(parents=True)
+    shutil.copytree(EXAMPLE, tmp_path / "subs" / "team2" / "src" / "usar_course")
+    found = {s.team: s for s in discover(tmp_path / "subs")}
+    for team in ("team1", "team2"):
+        assert found[team].target == f"ros1:{(tmp_path / 'subs' / team).resolve()}"
+        assert found[team].problem == ""
+
+
 def test_a_build_failure_is_a_verdict(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A C++ error: exit 4, the compiler's error shown, a closed log saying ``build_failed``."""
     broken = tmp_path / "usar_course"

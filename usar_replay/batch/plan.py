@@ -264,7 +264,11 @@ def _folder_target(folder: Path) -> tuple[str, str]:
     mission = folder / DEFAULT_MISSION_FILE
     if mission.is_file():
         return str(mission.resolve()), ""
-    if (folder / "package.xml").is_file() or any(folder.glob("*/package.xml")):
+    if (
+        any(folder.glob("package.xml"))
+        or any(folder.glob("*/package.xml"))
+        or any(folder.glob("*/*/package.xml"))
+    ):
         # a catkin package (the course's own deliverable): built and run by usar's ROS 1 bridge
         return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
     return (
