@@ -31,7 +31,7 @@ __all__ = [
 OUTCOME_MARKS = {
     "done": "",
     "time_limit": "T",
-    "max_sim_time": "T",
+    "max_sim_time": "S",
     "crashed": "C",
     "hung": "H",
     "out_of_memory": "M",
@@ -45,8 +45,8 @@ OUTCOME_MARKS = {
 """The letter after a world's points in the table when the run did not end ``done``."""
 OUTCOME_WORDS = {
     "done": "the mission finished",
-    "time_limit": "stopped at the time limit",
-    "max_sim_time": "stopped at --max-sim-time",
+    "time_limit": "stopped at the world's time limit",
+    "max_sim_time": "stopped at the batch's --max-sim-time",
     "crashed": "the mission's code raised an exception",
     "hung": "a callback did not return in time (or the CPU-time limit)",
     "out_of_memory": "the mission ran out of memory",
@@ -177,7 +177,7 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
     legend = [
         f"{m} {OUTCOME_WORDS[o]}"
         for o, m in OUTCOME_MARKS.items()
-        if m and m in marks_used and OUTCOME_MARKS.get(o) == m and o not in ("max_sim_time", "")
+        if m and m in marks_used and o != ""
     ]
     if "?" in marks_used:
         legend.append("? outcome unknown")
@@ -193,7 +193,9 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
 def _wrap(text: str, width: int) -> str:
     import textwrap
 
-    return "\n".join(textwrap.wrap(text, width=width, subsequent_indent="  "))
+    return "\n".join(
+        textwrap.wrap(text, width=width, subsequent_indent="  ", break_on_hyphens=False)
+    )
 
 
 def _check_lines(grade: dict[str, Any]) -> list[str]:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
+from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
 
 if TYPE_CHECKING:
@@ -135,7 +136,25 @@ def run(args: argparse.Namespace) -> int:
     print_summary(result)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         return EXIT_MISSION
-    return EXIT_OK if result.mission_done else EXIT_FAIL
+    if not result.mission_done:
+        print_wrapped(f"usar: exit 1: {_why_not_done(result, args)}", file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
+
+
+def _why_not_done(result: RecordResult, args: argparse.Namespace) -> str:
+    """The one line that says why a recording that ended without a fault exits 1: the run
+    stopped before the mission said it was done, so the log is not a finished run."""
+    if result.outcome == "max_sim_time":
+        return (
+            f"stopped by --max-sim-time {args.max_sim_time:g} s before the mission said it was done"
+        )
+    if result.outcome == "time_limit":
+        return (
+            "stopped at the world's hard time limit (1.5 x its time_limit_s) before the "
+            "mission said it was done"
+        )
+    return f"the mission did not say it was done ({result.outcome})"
 
 
 def _record_ros1(

@@ -484,6 +484,13 @@ def _found_as_graded(path: Path) -> tuple[FoundMarker, ...]:
     return observe_run(open_run(path)).found_markers()
 
 
+def _fit(line: str, width: int = 100) -> list[str]:
+    """A summary line wrapped to ``width`` (a long output path must not run past the edge)."""
+    import textwrap
+
+    return textwrap.wrap(line, width, subsequent_indent="  ", break_on_hyphens=False) or [""]
+
+
 def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     """The end-of-run summary for people (fits 100 columns; a crash's traceback is shown as
     the user's own)."""
@@ -507,7 +514,7 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
             )
     out = file or sys.stdout
-    print("\n".join(lines), file=out)
+    print("\n".join(w for line in lines for w in _fit(line)), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
         print(result.outcome_reason.rstrip(), file=out)
