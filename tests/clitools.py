@@ -2,17 +2,29 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 
-def usar(*args: str) -> subprocess.CompletedProcess[str]:
-    """``usar ARGS...`` in a fresh interpreter (what a shell user sees, tracebacks included)."""
+def usar(*args: str, cwd: str | os.PathLike[str] | None = None) -> subprocess.CompletedProcess[str]:
+    """``usar ARGS...`` in a fresh interpreter (what a shell user sees, tracebacks included),
+    in ``cwd`` when given (the package must then be importable from the environment)."""
+    env = None
+    if cwd is not None:  # the tests may import the package from the checkout, not an install
+        root = str(Path(__file__).resolve().parents[1])
+        env = {
+            **os.environ,
+            "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH", "")) if p),
+        }
     return subprocess.run(
         [sys.executable, "-m", "usar_replay.cli", *args],
         capture_output=True,
         text=True,
         check=False,
+        cwd=cwd,
+        env=env,
     )
 
 

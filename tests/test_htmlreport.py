@@ -26,11 +26,19 @@ class _Page(HTMLParser):
         self.cells: list[str] = []
         self.text: list[str] = []
         self._in_cell = False
+        self._svg = ""
+        self.polygons: list[dict[str, str]] = []
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         a = {k: v or "" for k, v in attrs}
         if tag == "img":
             self.images.append(a)
+        elif tag == "svg":
+            self._svg = a.get("aria-label", "")
+        elif tag == "image":  # a detection frame drawn in SVG, under the marker's outline
+            self.images.append({"alt": self._svg, "src": a.get("href", "")})
+        elif tag == "polygon":
+            self.polygons.append({"svg": self._svg, **a})
         elif tag == "a":
             self.links.append(a.get("href", ""))
         elif tag == "td":
@@ -81,7 +89,9 @@ def test_report_writes_a_self_contained_page_and_an_index(
     map_img = next(i for i in page.images if i["alt"] == "map of the run")
     png = base64.b64decode(map_img["src"].split(",", 1)[1])
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
-    frame = next(i for i in page.images if i["alt"] == "marker 0")
+    frame = next(i for i in page.images if i["alt"] == "marker 0 (frame)")
+    # the outline over it, and (35 px wide in a 320 px frame) a zoomed inset
+    assert [p["svg"] for p in page.polygons] == ["marker 0 (frame)", "marker 0 (zoom)"]
     assert base64.b64decode(frame["src"].split(",", 1)[1]) == _first_detected_frame(room_log[0])
     first_s = grade_file(room_log[0]).check("marker_0.detected").evidence_ns / 1e9
     assert f"marker 0: first detected at {first_s:.1f} s" in text

@@ -35,10 +35,14 @@ LAYERS: dict[str, frozenset[str]] = {
     "missions": frozenset({"core", "world", "node", "api"}),
     "grading": frozenset({"core", "world", "log"}),
     "pipeline": frozenset({"core", "world", "log", "sim", "node", "grading"}),
+    "ros1": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline"}),
     "viewer": frozenset({"core", "world", "log", "grading"}),
-    "batch": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline"}),
+    "batch": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline", "ros1"}),
     "cli": frozenset(
-        {"core", "world", "log", "sim", "node", "api", "grading", "pipeline", "viewer", "batch"}
+        {
+            *("core", "world", "log", "sim", "node", "api", "grading", "pipeline", "ros1"),
+            *("viewer", "batch"),
+        }
     ),
 }
 # What each layer is for, for the message that says where a misplaced module belongs.
@@ -52,6 +56,7 @@ PURPOSE = {
     "missions": "the built-in missions, written on the node API",
     "grading": "rubrics, grades and their reports",
     "pipeline": "record and replay",
+    "ros1": "a course's ROS 1 catkin package run against usar's world (build, bridge)",
     "viewer": "what rerun shows",
     "batch": "grading a class",
     "cli": "the usar command",
@@ -235,7 +240,7 @@ def test_a_misplaced_module_fails_with_where_it_belongs(tmp_path: Path) -> None:
         )
     )
     assert "the world layer may import only core" in world
-    assert "belongs in log, grading, pipeline, viewer, batch, cli" in world
+    assert "belongs in log, grading, pipeline, ros1, viewer, batch, cli" in world
     assert "only sim/ may import it" in heavy
     assert "is in no layer" in stray and "world/" in stray
 

@@ -31,11 +31,12 @@ __all__ = [
 OUTCOME_MARKS = {
     "done": "",
     "time_limit": "T",
-    "max_sim_time": "T",
+    "max_sim_time": "S",
     "crashed": "C",
     "hung": "H",
     "out_of_memory": "M",
     "refused": "R",
+    "build_failed": "B",
     "wall_limit": "W",
     "interrupted": "I",
     "no_mission": "N",
@@ -44,12 +45,13 @@ OUTCOME_MARKS = {
 """The letter after a world's points in the table when the run did not end ``done``."""
 OUTCOME_WORDS = {
     "done": "the mission finished",
-    "time_limit": "stopped at the time limit",
-    "max_sim_time": "stopped at --max-sim-time",
+    "time_limit": "stopped at the world's time limit",
+    "max_sim_time": "stopped at the batch's --max-sim-time",
     "crashed": "the mission's code raised an exception",
     "hung": "a callback did not return in time (or the CPU-time limit)",
     "out_of_memory": "the mission ran out of memory",
     "refused": "the mission published something it may not",
+    "build_failed": "the ROS 1 package did not build",
     "wall_limit": "the run took longer than its wall-clock limit",
     "interrupted": "the run was interrupted",
     "no_mission": "no mission found in the submission",
@@ -175,7 +177,7 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
     legend = [
         f"{m} {OUTCOME_WORDS[o]}"
         for o, m in OUTCOME_MARKS.items()
-        if m and m in marks_used and OUTCOME_MARKS.get(o) == m and o not in ("max_sim_time", "")
+        if m and m in marks_used and o != ""
     ]
     if "?" in marks_used:
         legend.append("? outcome unknown")
@@ -191,7 +193,9 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
 def _wrap(text: str, width: int) -> str:
     import textwrap
 
-    return "\n".join(textwrap.wrap(text, width=width, subsequent_indent="  "))
+    return "\n".join(
+        textwrap.wrap(text, width=width, subsequent_indent="  ", break_on_hyphens=False)
+    )
 
 
 def _check_lines(grade: dict[str, Any]) -> list[str]:

@@ -2,16 +2,18 @@
 the class summary and Gradescope's files. The ``usar batch`` command is a thin face over
 :func:`grade_class`.
 
-Progress (``rich``, on stderr): runs done / to do, failures so far (runs whose mission did not
-finish, and runs usar could not record or grade), elapsed time and an ETA from the runs done in
-this invocation (runs finished before are counted apart, so they do not skew the ETA), and a line
-per finished run above the bar. Without a terminal only the per-run lines are printed.
+Progress (``rich``, on stderr): runs done / to do, runs whose mission did not finish and runs
+usar could not record or grade (``errors``), counted as the final lines count them, elapsed
+time and an ETA from the runs done in this invocation (runs finished before are counted apart,
+so they do not skew the ETA), and a line per finished run above the bar. Without a terminal
+only the per-run lines are printed.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import textwrap
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -80,7 +82,12 @@ class BatchSummary:
             )
         for r in self.errors:
             first = r.error.strip().splitlines()[0] if r.error.strip() else "unknown error"
-            out.append(f"error: {r.team} on {r.world}: {first} (it is redone next time)")
+            out += textwrap.wrap(
+                f"error: {r.team} on {r.world}: {first} (it is redone next time)",
+                100,
+                subsequent_indent="  ",
+                break_on_hyphens=False,
+            )
         return out
 
 
@@ -147,12 +154,15 @@ class _Progress:
 
         self.console = Console(file=stream, width=100, highlight=False)
         self.quiet = quiet
-        self.failures = 0
+        # the bar counts as the final lines do (BatchSummary.lines): runs whose mission did not
+        # finish, this time or before, apart from usar's own errors
+        self.unfinished = sum(r.outcome != "done" for r in (*plan.finished, *plan.invalid))
+        self.errors = 0
         self.progress = Progress(
             TextColumn("[bold]runs[/]"),
             BarColumn(bar_width=30),
             MofNCompleteColumn(),
-            TextColumn("failures {task.fields[failures]}"),
+            TextColumn("did not finish {task.fields[unfinished]}, errors {task.fields[errors]}"),
             TimeElapsedColumn(),
             TextColumn("ETA"),
             TimeRemainingColumn(),
@@ -160,7 +170,9 @@ class _Progress:
             disable=quiet,
             transient=False,
         )
-        self.task = self.progress.add_task("runs", total=len(plan.jobs), failures=0)
+        self.task = self.progress.add_task(
+            "runs", total=len(plan.jobs), unfinished=self.unfinished, errors=0
+        )
         if not quiet and (plan.finished or plan.invalid):
             self.console.print(
                 f"{len(plan.finished)} runs finished before (not run again)"
@@ -179,9 +191,11 @@ class _Progress:
         self.progress.stop()
 
     def __call__(self, r: RunResult) -> None:
-        if r.failed and r.state != "interrupted":
-            self.failures += 1
-        self.progress.update(self.task, advance=1, failures=self.failures)
+        if r.state == "error":
+            self.errors += 1
+        elif r.state == "graded" and r.outcome != "done":
+            self.unfinished += 1
+        self.progress.update(self.task, advance=1, unfinished=self.unfinished, errors=self.errors)
         if self.quiet or r.state == "interrupted":
             return
         if r.state == "error":

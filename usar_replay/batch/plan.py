@@ -59,6 +59,8 @@ __all__ = [
 RUN_FORMAT = "usar-batch-run/1"
 GRADE_FORMAT = "usar-batch-grade/1"
 CONFIG_FILE = "usar.toml"
+ROS1_TARGET_PREFIX = "ros1:"
+"""A team folder holding a catkin package: its target is ``ros1:<folder>`` (docs/ros1.md)."""
 DEFAULT_MISSION_FILE = "mission.py"
 WORK_DIR = ".work"
 _NAME = re.compile(r"[^A-Za-z0-9._-]+")
@@ -263,7 +265,17 @@ def _folder_target(folder: Path) -> tuple[str, str]:
     mission = folder / DEFAULT_MISSION_FILE
     if mission.is_file():
         return str(mission.resolve()), ""
-    return "", f"no {DEFAULT_MISSION_FILE} and no {CONFIG_FILE} in the team's folder"
+    if (
+        any(folder.glob("package.xml"))
+        or any(folder.glob("*/package.xml"))
+        or any(folder.glob("*/*/package.xml"))
+    ):
+        # a catkin package (the course's own deliverable): built and run by usar's ROS 1 bridge
+        return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
+    return (
+        "",
+        f"no {DEFAULT_MISSION_FILE}, no {CONFIG_FILE} and no package.xml in the team's folder",
+    )
 
 
 def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
@@ -441,6 +453,8 @@ def _relative_target(sub: Submission) -> str:
     """The target relative to the submission (a moved submissions folder is the same input)."""
     if not sub.target:
         return ""
+    if sub.target.startswith(ROS1_TARGET_PREFIX):
+        return ROS1_TARGET_PREFIX + "."  # the team's folder is the package
     file_part, colon, func = sub.target.partition(":")
     base = sub.path.parent if sub.path.is_file() else sub.path
     rel = Path(file_part).relative_to(base).as_posix()

@@ -25,7 +25,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from usar_replay.batch.plan import GRADE_FORMAT, RUN_FORMAT, RunJob, finished_record
+from usar_replay.batch.plan import (
+    GRADE_FORMAT,
+    ROS1_TARGET_PREFIX,
+    RUN_FORMAT,
+    RunJob,
+    finished_record,
+)
 from usar_replay.core.errors import UsarError
 from usar_replay.core.outfiles import write_text
 
@@ -136,6 +142,19 @@ def _mission_limits(job: RunJob) -> Any:
     )
 
 
+def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog: Any) -> Any:
+    """A catkin package: built and run by the ROS 1 bridge, in its own network namespace (its
+    master and ports are its own, so teams run in parallel). The Python sandbox does not apply
+    to native code; the time and memory limits do."""
+    import dataclasses
+
+    from usar_replay.ros1.record import record_ros1
+
+    limits = dataclasses.replace(_mission_limits(job), sandbox=None)
+    package = job.target.removeprefix(ROS1_TARGET_PREFIX)
+    return record_ros1(scenario, log, package, settings, watchdog, limits=limits)
+
+
 def record_run(job: RunJob) -> dict[str, Any]:
     """Record the run (replacing whatever a cut-off run left) and write its manifest entry.
 
@@ -159,9 +178,12 @@ def record_run(job: RunJob) -> dict[str, Any]:
 
     start = time.perf_counter()  # wall time is for people and the wall-limit verdict only
     try:
-        result = record(
-            scenario, log, settings, watchdog, mission=job.target, limits=_mission_limits(job)
-        )
+        if job.target.startswith(ROS1_TARGET_PREFIX):
+            result = _record_ros1(job, scenario, log, settings, watchdog)
+        else:
+            result = record(
+                scenario, log, settings, watchdog, mission=job.target, limits=_mission_limits(job)
+            )
         outcome, reason = result.outcome, result.outcome_reason
         sim_s = result.sim_duration_s
     except WallLimit:

@@ -107,6 +107,7 @@ def _grade_all(
 
 
 def run(args: argparse.Namespace) -> int:
+    from usar_replay.cli.textout import incomplete_note
     from usar_replay.grading.reports import summary_line, to_table
 
     if args.jobs < 1:
@@ -122,11 +123,7 @@ def run(args: argparse.Namespace) -> int:
             print(to_table(r))
             print()
         if not r.log_complete:
-            print(
-                f"usar: {r.source}: the log is incomplete ({r.log_problem}); "
-                "graded as far as it goes",
-                file=sys.stderr,
-            )
+            print(incomplete_note(r.source, r.log_problem, "graded"), file=sys.stderr)
     for _, message in errors:
         print(f"usar: error: {message}", file=sys.stderr)
     if len(files) > 1:

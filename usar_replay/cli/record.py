@@ -10,10 +10,15 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
+from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
 
 if TYPE_CHECKING:
-    from usar_replay.pipeline.record import Progress
+    from collections.abc import Callable
+
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.pipeline.record import Progress, RecordResult
+    from usar_replay.world.scenario import Scenario
 
 __all__ = ["add_parser", "run"]
 
@@ -44,6 +49,17 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--quiet", action="store_true", help="no progress line")
     arguments.mission_options(p, replay=False)
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    ros1 = p.add_argument_group("a ROS 1 catkin package as the mission (docs/ros1.md)")
+    ros1.add_argument("--ros1", metavar="PKG", help="catkin package folder: build it and run it")
+    ros1.add_argument("--launch", metavar="FILE", help="with --ros1: roslaunch this launch file")
+    ros1.add_argument("--node", metavar="EXE", help="with --ros1: rosrun this executable")
+    ros1.add_argument(
+        "--rtf",
+        type=float,
+        default=4.0,
+        metavar="R",
+        help="with --ros1: real-time factor cap (wall time per tick >= dt/R; 0: none)",
+    )
     p.set_defaults(func=run)
 
 
@@ -94,14 +110,20 @@ def run(args: argparse.Namespace) -> int:
     status = _StatusLine()
     before = options.identity(out)
     try:
-        result = record(
-            scenario,
-            out,
-            settings,
-            progress=None if args.quiet else status,
-            mission=args.mission,
-            limits=options.limits(args),
-        )
+        progress = None if args.quiet else status
+        if args.ros1:
+            result = _record_ros1(args, scenario, out, settings, progress)
+        else:
+            if args.launch or args.node:
+                raise UsageError("--launch and --node go with --ros1 PKG")
+            result = record(
+                scenario,
+                out,
+                settings,
+                progress=progress,
+                mission=args.mission,
+                limits=options.limits(args),
+            )
     except KeyboardInterrupt as err:
         from usar_replay.core.signals import exit_code
 
@@ -113,6 +135,45 @@ def run(args: argparse.Namespace) -> int:
         return exit_code(err)
     status.close()
     print_summary(result)
-    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         return EXIT_MISSION
-    return EXIT_OK if result.mission_done else EXIT_FAIL
+    if not result.mission_done:
+        print_wrapped(f"usar: exit 1: {_why_not_done(result, args)}", file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
+
+
+def _why_not_done(result: RecordResult, args: argparse.Namespace) -> str:
+    """The one line that says why a recording that ended without a fault exits 1: the run
+    stopped before the mission said it was done, so the log is not a finished run."""
+    if result.outcome == "max_sim_time":
+        return (
+            f"stopped by --max-sim-time {args.max_sim_time:g} s before the mission said it was done"
+        )
+    if result.outcome == "time_limit":
+        return (
+            "stopped at the world's hard time limit (1.5 x its time_limit_s) before the "
+            "mission said it was done"
+        )
+    return f"the mission did not say it was done ({result.outcome})"
+
+
+def _record_ros1(
+    args: argparse.Namespace,
+    scenario: Scenario,
+    out: Path,
+    settings: RunSettings,
+    progress: Callable[[Progress], None] | None,
+) -> RecordResult:
+    """``--ros1 PKG``: build the catkin package and record it with the ROS 1 bridge."""
+    from usar_replay.ros1.process import Ros1Options
+    from usar_replay.ros1.record import record_ros1
+
+    if args.mission:
+        raise UsageError("--ros1 and --mission: give one mission")
+    if args.rtf < 0:
+        raise UsageError(f"--rtf {args.rtf:g}: give a factor >= 0 (0: no cap)")
+    opts = Ros1Options(launch=args.launch or "", node=args.node or "", rtf=args.rtf)
+    return record_ros1(
+        scenario, out, args.ros1, settings, progress, options=opts, limits=options.limits(args)
+    )

@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
 
 from usar_replay.cli.exits import EXIT_OK
-
-if TYPE_CHECKING:
-    pass
+from usar_replay.cli.textout import print_wrapped, wrap
 
 __all__ = ["add_parser", "run"]
 
@@ -20,7 +17,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument("file", metavar="FILE", help="the .part or damaged .mcap")
     p.add_argument(
-        "-o", "--out", metavar="OUT", help="output (default: FILE without .part, or X.recovered)"
+        "-o",
+        "--out",
+        metavar="OUT",
+        help="output (default: FILE without .part, else NAME.recovered.mcap)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.set_defaults(func=run)
@@ -30,7 +30,13 @@ def run(args: argparse.Namespace) -> int:
     from usar_replay.log.recover import recover
 
     result = recover(args.file, args.out, overwrite=args.overwrite)
-    print(result.describe())
+    of = "" if result.messages_total is None else f" of {result.messages_total}"
+    print_wrapped(
+        f"recovered {result.messages}{of} messages (up to sim time "
+        f"{result.last_time_ns / 1e9:.3f} s), marked interrupted"
+    )
+    for word, path in (("from", result.source), ("into", result.output)):
+        print("\n".join(wrap(f"  {word} {path}", indent="    ")))
     if result.damage:
-        print(f"what was damaged: {result.damage}")
+        print_wrapped(f"what was damaged: {result.damage}")
     return EXIT_OK

@@ -9,8 +9,10 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_MISSION, EXIT_OK
+from usar_replay.cli.textout import incomplete_note
 
 if TYPE_CHECKING:
+    from usar_replay.grading.delta import RubricDelta
     from usar_replay.grading.verdict import GradeReport
     from usar_replay.pipeline.replay import ReplayReport
 
@@ -33,7 +35,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from usar_replay.grading.grade import rubric_for
+    from usar_replay.grading.delta import rubric_delta
+    from usar_replay.grading.grade import grade_run, rubric_for
     from usar_replay.grading.reports import to_table
     from usar_replay.grading.verdict import RubricGrader
     from usar_replay.log.run import open_run
@@ -46,7 +49,11 @@ def run(args: argparse.Namespace) -> int:
     thresholds = options.thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: RubricGrader | None = None
     rubric = rubric_for(run.require_scenario())
-    if args.grade:
+    # other code or settings on a log with ground truth: grade both sides and show the delta
+    want_delta = bool(args.mission or changed) and all(
+        t in run.topics for t in rubric.required_topics
+    )
+    if args.grade or want_delta:
         grader = rubric.grader(run.require_scenario(), thresholds)
     report = replay(
         run,
@@ -54,39 +61,50 @@ def run(args: argparse.Namespace) -> int:
         mission=args.mission,
         grade_sink=None if grader is None else grader.feed,
         grade_topics=rubric.grade_topics,
-        required_topics=rubric.required_topics if grader is not None else (),
+        required_topics=rubric.required_topics if args.grade else (),
         limits=options.limits(args),
     )
     check_not_damaged(report)
-    print("\n".join(report.lines()))
-    code = EXIT_OK if report.identical or args.expect_changes else EXIT_FAIL
-    if report.mission_failure is not None:
-        code = EXIT_MISSION
-    grades = []
+    replayed: GradeReport | None = None
     if grader is not None:
-        g = grader.report(
+        replayed = grader.report(
             f"{args.file} (replayed)",
             log_complete=not report.log_problem,
             log_problem=report.log_problem,
         )
-        grades.append(g)
-        print()
-        print(to_table(g))
-        if not g.passed and code == EXIT_OK:
-            code = EXIT_FAIL
-    _replay_reports_out(args, report, grades)
-    if report.log_problem:
-        print(
-            f"usar: {args.file}: the log is incomplete ({report.log_problem}); "
-            "replayed as far as it goes",
-            file=sys.stderr,
+    delta = None
+    if want_delta and replayed is not None and report.regression:
+        delta = rubric_delta(grade_run(run, thresholds), replayed)
+    print(
+        "\n".join(
+            report.lines(
+                expect_changes=args.expect_changes,
+                before_verdict=() if delta is None else delta.lines(),
+            )
         )
+    )
+    code = EXIT_OK if report.identical or args.expect_changes else EXIT_FAIL
+    if report.mission_failure is not None:
+        code = EXIT_MISSION
+    grades = []
+    if args.grade and replayed is not None:
+        grades.append(replayed)
+        print()
+        print(to_table(replayed))
+        if not replayed.passed and code == EXIT_OK:
+            code = EXIT_FAIL
+    _replay_reports_out(args, report, grades, delta)
+    if report.log_problem:
+        print(incomplete_note(args.file, report.log_problem, "replayed"), file=sys.stderr)
         return EXIT_INCOMPLETE
     return code
 
 
 def _replay_reports_out(
-    args: argparse.Namespace, report: ReplayReport, grades: Sequence[GradeReport]
+    args: argparse.Namespace,
+    report: ReplayReport,
+    grades: Sequence[GradeReport],
+    delta: RubricDelta | None,
 ) -> None:
     """``usar replay --json/--junit/--csv``: the comparison (and the grade with ``--grade``)."""
     from usar_replay.core.outfiles import write_text
@@ -94,7 +112,7 @@ def _replay_reports_out(
     from usar_replay.pipeline import replay_report as rr
 
     outputs: tuple[tuple[str, str | None, Callable[[], str]], ...] = (
-        ("--json", args.json, lambda: rr.replay_to_json(report, grades)),
+        ("--json", args.json, lambda: rr.replay_to_json(report, grades, delta)),
         ("--junit", args.junit, lambda: rr.replay_to_junit(report, grades)),
         ("--csv", args.csv, lambda: rep.to_csv(grades) if grades else rr.replay_to_csv(report)),
     )

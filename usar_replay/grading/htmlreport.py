@@ -27,16 +27,31 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from usar_replay import __version__
 from usar_replay.core import contract, msgs
 from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.grading.labels import Label, diameter_pt, place
 from usar_replay.grading.verdict import Check, GradeReport
 from usar_replay.log.run import Run
 from usar_replay.world.scenario import Box, Cylinder, Scenario, Sphere
 
-__all__ = ["RunPicture", "collect", "index_page", "map_png", "run_page"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "RunPicture",
+    "collect",
+    "detection_figure",
+    "draw_map",
+    "index_page",
+    "map_png",
+    "outline",
+    "run_page",
+]
 
 FRAME_MEMORY = 64
 """Camera frames kept while waiting for their detections (a detection names its image's stamp
@@ -63,6 +78,11 @@ class Detection:
     t_ns: int
     image_format: str
     image: bytes
+    corners: tuple[tuple[float, float], ...] = ()
+    """The marker's outline in the image's pixels: its published pose (in the camera's optical
+    frame) projected through the camera's ``K``; empty when that cannot be done."""
+    size: tuple[int, int] = (0, 0)
+    """The image's width and height (from its camera info)."""
 
 
 @dataclass(slots=True)
@@ -86,14 +106,25 @@ class RunPicture:
         return best if best is not None else (path[0][1:] if path else None)
 
 
-def _detected(topic: str, msg: msgs.Message | None) -> tuple[int, tuple[int, ...]] | None:
-    """The image stamp and marker IDs of a detector's message: US&R's ``aruco_detect``
-    (``/fiducial_transforms``) or the ROS 2 project's ``ros2_aruco`` (``/aruco_markers``); None
-    for any other message."""
+_Pose = tuple[msgs.Vector3 | msgs.Point, msgs.Quaternion]
+
+
+def _detected(
+    topic: str, msg: msgs.Message | None
+) -> tuple[int, list[tuple[int, _Pose]]] | None:
+    """The image stamp and (marker ID, pose in the camera's optical frame) of each detection
+    in a detector's message: US&R's ``aruco_detect`` (``/fiducial_transforms``) or the ROS 2
+    project's ``ros2_aruco`` (``/aruco_markers``); None for any other message."""
     if topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
-        return msg.header.stamp.ns, tuple(f.fiducial_id for f in msg.transforms)
+        return msg.header.stamp.ns, [
+            (f.fiducial_id, (f.transform.translation, f.transform.rotation))
+            for f in msg.transforms
+        ]
     if topic == contract.ARUCO_MARKERS and isinstance(msg, msgs.ArucoMarkers):
-        return msg.header.stamp.ns, msg.marker_ids
+        return msg.header.stamp.ns, [
+            (mid, (p.position, p.orientation))
+            for mid, p in zip(msg.marker_ids, msg.poses, strict=False)
+        ]
     return None
 
 
@@ -104,11 +135,15 @@ def collect(run: Run) -> RunPicture:
     pic = RunPicture(paths={r: [] for r in asg.robot_names})
     truth = {contract.truth_pose(r): r for r in asg.robot_names}
     frames: dict[int, msgs.CompressedImage] = {}
+    info: msgs.CameraInfo | None = None
+    marker_size = run.settings.detector.marker_size
     detectors = [contract.FIDUCIALS, contract.ARUCO_MARKERS]
-    topics = [*truth, contract.MARKER_POSES, asg.image_topic, *detectors]
+    topics = [*truth, contract.MARKER_POSES, asg.image_topic, *detectors, asg.camera_info_topic]
     for m in run.messages(topics):
         msg = m.msg
-        if m.topic in truth and isinstance(msg, msgs.PoseStamped):
+        if isinstance(msg, msgs.CameraInfo):
+            info = msg
+        elif m.topic in truth and isinstance(msg, msgs.PoseStamped):
             p = msg.pose.position
             pic.paths[truth[m.topic]].append((m.log_time_ns, p.x, p.y))
         elif isinstance(msg, msgs.CompressedImage):
@@ -119,15 +154,65 @@ def collect(run: Run) -> RunPicture:
             stamp_ns, ids = found
             seen = {d.marker_id for d in pic.detections}
             image = frames.get(stamp_ns)
-            for mid in ids:
+            for mid, (position, rotation) in ids:
                 if mid not in seen and image is not None:
                     seen.add(mid)
-                    pic.detections.append(Detection(mid, m.log_time_ns, image.format, image.data))
+                    pic.detections.append(
+                        Detection(
+                            mid,
+                            m.log_time_ns,
+                            image.format,
+                            image.data,
+                            outline(position, rotation, info, marker_size),
+                            (0, 0) if info is None else (info.width, info.height),
+                        )
+                    )
         elif m.topic == contract.MARKER_POSES and isinstance(msg, msgs.FiducialTransformArray):
             for f in msg.transforms:
                 pic.stored[f.fiducial_id] = (f.transform.translation.x, f.transform.translation.y)
     pic.detections.sort(key=lambda d: d.marker_id)
     return pic
+
+
+def outline(
+    t: msgs.Vector3 | msgs.Point,
+    q: msgs.Quaternion,
+    info: msgs.CameraInfo | None,
+    size: float,
+) -> tuple[tuple[float, float], ...]:
+    """A detected marker's corners in pixels: the square of side ``size`` (the detector's
+    marker size) at the published pose, through ``K`` and plumb-bob distortion. Why not detect
+    again: the page shows what the recorded detector published, with no image decode."""
+    if info is None or len(info.k) < 9:
+        return ()
+    n = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+    if not n > 0.0 or not math.isfinite(n):
+        return ()
+    x, y, z, w = q.x / n, q.y / n, q.z / n, q.w / n
+    rot = (
+        (1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
+        (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
+        (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)),
+    )
+    k = info.k
+    d = [*info.d, 0.0, 0.0, 0.0, 0.0, 0.0][:5]
+    h = size / 2
+    out = []
+    for cx, cy in ((-h, h), (h, h), (h, -h), (-h, -h)):  # ArUco's corner order
+        px, py, pz = (
+            r[0] * cx + r[1] * cy + tv for r, tv in zip(rot, (t.x, t.y, t.z), strict=True)
+        )
+        if pz <= 1e-6:
+            return ()
+        a, b = px / pz, py / pz
+        r2 = a * a + b * b
+        radial = 1 + d[0] * r2 + d[1] * r2 * r2 + d[4] * r2 * r2 * r2
+        a, b = (
+            a * radial + 2 * d[2] * a * b + d[3] * (r2 + 2 * a * a),
+            b * radial + d[2] * (r2 + 2 * b * b) + 2 * d[3] * a * b,
+        )
+        out.append((k[0] * a + k[1] * b + k[2], k[4] * b + k[5]))
+    return tuple(out)
 
 
 # --- the map --------------------------------------------------------------------------------------
@@ -159,8 +244,47 @@ def _box_corners(b: Box) -> list[tuple[float, float]]:
     ]
 
 
+LABEL_FONT = 7
+"""Points: the evidence circles' numbers."""
+
+
+def evidence_labels(
+    fig: Figure, ax: Axes, report: GradeReport, pic: RunPicture, asg: Assignment
+) -> list[Label]:
+    """The numbered circles of the map, placed (:func:`usar_replay.grading.labels.place`) in
+    map metres on the finished layout, so that none covers another or crosses the frame. Lines
+    evidenced at one spot share a circle ("7,8"); a text ends in ``+`` when all its lines
+    passed, ``-`` otherwise (the colour)."""
+    spots: dict[tuple[float, float], list[tuple[int, bool]]] = {}
+    for n, c in enumerate(report.checks, start=1):
+        at = None if c.evidence_ns is None else pic.position(_robot_of(c, asg), c.evidence_ns)
+        if at is not None:
+            spots.setdefault((round(at[0], 2), round(at[1], 2)), []).append((n, c.passed))
+    ax.apply_aspect()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    (px0, _), (px1, _) = ax.transData.transform([(0.0, 0.0), (1.0, 0.0)])
+    metres_per_pt = fig.dpi / 72.0 / abs(px1 - px0)
+    wanted = []
+    for at, lines in spots.items():
+        text = ",".join(str(n) for n, _ in lines)
+        r = diameter_pt(text, LABEL_FONT) / 2 * metres_per_pt
+        wanted.append((text + ("+" if all(ok for _, ok in lines) else "-"), at, r))
+    return place(wanted, (x0, x1, y0, y1), gap=1.5 * metres_per_pt)
+
+
 def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
     """The run seen from above, as PNG bytes."""
+    fig, _ = draw_map(scenario, report, pic)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    return buf.getvalue()
+
+
+def draw_map(
+    scenario: Scenario, report: GradeReport, pic: RunPicture
+) -> tuple[Figure, list[Label]]:
+    """The map's figure and where its evidence circles went (the tests check those)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -196,17 +320,6 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
                     color="#2ca02c")  # fmt: skip
     for i, (_mid, (x, y)) in enumerate(sorted(pic.stored.items())):
         ax.plot(x, y, marker="o", ms=5, color="#ff7f0e", label="stored marker" if not i else None)
-    spots: dict[tuple[float, float], list[tuple[int, bool]]] = {}
-    for n, c in enumerate(report.checks, start=1):
-        at = None if c.evidence_ns is None else pic.position(_robot_of(c, asg), c.evidence_ns)
-        if at is not None:  # lines evidenced at one place share a circle: "7,8"
-            spots.setdefault((round(at[0], 2), round(at[1], 2)), []).append((n, c.passed))
-    for at, lines in spots.items():
-        color = "#2ca02c" if all(ok for _, ok in lines) else "#d62728"
-        label = ",".join(str(n) for n, _ in lines)
-        ax.plot(*at, marker="o", ms=9 + 4 * len(label) ** 0.5, mfc="white", mec=color, mew=2,
-                zorder=5)  # fmt: skip
-        ax.annotate(label, at, ha="center", va="center", fontsize=7, color=color, zorder=6)
     ax.plot([], [], marker="o", ms=10, mfc="white", mec="#2ca02c", mew=2, ls="none",
             label="evidence (rubric line #)")  # fmt: skip
     ax.set_aspect("equal")
@@ -216,9 +329,17 @@ def map_png(scenario: Scenario, report: GradeReport, pic: RunPicture) -> bytes:
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=5, fontsize=8, frameon=False)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", metadata={"Software": None})
-    return buf.getvalue()
+    labels = evidence_labels(fig, ax, report, pic, asg)
+    for label in labels:
+        color = "#2ca02c" if label.text.endswith("+") else "#d62728"
+        if label.moved:
+            ax.plot(*zip(label.anchor, label.center, strict=True), color=color, lw=0.8, zorder=5)
+            ax.plot(*label.anchor, marker="o", ms=3, color=color, zorder=5)
+        ax.add_patch(patches.Circle(label.center, label.radius, facecolor="white",
+                                    edgecolor=color, lw=1.6, zorder=6))  # fmt: skip
+        ax.annotate(label.text.rstrip("+-"), label.center, ha="center", va="center",
+                    fontsize=LABEL_FONT, color=color, zorder=7)  # fmt: skip
+    return fig, labels
 
 
 # --- the pages ------------------------------------------------------------------------------------
@@ -233,6 +354,8 @@ th{background:#f6f8fa} td.num{text-align:right;white-space:nowrap}
 img.map{width:100%;border:1px solid #ddd}
 .frames{display:flex;flex-wrap:wrap;gap:1em} figure{margin:0}
 figure img{max-width:320px;border:1px solid #ddd} figcaption{font-size:.85em;color:#555}
+.det{display:flex;gap:.5em;align-items:flex-start} .det svg{border:1px solid #ddd}
+svg.zoom image{image-rendering:pixelated}
 """.strip()
 
 
@@ -294,16 +417,66 @@ def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
     parts.append("<h2>Rubric</h2><table>" + "".join(rows) + "</table>")
     parts.append("<h2>Detections</h2>")
     if pic.detections:
-        figs = [
-            f"<figure><img alt='marker {d.marker_id}' src='{_data_uri(d.image_format, d.image)}'>"
-            f"<figcaption>marker {d.marker_id}: first detected at {d.t_ns / 1e9:.1f} s"
-            "</figcaption></figure>"
-            for d in pic.detections
-        ]
+        figs = [detection_figure(d) for d in pic.detections]
         parts.append("<div class='frames'>" + "".join(figs) + "</div>")
     else:
         parts.append("<p>No marker was detected.</p>")
     return _page(f"usar report: {run.path.name}", "\n".join(parts))
+
+
+ZOOM_BELOW = 0.15
+"""A marker narrower than this share of the frame's width gets a zoomed inset beside it."""
+FRAME_PX = 320
+"""Width of a frame on the page."""
+
+
+def detection_figure(d: Detection) -> str:
+    """A detection frame with the detected marker's outline drawn over it (SVG over the
+    recorded bytes: nothing is decoded or re-encoded) and, for a marker seen from far away, a
+    zoomed inset of it, so a person can see what was detected."""
+    uri = _data_uri(d.image_format, d.image)
+    caption = f"marker {d.marker_id}: first detected at {d.t_ns / 1e9:.1f} s"
+    w, h = d.size
+    if not d.corners or not w or not h:
+        return (
+            f"<figure><img alt='marker {d.marker_id}' src='{uri}'>"
+            f"<figcaption>{caption}</figcaption></figure>"
+        )
+    pts = " ".join(f"{u:.1f},{v:.1f}" for u, v in d.corners)
+    us, vs = [u for u, _ in d.corners], [v for _, v in d.corners]
+    side = max(max(us) - min(us), max(vs) - min(vs), 1.0)
+    body = [
+        _svg_frame(d, uri, (0.0, 0.0, float(w), float(h)), pts, FRAME_PX, "frame")
+    ]
+    if side < ZOOM_BELOW * w:
+        half = side / 2 + max(side * 0.6, 6.0)
+        cu, cv = (max(us) + min(us)) / 2, (max(vs) + min(vs)) / 2
+        # the inset stays inside the frame where it can (a marker at the edge is not centred)
+        bx = min(max(cu - half, 0.0), max(w - 2 * half, 0.0))
+        by = min(max(cv - half, 0.0), max(h - 2 * half, 0.0))
+        box = (bx, by, 2 * half, 2 * half)
+        zoom = FRAME_PX / 2 / (2 * half)
+        body.append(_svg_frame(d, uri, box, pts, FRAME_PX // 2, "zoom"))
+        caption += f" ({side:.0f} px wide; zoomed {zoom:.0f}x on the right)"
+    return (
+        "<figure><div class='det'>" + "".join(body) + "</div>"
+        f"<figcaption>{caption}; outline: the published pose</figcaption></figure>"
+    )
+
+
+def _svg_frame(
+    d: Detection, uri: str, view: tuple[float, float, float, float], pts: str, width: int, kind: str
+) -> str:
+    x, y, w, h = view
+    mid, (iw, ih) = d.marker_id, d.size
+    height = round(width * h / w)
+    return (
+        f"<svg class='{kind}' role='img' aria-label='marker {mid} ({kind})' width='{width}' "
+        f"height='{height}' viewBox='{x:.1f} {y:.1f} {w:.1f} {h:.1f}'>"
+        f"<image href='{uri}' x='0' y='0' width='{iw}' height='{ih}'/>"
+        f"<polygon points='{pts}' fill='none' stroke='#ff1493' stroke-width='2' "
+        "vector-effect='non-scaling-stroke'/></svg>"
+    )
 
 
 def index_page(

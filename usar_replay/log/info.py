@@ -39,6 +39,7 @@ _OUTCOMES = {
     "time_limit": "stopped at the time limit",
     "crashed": "the mission's code crashed",
     "hung": "the mission's code stopped responding",
+    "build_failed": "the ROS 1 package did not build",
     "interrupted": "interrupted before the mission finished",
     "unknown": "not recorded in this log",
 }

@@ -104,6 +104,11 @@ class MissionTarget:
 def resolve_target(spec: str | None) -> MissionTarget:
     """Check ``--mission`` and find its source (a :class:`UsageError` says what is wrong)."""
     spec = (spec or BUILTIN).strip()
+    if spec.startswith("ros1:"):
+        raise UsageError(
+            f"mission {spec!r} is a ROS 1 package: only Python missions are re-run here; "
+            "grade its recorded outputs with usar grade, or record it again with --ros1"
+        )
     text = _BUILTIN_MODULES.get(spec, spec)
     attr = "main"
     if text.endswith(".py") or "/" in text or os.sep in text:
@@ -443,7 +448,6 @@ class MissionProcess:
         self.shutdown_requested = False
         self._work: str | None = None
         self._jail: jail.Jail | None = None
-        argv = [sys.executable, "-m", "usar_replay.node.worker"]
         policy = self.limits.sandbox
         jailed = _use_jail(self.limits)
         if jailed:
@@ -474,7 +478,7 @@ class MissionProcess:
             # a fresh interpreter running this module: no fork of usar's state (pybullet, an
             # open log), no re-import of the caller's __main__ (multiprocessing's spawn does);
             # the socket keeps its number through bwrap, which passes inherited descriptors on
-            argv.append(str(child_sock.fileno()))
+            argv = self._argv(child_sock.fileno())
             env: dict[str, str] | None = None
             if self._jail is not None and self._work is not None:
                 roots = self.limits.read_roots or _submission_roots(target)
@@ -511,6 +515,12 @@ class MissionProcess:
         except BaseException:
             self.close()
             raise
+
+    def _argv(self, fd: int) -> list[str]:
+        """The command that serves the tick protocol on socket ``fd``: here a fresh interpreter
+        running this module. Another front end (the ROS 1 bridge,
+        :mod:`usar_replay.ros1.process`) starts its own process here."""
+        return [sys.executable, "-m", "usar_replay.node.worker", str(fd)]
 
     def __enter__(self) -> MissionProcess:
         return self

@@ -72,6 +72,7 @@ OUTCOMES = {
     "hung": "a mission callback did not return in time",
     "out_of_memory": "the mission ran out of memory",
     "refused": "the mission published something it may not",
+    "build_failed": "the ROS 1 package did not build (catkin_make)",
 }
 """How a run can end (``usar.status`` ``outcome``), with the words people read."""
 
@@ -239,6 +240,8 @@ def record(
     *,
     mission: str | None = None,
     limits: MissionLimits | None = None,
+    target: MissionTarget | None = None,
+    process: Callable[..., MissionProcess] = MissionProcess,
 ) -> RecordResult:
     """Run ``mission`` (default: the built-in one) on ``scenario`` and write the log to ``out``.
 
@@ -250,11 +253,15 @@ def record(
     The phases: open the simulator and the log, write what makes the log self-contained
     (:func:`_write_header`), run the tick loop with the mission process (:func:`_tick_loop`),
     close the log with the run's outcome (:func:`_close_run`), then sum up.
+
+    ``target`` and ``process`` let another front end take the mission process's place (the
+    ROS 1 bridge: :mod:`usar_replay.ros1.process`): ``process(target, parameters, sim_topics=,
+    sim_frames=, limits=)`` must speak the mission process's tick protocol.
     """
     settings = settings or RunSettings()
     rs = settings.record
     asg = assignment_of(scenario)
-    target = resolve_target(mission or asg.builtin_mission)
+    target = target or resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
     with _simulator(scenario, settings, asg) as sim, bag.BagWriter(out) as writer:
@@ -266,7 +273,8 @@ def record(
             reason=f"stopped at {limit_s:g} s of sim time",
         )
         try:
-            _tick_loop(sim, writer, scenario, settings, asg, target, run, limit_s, progress, limits)
+            loop_args = (sim, writer, scenario, settings, asg, target, run, limit_s, progress)
+            _tick_loop(*loop_args, limits, process)
         except MissionEnded as ended:
             run.outcome, run.reason = ended.verdict, ended.detail
         except KeyboardInterrupt:
@@ -348,6 +356,7 @@ def _tick_loop(
     limit_s: float,
     progress: Callable[[Progress], None] | None,
     limits: MissionLimits | None,
+    process: Callable[..., MissionProcess] = MissionProcess,
 ) -> None:
     """sim -> log and mission -> log and sim, one control tick at a time, until the mission
     says it is done or the sim clock passes the limit (a :class:`MissionEnded` ends it early).
@@ -367,7 +376,7 @@ def _tick_loop(
     hidden = hide_from_mission(limits, str(writer.part_path))
     detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
     inputs = mission_inputs(asg, detector is not None)
-    with MissionProcess(
+    with process(
         target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden
     ) as proc:
         latency = rs.actuation_latency_ticks
@@ -488,6 +497,13 @@ def _found_as_graded(path: Path) -> tuple[FoundMarker, ...]:
     return observe_run(open_run(path)).found_markers()
 
 
+def _fit(line: str, width: int = 100) -> list[str]:
+    """A summary line wrapped to ``width`` (a long output path must not run past the edge)."""
+    import textwrap
+
+    return textwrap.wrap(line, width, subsequent_indent="  ", break_on_hyphens=False) or [""]
+
+
 def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     """The end-of-run summary for people (fits 100 columns; a crash's traceback is shown as
     the user's own)."""
@@ -511,7 +527,7 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
             )
     out = file or sys.stdout
-    print("\n".join(lines), file=out)
-    if result.outcome in ("crashed", "hung", "out_of_memory", "refused"):
+    print("\n".join(w for line in lines for w in _fit(line)), file=out)
+    if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
         print(result.outcome_reason.rstrip(), file=out)

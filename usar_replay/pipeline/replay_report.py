@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from usar_replay.grading.delta import RubricDelta
 from usar_replay.grading.reports import SCHEMA_VERSION, to_json, to_junit
 from usar_replay.grading.verdict import GradeReport
 from usar_replay.pipeline.replay import ReplayReport
@@ -58,13 +59,17 @@ def replay_dict(report: ReplayReport) -> dict[str, object]:
     }
 
 
-def replay_to_json(report: ReplayReport, grades: Sequence[GradeReport] = ()) -> str:
+def replay_to_json(
+    report: ReplayReport, grades: Sequence[GradeReport] = (), delta: RubricDelta | None = None
+) -> str:
     """``usar replay --json``: the grade document's shape (``recordings``: the replayed run's
-    grade when ``--grade``, else empty) plus ``replay``, the comparison."""
+    grade when ``--grade``, else empty) plus ``replay``, the comparison, with its
+    ``rubric_delta`` (null when other code or settings were not graded on both sides)."""
     import json  # deferred: the table alone needs none
 
     doc = json.loads(to_json(grades))
     doc["replay"] = replay_dict(report)
+    doc["replay"]["rubric_delta"] = None if delta is None else delta.as_dict()
     return json.dumps(doc, indent=2) + "\n"
 
 

@@ -1,0 +1,100 @@
+"""The Debian 12 packages that run a course's ROS 1 package, and the check that names them.
+
+Why Debian's: Debian 12 packages ROS 1 (Noetic-era: roscpp, rospy, tf2_ros, actionlib,
+move_base_msgs, catkin, the message generators), so a course package builds and runs with
+``apt-get install`` and nothing else; Gazebo, move_base, map_server and aruco_detect are what
+usar stands in for. The list is minimal: each package is there for a named reason, and apt pulls
+in the rest (roscpp's headers, the message packages' dependencies).
+
+Python: Debian's ROS 1 Python packages live in ``/usr/lib/python3/dist-packages`` for Debian's
+``/usr/bin/python3``, which is 3.11 like usar's. The bridge process runs usar's own interpreter
+and *appends* that folder to its ``sys.path`` (:func:`python_path`): usar's own dependencies
+(numpy, OpenCV) keep winning over Debian's, and nothing is written into a virtual environment.
+catkin and roslaunch run as Debian's own programs (``/usr/bin/python3``, by their ``#!``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from usar_replay.core.errors import UsageError
+
+__all__ = ["APT_PACKAGES", "DIST_PACKAGES", "MissingRos1", "check", "install_line", "missing"]
+
+DIST_PACKAGES = Path("/usr/lib/python3/dist-packages")
+"""Where Debian installs rospy, actionlib, tf2_ros and the generated Python messages."""
+
+APT_PACKAGES: dict[str, str] = {
+    "g++": "the C++ compiler",
+    "cmake": "catkin_make's build system",
+    "catkin": "catkin_make and the catkin CMake macros",
+    "ros-message-generation": "message_generation (fiducial_msgs is generated at build time)",
+    "ros-std-msgs": "std_msgs .msg definitions (fiducial_msgs' Header)",
+    "ros-geometry-msgs": "geometry_msgs .msg definitions (fiducial_msgs' Transform)",
+    "libroscpp-dev": "roscpp, the students' C++ client library",
+    "libtf2-ros-dev": "tf2_ros: TransformBroadcaster, Buffer, TransformListener",
+    "libactionlib-dev": "actionlib: the move_base action clients",
+    "libmove-base-msgs-dev": "move_base_msgs for C++",
+    "libnav-msgs-dev": "nav_msgs for C++ (odometry, the map)",
+    "libsensor-msgs-dev": "sensor_msgs for C++ (camera image and info)",
+    "python3-rosmaster": "the ROS master (a private one per run)",
+    "python3-roslaunch": "roslaunch and rosrun, to start the package's launch file or node",
+    "python3-rospy": "rospy, the bridge's client library",
+    "python3-tf2-ros": "tf2_msgs for the bridge's /tf",
+    "python3-actionlib": "the bridge's move_base action servers",
+    "python3-move-base-msgs": "move_base_msgs for the bridge",
+    "python3-nav-msgs": "nav_msgs for the bridge",
+    "python3-sensor-msgs": "sensor_msgs for the bridge",
+}
+"""What ``apt-get install`` needs, with why (``--no-install-recommends`` is enough)."""
+
+# a file each package installs: the check looks for these, never runs apt or dpkg
+_PROBES: dict[str, str] = {
+    "g++": "/usr/bin/g++",
+    "cmake": "/usr/bin/cmake",
+    "catkin": "/usr/bin/catkin_make",
+    "ros-message-generation": "/usr/share/message_generation/package.xml",
+    "ros-std-msgs": "/usr/share/std_msgs/msg/Header.msg",
+    "ros-geometry-msgs": "/usr/share/geometry_msgs/msg/Transform.msg",
+    "libroscpp-dev": "/usr/include/ros/ros.h",
+    "libtf2-ros-dev": "/usr/include/tf2_ros/transform_broadcaster.h",
+    "libactionlib-dev": "/usr/include/actionlib/client/simple_action_client.h",
+    "libmove-base-msgs-dev": "/usr/include/move_base_msgs/MoveBaseAction.h",
+    "libnav-msgs-dev": "/usr/include/nav_msgs/Odometry.h",
+    "libsensor-msgs-dev": "/usr/include/sensor_msgs/Image.h",
+    "python3-rosmaster": "/usr/bin/rosmaster",
+    "python3-roslaunch": "/usr/bin/roslaunch",
+    "python3-rospy": str(DIST_PACKAGES / "rospy" / "__init__.py"),
+    "python3-tf2-ros": str(DIST_PACKAGES / "tf2_msgs" / "msg" / "__init__.py"),
+    "python3-actionlib": str(DIST_PACKAGES / "actionlib" / "__init__.py"),
+    "python3-move-base-msgs": str(DIST_PACKAGES / "move_base_msgs" / "msg" / "__init__.py"),
+    "python3-nav-msgs": str(DIST_PACKAGES / "nav_msgs" / "msg" / "__init__.py"),
+    "python3-sensor-msgs": str(DIST_PACKAGES / "sensor_msgs" / "msg" / "__init__.py"),
+}
+
+
+class MissingRos1(UsageError):
+    """ROS 1 is not installed: the message is the ``apt-get install`` line to run."""
+
+
+def install_line(packages: list[str] | None = None) -> str:
+    """``apt-get install -y --no-install-recommends ...`` for ``packages`` (default: all)."""
+    names = packages if packages is not None else list(APT_PACKAGES)
+    return "apt-get install -y --no-install-recommends " + " ".join(names)
+
+
+def missing() -> list[str]:
+    """The Debian packages of :data:`APT_PACKAGES` that are not installed here (on another
+    system: all of them)."""
+    return [name for name, probe in _PROBES.items() if not Path(probe).exists()]
+
+
+def check() -> None:
+    """Raise :class:`MissingRos1` naming exactly what to install, or return."""
+    gone = missing()
+    if gone:
+        raise MissingRos1(
+            "--ros1 needs Debian 12's ROS 1 packages; missing: "
+            + ", ".join(gone)
+            + f"; install them (as root) with: apt-get update && {install_line(gone)}"
+        )

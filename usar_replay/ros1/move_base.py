@@ -1,0 +1,223 @@
+"""``/<robot>/move_base``: move_base's action, served by usar's navigator (bridge process only).
+
+Why here and not in the simulator: in the course, move_base is a node the students' action
+clients talk to; usar's :class:`usar_replay.world.nav.Navigator` is the same planner and
+controller the Python node API's navigation client uses, so a ROS 1 package and a Python
+mission drive alike. The server follows actionlib's rules as move_base does:
+
+* a new goal preempts the active one (its client sees PREEMPTED);
+* a cancel stops the robot (PREEMPTED/RECALLED as actionlib decides);
+* feedback (``base_position``) on every control tick while active;
+* SUCCEEDED when the goal is reached, ABORTED with the planner's or controller's reason
+  (goal in collision and no free cell near it, no path, stuck) otherwise.
+
+A goal inside an obstacle or its inflation is moved to the nearest free cell within
+:data:`GOAL_TOLERANCE_M` first, as move_base's global planner does with its ``default_tolerance``
+(students' follower goals are markers on walls). The other robot, where tf says it stands when
+the goal arrives, is an obstacle in this robot's costmap, as its laser would mark it.
+
+Threads: actionlib calls back on its own threads; those callbacks only queue events, and
+:meth:`MoveBase.tick` (the bridge's main loop, once per control tick) handles them in arrival
+order, so the navigator itself is only ever touched by one thread.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+from typing import Any
+
+from usar_replay.core import contract, msgs
+from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
+from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, robot_disc
+
+__all__ = ["GOAL_TOLERANCE_M", "MoveBase"]
+
+GOAL_TOLERANCE_M = 0.5
+"""How far a goal in collision may be moved to a free cell (global_planner's tolerance)."""
+
+Pose = tuple[float, float, float]
+
+
+class MoveBase:
+    """One robot's move_base action server (see the module docstring)."""
+
+    def __init__(self, robot: str, *, xy_tolerance: float, yaw_tolerance: float) -> None:
+        import actionlib
+        from move_base_msgs.msg import MoveBaseAction
+
+        self.robot = robot
+        self.xy_tolerance = xy_tolerance
+        self.yaw_tolerance = yaw_tolerance
+        self.grid: OccupancyGrid | None = None
+        self.nav: Navigator | None = None
+        self.active: Any = None
+        self._events: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
+        self._name = ""
+        self._seq = 0
+        self._started_ns = 0
+        self.server = actionlib.ActionServer(
+            f"/{robot}/move_base", MoveBaseAction, self._on_goal, self._on_cancel, auto_start=False
+        )
+        self.server.start()
+
+    # -- actionlib's threads: queue only ----------------------------------------------------------
+
+    def _on_goal(self, handle: Any) -> None:
+        self._events.put(("goal", handle))
+
+    def _on_cancel(self, handle: Any) -> None:
+        self._events.put(("cancel", handle))
+
+    # -- the bridge's loop -------------------------------------------------------------------------
+
+    def tick(
+        self,
+        t_ns: int,
+        poses: dict[str, Pose | None],
+        in_map: Any,
+    ) -> list[tuple[str, msgs.Message]]:
+        """Handle the queued goals and cancels, then drive one tick; what to publish (the
+        ``cmd_vel``, the goal, the outcome) as usar messages. ``in_map(frame)`` gives a frame's
+        pose in map ((x, y, yaw) or None), for goals in another frame."""
+        out: list[tuple[str, msgs.Message]] = []
+        while True:
+            try:
+                kind, handle = self._events.get_nowait()
+            except queue.Empty:
+                break
+            if kind == "goal":
+                out += self._start(handle, t_ns, poses, in_map)
+            elif self.active is not None and _same(handle, self.active):
+                if self.nav is not None:
+                    self.nav.cancel()
+                self.active.set_canceled(_result(), "cancelled by the client")
+                self.active = None
+                out.append((contract.cmd_vel(self.robot), msgs.Twist()))
+            else:
+                handle.set_canceled(_result(), "cancelled by the client")
+        pose = poses.get(self.robot)
+        if self.active is None or self.nav is None or pose is None:
+            return out
+        twist = self.nav.update(t_ns, *pose)
+        out.append((contract.cmd_vel(self.robot), twist))
+        self._feedback(pose)
+        if self.nav.status is not NavStatus.ACTIVE:
+            out += self._finish(self.nav.status is NavStatus.SUCCEEDED, self.nav.reason, t_ns, pose)
+        return out
+
+    def _feedback(self, pose: Pose) -> None:
+        from move_base_msgs.msg import MoveBaseFeedback
+
+        from usar_replay.ros1.convert import to_ros1
+
+        fb = MoveBaseFeedback()
+        fb.base_position = to_ros1(_pose_stamped(pose, 0))
+        self.active.publish_feedback(fb)
+
+    def _start(
+        self, handle: Any, t_ns: int, poses: dict[str, Pose | None], in_map: Any
+    ) -> list[tuple[str, msgs.Message]]:
+        out: list[tuple[str, msgs.Message]] = []
+        if self.active is not None:
+            self.active.set_canceled(_result(), "preempted by a new goal")
+            self.active = None
+        handle.set_accepted("")
+        self._seq += 1
+        self._name = f"goal_{self._seq}"
+        self._started_ns = t_ns
+        goal = handle.get_goal().target_pose
+        p, q = goal.pose.position, goal.pose.orientation
+        x, y = float(p.x), float(p.y)
+        yaw = yaw_from_quat(msgs.Quaternion(x=q.x, y=q.y, z=q.z, w=q.w))
+        frame = str(goal.header.frame_id).lstrip("/")
+        self.active = handle
+        if frame != contract.MAP:
+            base = in_map(frame)
+            if base is None:
+                return self._finish(False, f"goal frame {frame!r} is not linked to map", t_ns)
+            bx, by, byaw = base
+            c, s = math.cos(byaw), math.sin(byaw)
+            x, y, yaw = bx + c * x - s * y, by + s * x + c * y, yaw + byaw
+        out.append((contract.goal(self.robot), _pose_stamped((x, y, yaw), t_ns)))
+        if self.grid is None:
+            return out + self._finish(False, "no map received yet", t_ns)
+        discs = [robot_disc(*pz) for r, pz in poses.items() if r != self.robot and pz]
+        grid = self.grid.with_discs(discs) if discs else self.grid
+        if not grid.is_free(x, y):
+            near = grid.nearest_free(x, y, GOAL_TOLERANCE_M)
+            if near is not None:
+                x, y = near
+        self.nav = Navigator(grid, Limits())
+        path = self.nav.set_goal(
+            x,
+            y,
+            yaw,
+            xy_tolerance=self.xy_tolerance,
+            yaw_tolerance=self.yaw_tolerance,
+            t_ns=t_ns,
+            start=poses.get(self.robot),
+        )
+        if path:
+            header = msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id=contract.MAP)
+            out.append(
+                (
+                    contract.plan(self.robot),
+                    msgs.Path(
+                        header=header,
+                        poses=tuple(_pose_stamped((px, py, 0.0), t_ns) for px, py in path),
+                    ),
+                )
+            )
+        if self.nav.status is NavStatus.FAILED:
+            out += self._finish(False, self.nav.reason, t_ns)
+        return out
+
+    def _finish(
+        self, ok: bool, reason: str, t_ns: int, pose: Pose | None = None
+    ) -> list[tuple[str, msgs.Message]]:
+        handle, self.active = self.active, None
+        if ok:
+            handle.set_succeeded(_result(), "goal reached")
+        else:
+            handle.set_aborted(_result(), reason)
+        p = pose or (math.nan, math.nan, math.nan)
+        status = msgs.DiagnosticStatus(
+            level=msgs.DiagnosticStatus.OK if ok else msgs.DiagnosticStatus.ERROR,
+            name=self._name,
+            message="succeeded" if ok else f"failed: {reason}",
+            hardware_id=self.robot,
+            values=(
+                msgs.KeyValue(key="goal", value=self._name),
+                msgs.KeyValue(key="seq", value=str(self._seq)),
+                msgs.KeyValue(key="x", value=repr(p[0])),
+                msgs.KeyValue(key="y", value=repr(p[1])),
+                msgs.KeyValue(key="yaw", value=repr(p[2])),
+                msgs.KeyValue(key="started_ns", value=str(self._started_ns)),
+                msgs.KeyValue(key="ended_ns", value=str(t_ns)),
+            ),
+        )
+        return [
+            (contract.cmd_vel(self.robot), msgs.Twist()),
+            (contract.goal_status(self.robot), status),
+        ]
+
+
+def _same(a: Any, b: Any) -> bool:
+    return bool(a.get_goal_id().id == b.get_goal_id().id)
+
+
+def _result() -> Any:
+    """An empty MoveBaseResult (actionlib publishes None as a broken message)."""
+    from move_base_msgs.msg import MoveBaseResult
+
+    return MoveBaseResult()
+
+
+def _pose_stamped(pose: Pose, t_ns: int) -> msgs.PoseStamped:
+    return msgs.PoseStamped(
+        header=msgs.Header(stamp=msgs.Time.from_ns(t_ns), frame_id=contract.MAP),
+        pose=msgs.Pose(
+            position=msgs.Point(x=pose[0], y=pose[1]), orientation=quat_from_yaw(pose[2])
+        ),
+    )
