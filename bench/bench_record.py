@@ -12,6 +12,8 @@ per sim-minute, frames rendered against frames recorded, and usar's CPU split by
 * ``render``: pybullet renders (frames reused because nothing moved cost nothing here);
 * ``encode``: compressing frames (a frame equal to the previous one costs one comparison);
 * ``log``: serialising and writing messages; ``physics``: the sim's steps;
+* ``detect``: the course's ArUco detector (trusted, on usar's side: issue #21; before it, the
+  mission process ran it);
 * ``rest``: tf, odometry, the process boundary and the loop itself.
 
 The mission process (image decoding, ArUco detection, planning) is reported as one figure. The
@@ -41,7 +43,7 @@ from usar_replay.world.scenario import Scenario, course_world
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import one_room
 
-STAGES = ("render", "encode", "log", "physics")
+STAGES = ("render", "encode", "log", "physics", "detect")
 _spent: defaultdict[str, float] = defaultdict(float)
 _calls: defaultdict[str, int] = defaultdict(int)
 
@@ -67,6 +69,12 @@ def _instrument() -> None:
         (bag.BagWriter, "write_raw", "log"),
         (sim.Simulator, "step", "physics"),
     ]
+    try:  # the course's detector, on usar's side since issue #21 (before: in the mission)
+        from usar_replay.pipeline import course_detector
+
+        points.append((course_detector, "detect", "detect"))
+    except ImportError:
+        pass
     if not hasattr(sim.Simulator, "_render"):  # before frames were reused
         points[0] = (sim.Simulator, "render_camera", "render")
     for owner, name, stage in points:

@@ -208,11 +208,12 @@ class SyntheticRun(Synthetic):
             )
             for mid in sorted(marker_ids)
         )
-        self.write(
+        self.write(  # the course's detector, run by the recorder: the world's ("sim")
             "/fiducial_transforms",
             msgs.FiducialTransformArray(
                 header=msgs.Header(stamp=stamp, frame_id=OPTICAL_FRAME), transforms=found
             ),
+            publisher="sim",
         )
         if broadcast:
             for f in found:

@@ -40,6 +40,7 @@ from usar_replay.batch.plan import (
 from usar_replay.batch.run_one import max_points
 from usar_replay.core.errors import UsageError
 from usar_replay.core.outfiles import write_text
+from usar_replay.world.world_key import WorldKey
 
 __all__ = ["BatchSummary", "grade_class", "plan_class", "require_sandbox"]
 
@@ -99,8 +100,10 @@ def plan_class(
     settings_toml: str,
     thresholds_toml: str = "",
     limits: Limits | None = None,
+    world_key: WorldKey | None = None,
 ) -> Plan:
-    """The plan of a batch: teams, worlds, and which runs still need doing."""
+    """The plan of a batch: teams, worlds (seeded ones keyed by ``world_key``: hidden worlds),
+    and which runs still need doing."""
     out, subs_root = Path(out_dir).resolve(), Path(submissions_dir).resolve()
     if out == subs_root or out.is_relative_to(subs_root) or subs_root.is_relative_to(out):
         raise UsageError(
@@ -110,7 +113,7 @@ def plan_class(
     if (limits or Limits()).sandbox:
         require_sandbox()
     subs = discover(submissions_dir)
-    worlds = make_worlds(seeds, scenarios)
+    worlds = make_worlds(seeds, scenarios, world_key)
     return make_plan(
         subs,
         worlds,

@@ -39,6 +39,7 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.core.errors import UsageError
+from usar_replay.world.world_key import WorldKey
 
 __all__ = [
     "GRADE_FORMAT",
@@ -323,8 +324,11 @@ def parse_seeds(text: str) -> list[int]:
     return sorted(seeds)
 
 
-def make_worlds(seeds: Sequence[int], scenario_files: Sequence[str]) -> list[World]:
-    """The worlds: each seed as a variant of the course world, then each scenario file (the
+def make_worlds(
+    seeds: Sequence[int], scenario_files: Sequence[str], world_key: WorldKey | None = None
+) -> list[World]:
+    """The worlds: each seed as a variant of the course world (keyed by ``world_key`` when
+    given: hidden worlds, :mod:`usar_replay.world.world_key`), then each scenario file (the
     course world alone when neither is given)."""
     from usar_replay.world.scenario import course_world
     from usar_replay.world.scenario_toml import load, to_toml
@@ -334,8 +338,10 @@ def make_worlds(seeds: Sequence[int], scenario_files: Sequence[str]) -> list[Wor
         from usar_replay.world.variants import make_variant
 
         base = course_world()
+        keyed = "" if world_key is None else ", keyed"
         for s in seeds:
-            worlds.append(World(f"seed{s}", to_toml(make_variant(base, s)), f"course, seed {s}"))
+            variant = to_toml(make_variant(base, s, world_key))
+            worlds.append(World(f"seed{s}", variant, f"course, seed {s}{keyed}"))
     for f in scenario_files:
         worlds.append(World(team_name(Path(f).stem), to_toml(load(f)), str(f)))
     if not worlds:

@@ -24,6 +24,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument("submissions", metavar="SUBMISSIONS_DIR", help="a .py file or folder per team")
     p.add_argument("--seeds", metavar="N-M", help="seeded variants of the course world, e.g. 0-4")
+    options.add_world_key(p)
     p.add_argument(
         "--scenario", nargs="+", action="extend", metavar="FILE", help="scenario TOML worlds"
     )
@@ -108,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         settings_toml=settings_to_toml(settings),
         thresholds_toml=thresholds,
         limits=limits,
+        world_key=options.world_key(args),
     )
     engine = make_engine(args.engine, jobs, args.address) if plan.jobs else None
     try:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,9 +21,12 @@ if TYPE_CHECKING:
     from usar_replay.grading.verdict import GradeReport
     from usar_replay.node.worker import MissionLimits
     from usar_replay.world.scenario import Scenario
+    from usar_replay.world.world_key import WorldKey
 
 __all__ = [
+    "add_world_key",
     "parse_camera",
+    "world_key",
     "load_scenario",
     "overrides",
     "run_settings",
@@ -64,8 +68,9 @@ def load_scenario(args: argparse.Namespace) -> Scenario:
         raise UsageError(
             f"{args.scenario} is a {base.assignment!r} world, not {kind!r}; drop --assignment"
         )
+    key = world_key(args)  # read (and taken out of the environment) even without --seed
     if args.seed is not None:
-        base = assignment.of(base).variant(base, args.seed)
+        base = assignment.of(base).variant(base, args.seed, key)
     if args.camera:
         w, h, rate = parse_camera(args.camera)
         base = dataclasses.replace(
@@ -76,6 +81,26 @@ def load_scenario(args: argparse.Namespace) -> Scenario:
             base, camera=dataclasses.replace(base.camera, encoding=args.encoding)
         )
     return base
+
+
+def add_world_key(p: argparse.ArgumentParser) -> None:
+    """``--world-key FILE``: the secret that keeps ``--seed`` worlds hidden."""
+    p.add_argument(
+        "--world-key",
+        metavar="FILE",
+        help="secret key for hidden seeded worlds (default: $USAR_WORLD_KEY; docs/batch.md)",
+    )
+
+
+def world_key(args: argparse.Namespace) -> WorldKey | None:
+    """``--world-key FILE``, else the key in ``$USAR_WORLD_KEY``; the variable is removed from
+    this process's environment either way, so no mission process started later inherits it."""
+    from usar_replay.world.world_key import ENV_VAR, key_from_env, load_key
+
+    from_env = key_from_env()
+    os.environ.pop(ENV_VAR, None)
+    path = getattr(args, "world_key", None)
+    return load_key(path) if path else from_env
 
 
 def overrides(items: Sequence[str] | None) -> dict[str, str]:

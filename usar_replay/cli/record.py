@@ -28,6 +28,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p = sub.add_parser("record", help="run the mission in pybullet and record it to MCAP")
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    options.add_world_key(p)
     p.add_argument(
         "--assignment",
         choices=["usar", "ros2-final"],

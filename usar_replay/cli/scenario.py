@@ -22,6 +22,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument("--scenario", metavar="FILE", help="scenario TOML to read (default: the course)")
     p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    options.add_world_key(p)
     p.add_argument(
         "--assignment",
         choices=["usar", "ros2-final"],

@@ -111,7 +111,9 @@ as map_server does."""
 IMAGE = "/explorer/camera/rgb/image_raw/compressed"
 CAMERA_INFO = "/explorer/camera/rgb/camera_info"
 FIDUCIALS = "/fiducial_transforms"
-"""aruco_detect's output: one ``FiducialTransformArray`` per camera frame."""
+"""aruco_detect's output: one ``FiducialTransformArray`` per camera frame it searched. In the
+US&R world the recorder runs the course's detector (trusted: the rubric counts only its
+detections) and this is a mission *input*, published by ``sim``; a mission may not publish it."""
 ENABLE_DETECTIONS = "/aruco_detect/enable_detections"
 """std_msgs/Bool switching the built-in mission's detector on (true) and off (false): the
 topic form of aruco_detect's ``enable_detections`` service. The explorer turns detection on

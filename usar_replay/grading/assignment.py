@@ -24,12 +24,13 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from usar_replay.core import contract
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.verdict import Rubric
 from usar_replay.world.scenario import Scenario, course_world
+from usar_replay.world.world_key import WorldKey
 
 if TYPE_CHECKING:
     from usar_replay.world.ros2_world import Ros2Task
@@ -44,6 +45,13 @@ __all__ = [
     "ros2_parameters",
     "usar_parameters",
 ]
+
+
+class VariantMaker(Protocol):
+    """``(world, seed, key=None) -> variant``: a seeded variant, keyed by a secret world key
+    when one is given (:mod:`usar_replay.world.world_key`)."""
+
+    def __call__(self, scenario: Scenario, seed: int, key: WorldKey | None = None) -> Scenario: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,8 +82,11 @@ class Assignment:
     """The rubric that grades this assignment (its grader and the topics it reads)."""
     world: Callable[[], Scenario]
     """The built-in world."""
-    variant: Callable[[Scenario, int], Scenario]
-    """A seeded variant of a world."""
+    variant: VariantMaker
+    """A seeded variant of a world (keyed by the world key when one is given)."""
+    course_detections: str = ""
+    """The topic of the course's detector, run by the recorder (trusted, a mission input;
+    :mod:`usar_replay.pipeline.course_detector`); empty when the world has none."""
 
     @property
     def robot_names(self) -> tuple[str, ...]:
@@ -164,16 +175,16 @@ def _ros2_final_world() -> Scenario:
     return ros2_world.ros2_final_world()
 
 
-def _make_ros2_variant(scenario: Scenario, seed: int) -> Scenario:
+def _make_ros2_variant(scenario: Scenario, seed: int, key: WorldKey | None = None) -> Scenario:
     from usar_replay.world import ros2_world
 
-    return ros2_world.make_ros2_variant(scenario, seed)
+    return ros2_world.make_ros2_variant(scenario, seed, key)
 
 
-def _make_variant(scenario: Scenario, seed: int) -> Scenario:
+def _make_variant(scenario: Scenario, seed: int, key: WorldKey | None = None) -> Scenario:
     from usar_replay.world import variants
 
-    return variants.make_variant(scenario, seed)
+    return variants.make_variant(scenario, seed, key)
 
 
 def _usar_rubric() -> Rubric:
@@ -212,6 +223,7 @@ USAR = Assignment(
     rubric=_usar_rubric,
     world=course_world,
     variant=_make_variant,
+    course_detections=contract.FIDUCIALS,
 )
 
 ROS2_FINAL = Assignment(

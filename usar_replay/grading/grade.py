@@ -65,7 +65,9 @@ def observe_run(run: Run, thresholds: Thresholds | None = None) -> RubricGrader:
     grader = rubric.grader(scenario, thresholds)
     grader.start_ns = run.start_ns  # the run's clock starts with the log, whatever topic
     feed = grader.feed
-    for topic, msg, t in run.reader.decoded(rubric.grade_topics):
+    # the course's detections count as the world published them ("sim"), never a mission's
+    trusted = {topic: ("sim",) for topic in rubric.trusted_topics}
+    for topic, msg, t in run.reader.decoded(rubric.grade_topics, only_from=trusted):
         feed(topic, msg, t)
     return grader
 

@@ -95,6 +95,8 @@ class _Worst:
         self.count += 1
         if self.first_ns is None:
             self.first_ns = t_ns
+        if not math.isfinite(value):  # NaN compares false with everything: it is the worst
+            value, problem = math.inf, problem or "not a finite number"
         if value > self.worst:
             self.worst, self.worst_ns = value, t_ns
             if problem:

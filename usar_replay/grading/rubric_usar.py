@@ -24,10 +24,13 @@ line (``Check.id``)                  points  passes when
 ===================================  ======  ===================================================
 ``explorer.target_k``                12      the explorer came within ``target_reached_m`` of
                                              target_k after the earlier targets it reached
-``marker_k.detected``                12      ``/fiducial_transforms`` holds ID k at least once
-``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k and
-                                             every such broadcast, looked up in ``map``, lies
-                                             within ``marker_map_error_m`` of the true marker
+``marker_k.detected``                12      the course's detector's ``/fiducial_transforms``
+                                             (trusted; never a mission's) holds ID k once
+``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k on a
+                                             frame where it was detected, and every such
+                                             broadcast, looked up in ``map``, lies within
+                                             ``marker_map_error_m`` of the true marker (a
+                                             non-finite one is the worst)
 ``marker_frame.only_on_detection``   4       ``marker_frame`` was broadcast, and every such
                                              broadcast is a child of the camera's optical
                                              frame, stamped with a detected frame ("nothing
@@ -58,6 +61,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
 from usar_replay.core import contract, msgs
+from usar_replay.core.finite import nonfinite_field
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
@@ -180,6 +184,9 @@ class Broadcasts:
     """The ``marker_frame`` broadcasts attributed to one marker."""
 
     count: int = 0
+    detected: int = 0
+    """Broadcasts stamped with a frame in which the course's detector saw this marker: only
+    those count (a ``marker_frame`` without a detection is not evidence of one)."""
     worst_m: float = -1.0
     worst_ns: int = 0
     first_ns: int | None = None
@@ -282,6 +289,13 @@ class Grader:
 
     def _on_fiducials(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
         self.fiducial_messages += 1
+        if any(nonfinite_field(f) for f in msg.transforms):
+            # a detection at NaN or infinity is no detection (the course's detector never
+            # publishes one; the recorder refuses it from a mission)
+            msg = msgs.FiducialTransformArray(
+                header=msg.header,
+                transforms=tuple(f for f in msg.transforms if not nonfinite_field(f)),
+            )
         for f in msg.transforms:
             self.detected_ns.setdefault(f.fiducial_id, t_ns)
             self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
@@ -335,6 +349,8 @@ class Grader:
             mid = min(self.markers, key=lambda k: math.dist((p.x, p.y, p.z), self.markers[k]))
         b = self.broadcasts[mid]
         b.count += 1
+        if any(f.fiducial_id == mid for f in detections):
+            b.detected += 1
         if b.first_ns is None:
             b.first_ns = t_ns
         if in_map is None:
@@ -343,6 +359,9 @@ class Grader:
         else:
             p = in_map.transform.translation
             err = math.dist((p.x, p.y, p.z), self.markers[mid])
+            if not math.isfinite(err):  # NaN is never "worse than" anything: make it the worst
+                b.failed_lookups += 1
+                err = math.inf
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
 
@@ -352,7 +371,7 @@ class Grader:
         return tuple(
             FoundMarker(
                 mid,
-                _broadcast_text(b),
+                _broadcast_text(b, mid),
                 b.worst_m if math.isfinite(b.worst_m) else None,
             )
             for mid, b in self.broadcasts.items()
@@ -547,12 +566,17 @@ def marker_detected(g: Grader, mid: int) -> Check:
     )
 
 
-def _broadcast_text(b: Broadcasts) -> str:
+def _broadcast_text(b: Broadcasts, mid: int) -> str:
     """What a marker's broadcasts measured, in words (the line's and the record summary's)."""
     if b.count == 0:
         return "no broadcast"
+    if b.detected == 0:
+        return f"{_n(b.count, 'broadcast')}, none on a frame where marker {mid} was detected"
     if b.failed_lookups:
-        return f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP}"
+        return (
+            f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP} or not "
+            "finite"
+        )
     return f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
 
 
@@ -560,8 +584,8 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
     """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
-    ok = b.count > 0 and b.worst_m <= limit
-    measured = _broadcast_text(b)
+    ok = b.detected > 0 and b.worst_m <= limit
+    measured = _broadcast_text(b, mid)
     each = 8.0 / max(len(g.markers), 1)
     evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
     return Check(
@@ -769,5 +793,5 @@ def judge(g: Grader) -> tuple[Check, ...]:
     return tuple(lines)
 
 
-RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)
+RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS, trusted_topics=(contract.FIDUCIALS,))
 """The US&R rubric, as its assignment carries it."""

@@ -126,3 +126,6 @@ class Rubric:
     """The topics the rubric reads; everything else in a log is skipped without decoding."""
     required_topics: tuple[str, ...]
     """Without these a log cannot be graded at all."""
+    trusted_topics: tuple[str, ...] = ()
+    """Topics that count only as the world published them (the ``sim`` publisher: the course's
+    detector on the recorder's side), never as a mission did: a forged copy is not graded."""

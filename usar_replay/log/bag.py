@@ -25,7 +25,7 @@ import contextlib
 import errno
 import fcntl
 import os
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -667,12 +667,25 @@ class BagReader:
                     info.publisher,
                 )
 
-    def decoded(self, topics: Iterable[str]) -> Iterator[tuple[str, msgs.Message | None, int]]:
+    def publishers(self, topic: str) -> frozenset[str]:
+        """Who published ``topic`` in this log (its channels' ``usar.publisher``s)."""
+        return frozenset(c.publisher for c in self._layout.channels.values() if c.topic == topic)
+
+    def decoded(
+        self, topics: Iterable[str], *, only_from: Mapping[str, Collection[str]] | None = None
+    ) -> Iterator[tuple[str, msgs.Message | None, int]]:
         """(topic, value, log time) of every message on ``topics``: :meth:`messages` with the
         same checks, order and errors, without a :class:`BagMessage` per message (``usar
-        grade`` reads tens of thousands of small messages and needs only these three)."""
+        grade`` reads tens of thousands of small messages and needs only these three).
+
+        ``only_from``: topics whose messages count only from these publishers (the rubric's
+        trusted detections: the course's detector, never a mission's copy)."""
+        only = only_from or {}
         for found in self._chunks(topics, None, None):
             for info, t, data in found:
+                allowed = only.get(info.topic)
+                if allowed is not None and info.publisher not in allowed:
+                    continue
                 yield info.topic, _decoded(info.topic, info.msgtype, t, data), t
 
     def _chunks(

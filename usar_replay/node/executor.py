@@ -38,6 +38,8 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 from usar_replay.core import contract, msgs
+from usar_replay.core.finite import check_finite
+from usar_replay.node.boundary_check import MAX_TICK_MESSAGES, OutputRefused, PublishRefused
 from usar_replay.node.node import (
     Node,
     Subscription,
@@ -75,6 +77,11 @@ class PublishPolicy:
         """Why ``topic`` may not be published (empty when it may)."""
         if contract.is_ground_truth(topic):
             return f"{topic} is ground truth: a mission can neither read nor publish it"
+        if topic == contract.FIDUCIALS and topic in self.sim_topics:
+            return (
+                f"{topic} is the course's detector's output (trusted, run by usar); a mission "
+                "may not publish it: publish your own detector's results on a topic of your own"
+            )
         if topic in self.sim_topics:
             return f"{topic} is published by the simulator; a mission may not publish it"
         if not topic.startswith("/"):
@@ -142,7 +149,7 @@ class Executor:
 
     def add_subscription(self, sub: Subscription) -> None:
         if contract.is_ground_truth(sub.topic_name):
-            raise PermissionError(
+            raise PublishRefused(
                 f"{sub.topic_name} is ground truth: it is for the grader, never for a mission"
             )
         self._subs.setdefault(sub.topic_name, []).append(sub)
@@ -153,18 +160,35 @@ class Executor:
     def subscription_count(self, topic: str) -> int:
         return len(self._subs.get(topic, ()))
 
+    def provided_by_world(self, topic: str) -> bool:
+        """Whether the world publishes ``topic`` to this mission (the simulator's topics, the
+        course's trusted ``/fiducial_transforms``): a node that would publish it stays idle."""
+        return topic in self.policy.sim_topics
+
     def check_publish_topic(self, topic: str) -> None:
         problem = self.policy.topic_problem(topic)
         if problem:
-            raise PermissionError(problem)
+            raise PublishRefused(problem)
 
     # -- publishing ----------------------------------------------------------------------------
 
     def publish(self, topic: str, msg: msgs.Message) -> None:
-        """Queue ``msg`` as an output of this tick, and for local subscribers."""
+        """Queue ``msg`` as an output of this tick, and for local subscribers.
+
+        Refused at the call, with the error where the user published: a topic the mission may
+        not publish (``PermissionError``), NaN or infinity in any field
+        (:class:`~usar_replay.core.finite.NonFiniteValue`, a ``ValueError`` naming the field),
+        more than :data:`~usar_replay.node.boundary_check.MAX_TICK_MESSAGES` messages in one
+        tick (:class:`~usar_replay.node.boundary_check.OutputRefused`). The recorder checks
+        all of it again on its side."""
         problem = self.policy.message_problem(topic, msg)
         if problem:
-            raise PermissionError(problem)
+            raise PublishRefused(problem)
+        check_finite(topic, msg)
+        if len(self._outputs) >= MAX_TICK_MESSAGES:
+            raise OutputRefused(
+                f"{topic}: more than {MAX_TICK_MESSAGES} messages published in one tick"
+            )
         self._outputs.append((topic, msg))
         if topic in self._subs:
             self._queue.append((topic, msg))

@@ -48,7 +48,15 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.core import cdr, msgs
 from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.core.finite import NonFiniteValue
 from usar_replay.node import jail
+from usar_replay.node.boundary_check import (
+    MAX_FRAME_BYTES,
+    MAX_MESSAGE_BYTES,
+    BoundaryCheck,
+    OutputRefused,
+    PublishRefused,
+)
 from usar_replay.node.executor import Executor, PublishPolicy
 from usar_replay.node.sandbox import SandboxPolicy
 
@@ -70,7 +78,7 @@ _BUILTIN_MODULES = {
     "ros2-final": "usar_replay.missions.ros2_final:main",
 }
 
-_TICK, _OUT, _CRASH, _READY, _STOP = b"T", b"O", b"C", b"R", b"S"
+_TICK, _OUT, _CRASH, _READY, _STOP, _REFUSED = b"T", b"O", b"C", b"R", b"S", b"F"
 _USAR_DIR = str(Path(__file__).resolve().parent)
 
 Wire = tuple[str, str, bytes]
@@ -295,6 +303,8 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
             _serve(conn, executor)
     except MemoryError as err:
         _report(conn, b"M", _user_traceback(err))
+    except (NonFiniteValue, OutputRefused, PublishRefused) as err:  # refused at the call
+        _report(conn, _REFUSED, _user_traceback(err))
     except BaseException as err:  # noqa: BLE001 - the user's error is the verdict, not ours
         _report(conn, _CRASH, _user_traceback(err))
 
@@ -325,6 +335,12 @@ def _serve(conn: multiprocessing.connection.Connection, executor: Executor) -> N
             # a mission that said it is done runs no more callbacks (live, the run ends there)
             outputs = [] if executor.shutdown_requested else executor.tick(t_ns, inputs)
             wire = [(topic, type(m).__msgtype__, cdr.encode(m)) for topic, m in outputs]
+            for topic, msgtype, data in wire:
+                if len(data) > MAX_MESSAGE_BYTES:
+                    raise OutputRefused(
+                        f"a {msgtype} of {len(data)} bytes on {topic}: a message is at most "
+                        f"{MAX_MESSAGE_BYTES} bytes (8 MiB)"
+                    )
             conn.send_bytes(_pack(_OUT, t_ns, wire, int(executor.shutdown_requested)))
 
 
@@ -428,6 +444,7 @@ class MissionProcess:
         self.target = target
         self.limits = limits or MissionLimits()
         self.policy = PublishPolicy(sim_topics=sim_topics, sim_frames=sim_frames)
+        self.boundary = BoundaryCheck(self.policy)
         self.shutdown_requested = False
         self._work: str | None = None
         self._jail: jail.Jail | None = None
@@ -569,15 +586,26 @@ class MissionProcess:
                 "within the same tick); raise the limit with --tick-timeout",
             )
         try:
-            frame = self._conn.recv_bytes()
+            frame = self._conn.recv_bytes(MAX_FRAME_BYTES)
         except (EOFError, OSError):
+            if self._conn.closed or not self._conn.readable:  # a frame over the length
+                raise self._refuse(
+                    f"the mission process sent more than {MAX_FRAME_BYTES} bytes in one frame"
+                ) from None
             raise self._died(doing) from None
         kind = frame[:1]
         if kind == _CRASH:
             raise MissionEnded("crashed", frame[1:].decode("utf-8", errors="replace"))
         if kind == b"M":
             raise MissionEnded("out_of_memory", frame[1:].decode("utf-8", errors="replace"))
+        if kind == _REFUSED:
+            raise MissionEnded("refused", frame[1:].decode("utf-8", errors="replace"))
         return frame
+
+    def _refuse(self, reason: str) -> MissionEnded:
+        """End the process now (what it sends is not read any more) and say why."""
+        self._proc.kill()
+        return MissionEnded("refused", reason)
 
     def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
         """Hand one tick to the mission without waiting (replay keeps several in flight)."""
@@ -595,22 +623,17 @@ class MissionProcess:
         """The outputs of the oldest tick in flight: (topic, type, CDR, decoded), checked."""
         frame = self._wait(self.limits.tick_timeout_s, "handling a tick")
         self._in_flight -= 1
-        kind, _t, items, flag = _unpack(frame)
-        if kind != _OUT:
-            raise MissionEnded("crashed", "the mission process sent something unexpected")
+        if frame[:1] != _OUT:
+            raise self._refuse(f"the mission process sent a frame of unknown kind {frame[:1]!r}")
+        try:
+            _kind, _t, items, flag = _unpack(frame)
+        except (ValueError, IndexError, struct.error) as err:  # UnicodeDecodeError included
+            raise self._refuse(f"the mission process sent a malformed frame ({err})") from None
+        try:
+            out = self.boundary.check(items)
+        except OutputRefused as err:
+            raise self._refuse(str(err)) from None
         self.shutdown_requested = self.shutdown_requested or bool(flag)
-        out: list[tuple[str, str, bytes, msgs.Message]] = []
-        for topic, msgtype, data in items:
-            try:
-                value = cdr.decode(data, msgtype)
-            except Exception as err:
-                raise MissionEnded(
-                    "refused", f"the mission published a {msgtype!r} on {topic} usar cannot read"
-                ) from err
-            problem = self.policy.message_problem(topic, value)
-            if problem:
-                raise MissionEnded("refused", problem)
-            out.append((topic, msgtype, data, value))
         return out
 
     def tick(self, t_ns: int, inputs: Sequence[Wire]) -> list[tuple[str, str, bytes, msgs.Message]]:

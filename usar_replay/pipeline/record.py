@@ -45,6 +45,7 @@ from usar_replay.node.worker import (
     hide_from_mission,
     resolve_target,
 )
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
@@ -373,20 +374,24 @@ def _tick_loop(
     params = mission_parameters(scenario, settings)
     # the log being written holds the truth: unreadable to the mission even next to its file
     hidden = hide_from_mission(limits, str(writer.part_path))
+    detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
+    inputs = mission_inputs(asg, detector is not None)
     with process(
-        target, params, sim_topics=asg.sim_topics, sim_frames=asg.sim_frames, limits=hidden
+        target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden
     ) as proc:
         latency = rs.actuation_latency_ticks
         tick: _Observed | None = _observe(sim, scenario, asg, first)
         commands: list[tuple[str, msgs.Twist]] = []
         while tick is not None:
+            if detector is not None:  # after the previous tick's enable switch
+                tick.wire = detector.add_detections(tick.wire)
             _write_inputs(writer, tick, run)
             proc.send(tick.t, tick.wire)
             nxt: _Observed | None = None
             if latency:
                 _step(sim, commands, steps_per_tick)
                 nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-            commands = _take_outputs(proc, writer, tick.t, run)
+            commands = _take_outputs(proc, writer, tick.t, run, detector)
             if progress is not None:
                 progress(_progress(run, tick.t, scenario))
             if proc.shutdown_requested:
@@ -409,12 +414,20 @@ def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:
 
 
 def _take_outputs(
-    proc: MissionProcess, writer: bag.BagWriter, t: int, run: _Run
+    proc: MissionProcess,
+    writer: bag.BagWriter,
+    t: int,
+    run: _Run,
+    detector: CourseDetector | None = None,
 ) -> list[tuple[str, msgs.Twist]]:
-    """What the mission published at this tick, written as the ``mission`` publisher; returns
-    the cmd_vels for the simulator and notes the stored markers and the last log line."""
+    """What the mission published at this tick (checked by the process boundary), written as
+    the ``mission`` publisher; returns the cmd_vels for the simulator, notes the stored markers
+    and the last log line, and hands the course's detector its enable switch."""
     commands: list[tuple[str, msgs.Twist]] = []
-    for topic, msgtype, raw, value in proc.receive():
+    outputs = proc.receive()
+    if detector is not None:
+        detector.note_outputs((topic, value) for topic, _, _, value in outputs)
+    for topic, msgtype, raw, value in outputs:
         writer.write_raw(topic, msgtype, raw, t, publisher="mission")
         robot = contract.robot_of_topic(topic)
         if robot is not None and topic == contract.cmd_vel(robot):

@@ -1,12 +1,14 @@
 """`usar replay`: re-run a mission from a log and prove it reproduces the recording.
 
 The recorded *inputs* (everything the simulator published: ``/tf_static``, ``/map``, ``/tf``,
-odometry, ``CameraInfo``, camera frames) are handed, tick by tick and as the very bytes that were
-logged, to a fresh mission process (:mod:`usar_replay.node.worker`), the same code path as live.
-Every message it publishes is compared with the recorded one on the same topic at the same sim time:
-the same CDR bytes. The report gives counts per topic, the first divergence (topic, sim time,
-field, both values) and a sha256 digest of the replayed outputs (:func:`outputs_digest` computes
-the same digest over a log's recorded outputs, so two machines can compare replays by one line).
+odometry, ``CameraInfo``, camera frames, and the course detector's ``/fiducial_transforms``, which
+replay re-runs on the recorded frames, compares with the recorded ones and hands to the mission:
+:mod:`usar_replay.pipeline.course_detector`) are handed, tick by tick and as the very bytes that
+were logged, to a fresh mission process (:mod:`usar_replay.node.worker`), the same code path as
+live. Every message it publishes is compared with the recorded one on the same topic at the same sim
+time: the same CDR bytes. The report gives counts per topic, the first divergence (topic, sim time,
+field, both values) and a sha256 digest of the replayed outputs (:func:`outputs_digest` computes the
+same digest over a log's recorded outputs, so two machines can compare replays by one line).
 
 Which messages are inputs and which outputs is written in the log itself: each channel says who
 published it (``sim``, ``mission``, ``recorder``), so a mission may broadcast any tf frame it
@@ -52,6 +54,7 @@ from usar_replay.node.worker import (
     hide_from_mission,
     resolve_target,
 )
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 
 __all__ = [
     "MISSION_TF_KEY",
@@ -407,6 +410,8 @@ class _Tick:
     recorded: list[_Pending] = field(default_factory=list)
     truth: list[bag.BagMessage] = field(default_factory=list)
     sent: bool = False
+    course: list[_Pending] = field(default_factory=list)
+    """The course detector's re-run on this tick's frame, compared with the recorded one."""
 
 
 def _ticks(run: Run) -> Iterator[_Tick]:
@@ -465,17 +470,30 @@ def replay(
     use = settings or run.settings
     same_code = bool(run.mission.sha256) and target.sha256 == run.mission.sha256
     replayer = _Replayer(grade_sink, frozenset(grade_topics) if grade_sink else frozenset())
+    # the course's detections are recorded inputs, re-run and compared (a log from before the
+    # trusted detector has the mission's own as outputs: those replay as they ran); a
+    # mission's detections on that topic are never graded
+    world_detects = bool(asg.course_detections) and SIM in run.reader.publishers(
+        asg.course_detections
+    )
+    redetect = CourseDetector(use.detector, asg) if world_detects else None
+    replayer.never_graded = frozenset({asg.course_detections} - {""})
     crashed: MissionEnded | None = None
     last: _Tick | None = None
     with MissionProcess(
         target,
         asg.parameters(scenario, use),
-        sim_topics=asg.sim_topics,
+        sim_topics=mission_inputs(asg, world_detects),
         sim_frames=asg.sim_frames,
         limits=hide_from_mission(limits, str(run.path)),  # the log holds the truth
     ) as proc:
         try:
-            last = _drive(run, proc, replayer, window)
+            # other code or settings may switch the course's detector otherwise than the
+            # recording did: then each tick's detections wait for the replayed switches
+            # (lockstep); a faithful replay follows the recorded ones with ticks in flight
+            if redetect is not None and (use != run.settings or not same_code):
+                replayer.switches, window = redetect, 0
+            last = _drive(run, proc, replayer, window, redetect)
         except MissionEnded as ended:
             crashed, last = ended, replayer.last
     uncompared = len(last.recorded) if (last is not None and run.problem()) else 0
@@ -526,6 +544,10 @@ class _Replayer:
         self.inputs = 0
         self.ticks = 0
         self.last: _Tick | None = None
+        self.never_graded: frozenset[str] = frozenset()
+        """Output topics the grader never sees from a mission (the course's detections)."""
+        self.switches: CourseDetector | None = None
+        """The course's detector that follows the *replayed* mission's on/off switches."""
 
     def feed(
         self, topic: str, msgtype: str, data: bytes, value: msgs.Message | None, t: int
@@ -549,15 +571,21 @@ class _Replayer:
         self._feed_recorded(tick)
         for p in tick.recorded:
             self.changes.note(p.topic, p.msg, recorded=True)
-        self.comparison.tick(tick.recorded, ())
+        for p in tick.course:
+            self.changes.note(p.topic, p.msg, recorded=False)
+        self.comparison.tick(tick.recorded, tick.course)
 
     def finish(self, tick: _Tick, proc: MissionProcess) -> None:
         """The mission's outputs for a sent tick: digested, compared with the recorded ones,
         and fed to the grader after the tick's inputs and truth."""
         outputs = proc.receive()
+        if self.switches is not None:
+            self.switches.note_outputs((topic, value) for topic, _, _, value in outputs)
         self.ticks += 1
         self.inputs += len(tick.inputs)
-        replayed = []
+        replayed = list(tick.course)
+        for p in tick.course:
+            self.changes.note(p.topic, p.msg, recorded=False)
         for topic, msgtype, data, value in outputs:
             self.digest.update(_digest_record(topic, tick.t, data))
             self.changes.note(topic, value, recorded=False)
@@ -567,16 +595,25 @@ class _Replayer:
         self.comparison.tick(tick.recorded, replayed)
         self._feed_recorded(tick)
         for topic, msgtype, data, value in outputs:
-            self.feed(topic, msgtype, data, value, tick.t)
+            if topic not in self.never_graded:
+                self.feed(topic, msgtype, data, value, tick.t)
 
 
-def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> _Tick | None:
+def _drive(
+    run: Run,
+    proc: MissionProcess,
+    replayer: _Replayer,
+    window: int,
+    redetect: CourseDetector | None = None,
+) -> _Tick | None:
     """Send every recorded tick to the mission process, keeping up to ``window`` ticks in
     flight (the mission thinks while the log is read), and finish each in order. Returns the
     log's last tick."""
     in_flight: deque[_Tick] = deque()
     for tick in _ticks(run):
         replayer.last = tick
+        if redetect is not None:
+            _redetect(redetect, tick, recorded_switches=replayer.switches is None)
         if not tick.inputs or proc.shutdown_requested:
             # ticks still in flight are finished first: the grade sink must see sim time in
             # order (a grader's tf buffer drops what arrives after newer data, TF_OLD_DATA)
@@ -587,7 +624,7 @@ def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> 
         proc.send(tick.t, tick.inputs)
         tick.sent = True
         in_flight.append(tick)
-        while len(in_flight) > max(window, 1):
+        while len(in_flight) > max(window, 0 if replayer.switches else 1):
             replayer.finish(in_flight.popleft(), proc)
     cut = run.reader.damage is not None or run.file_state != "complete"
     while in_flight:
@@ -597,6 +634,24 @@ def _drive(run: Run, proc: MissionProcess, replayer: _Replayer, window: int) -> 
             break
         replayer.finish(tick, proc)
     return replayer.last
+
+
+def _redetect(detector: CourseDetector, tick: _Tick, *, recorded_switches: bool) -> None:
+    """Re-run the course's detector on the tick's recorded frame: the mission receives the
+    re-run's detections (with the recorded settings, the recorded bytes; with ``--set
+    detector.*``, the changed detector's), and the recorded ones are compared with them. The
+    detector is switched by the tick's recorded outputs (``recorded_switches``), else by the
+    replayed ones as they come back (:attr:`_Replayer.switches`)."""
+    recorded_outputs = [(p.topic, p.msgtype, p.data) for p in tick.recorded]
+    tick.inputs, recorded, redone = detector.replay_tick(
+        tick.inputs, recorded_outputs if recorded_switches else []
+    )
+    def pending(items: list[tuple[str, str, bytes]]) -> list[_Pending]:
+        return [_Pending(tp, tick.t, data, mt, _try_decode(data, mt)) for tp, mt, data in items]
+
+    # first in the tick, as they were delivered: a changed frame diverges here first
+    tick.recorded[:0] = pending(recorded)
+    tick.course = pending(redone)
 
 
 def _digest_record(topic: str, t_ns: int, data: bytes) -> bytes:

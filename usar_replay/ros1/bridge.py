@@ -12,7 +12,8 @@ on socket FD; to the student's graph it is what the course's ``multiple_robots.l
   ``/tf_static`` and ``/map`` (latched), ``/explorer/odom``, ``/follower/odom``, the camera as
   ``sensor_msgs/Image`` on ``/explorer/camera/rgb/image_raw`` (and its ``compressed`` and
   ``camera_info``);
-* aruco_detect: ``/fiducial_transforms`` from usar's detector on every camera frame;
+* aruco_detect: ``/fiducial_transforms`` as the tick brings it, from the course's detector that
+  the recorder runs on every camera frame (trusted: :mod:`usar_replay.pipeline.course_detector`);
 * move_base: ``/explorer/move_base`` and ``/follower/move_base`` (:mod:`.move_base`).
 
 What the graph publishes on ``/tf``, ``/tf_static``, ``/explorer/cmd_vel``, ``/follower/cmd_vel``
@@ -48,12 +49,10 @@ from typing import Any
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
-from usar_replay.core.settings import DetectorParams, from_mapping
 from usar_replay.core.tf_tree import Buffer, TransformException
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
-from usar_replay.world.detect import detect
 from usar_replay.world.nav import grid_from_msg
 
 __all__ = ["main"]
@@ -177,12 +176,6 @@ class Bridge:
         self._static: dict[str, msgs.TransformStamped] = {}
         self.buffer = Buffer(cache_time=30.0)
         self.info: msgs.CameraInfo | None = None
-        self.image_seq = 0
-        self.detector = from_mapping(
-            DetectorParams,
-            {k[9:]: v for k, v in self.parameters.items() if k.startswith("detector.")},
-            "detector.",
-        )
         self.move_base: dict[str, Any] = {}
         self.last_t: int | None = None
         self.robots = [r for r in contract.ROBOTS if contract.odom(r) in setup["sim_topics"]]
@@ -363,7 +356,6 @@ class Bridge:
         from rosgraph_msgs.msg import Clock
 
         wall0 = time.perf_counter()  # pacing only: never reaches a message
-        out: list[tuple[str, msgs.Message]] = []
         for topic, msgtype, data in items:
             value = cdr.decode(data, msgtype)
             if topic == contract.TF_STATIC and isinstance(value, msgs.TFMessage):
@@ -382,11 +374,7 @@ class Bridge:
                 self.info = value
             elif isinstance(value, msgs.CompressedImage) and self.info is not None:
                 self._raw_image(value)
-                fiducials = detect(value, self.info, self.detector, self.image_seq)
-                self.image_seq += 1
-                out.append((contract.FIDUCIALS, fiducials))
-            self._publish(topic, value)
-        for topic, value in out:
+            # the course's /fiducial_transforms comes in the tick, right after its frame
             self._publish(topic, value)
         poses = {r: self._pose(r, t_ns) for r in self.robots}
         driven: list[tuple[str, msgs.Message]] = []
@@ -401,11 +389,10 @@ class Bridge:
             time.sleep(remaining)
         with self._lock:
             got, self._inbox = self._inbox, []
-        # the detector's output first (a marker_frame broadcast answering it comes after it),
         # move_base's commands last: when the package also commands a robot move_base drives,
         # move_base's command is the one the robot follows (what team 002 saw) and the rubric's
         # cmd_vel_one_publisher line reports the fight
-        return out + got + driven
+        return got + driven
 
     # -- the loop -------------------------------------------------------------------------------
 

@@ -37,6 +37,7 @@ from usar_replay.core.errors import InvalidScenario
 from usar_replay.core.rotations import wrap_angle
 from usar_replay.world.nav import Navigator, NavStatus, OccupancyGrid
 from usar_replay.world.scenario import Box, Marker, Scenario, wall
+from usar_replay.world.world_key import WorldKey
 
 __all__ = [
     "ASSIGNMENT",
@@ -246,13 +247,14 @@ def check_ros2(scn: Scenario, grid: OccupancyGrid | None = None) -> str | None:
     return None
 
 
-def make_ros2_variant(base: Scenario, seed: int) -> Scenario:
+def make_ros2_variant(base: Scenario, seed: int, key: WorldKey | None = None) -> Scenario:
     """A seeded variant of ``base`` (same room, marker position and ``aruco_target``): another
     marker ID, another origin frame, other origin poses and destinations. Candidates are drawn
-    from ``numpy.random.default_rng(seed)`` until one passes :func:`check_ros2`."""
+    from ``numpy.random.default_rng(seed)`` until one passes :func:`check_ros2`; with a world
+    ``key``, from HMAC-SHA256(key, seed) instead (:mod:`usar_replay.world.world_key`)."""
     task = task_of(base)
     grid = OccupancyGrid.from_scenario(base)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(seed if key is None else key.rng_seed(seed))
     walls_x = [w.x for w in base.walls]
     walls_y = [w.y for w in base.walls]
     x0, x1 = min(walls_x) + 1.0, max(walls_x) - 1.0
@@ -280,6 +282,7 @@ def make_ros2_variant(base: Scenario, seed: int) -> Scenario:
             base,
             markers=(marker,),
             seed=seed,
+            world_key="" if key is None else key.digest,
             task=_task_pairs(task.start, origins, frame, destinations),
         )
         if check_ros2(candidate, grid) is None:

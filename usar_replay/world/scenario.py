@@ -127,6 +127,9 @@ class Scenario:
     camera: CameraSettings = field(default_factory=CameraSettings)
     time_limit_s: float = 600.0
     seed: int | None = None
+    world_key: str = ""
+    """The digest of the world key a keyed variant was made with
+    (:mod:`usar_replay.world.world_key`): with one, ``seed`` alone does not give this world."""
     assignment: str = "usar"
     """Which assignment this world is for: ``usar`` (the two-robot US&R mission) or
     ``ros2-final`` (the ROS 2 final project; :mod:`usar_replay.grading.assignment`)."""

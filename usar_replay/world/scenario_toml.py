@@ -52,6 +52,7 @@ _T = TypeVar("_T")
 #   name = "course"
 #   time_limit_s = 600.0
 #   seed = 3                      # optional: the variant seed this world came from
+#   world_key = "0123abcd..."     # optional: digest of the world key of a hidden variant
 #   [camera]        width, height, rate_hz, hfov, encoding ("png" | "jpeg")
 #   [robots.explorer] / [robots.follower]   x, y, yaw
 #   [aruco_lookup_locations]      target_1 = [x, y], target_2 = [x, y], ... (as the course's
@@ -94,6 +95,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         camera=camera,
         time_limit_s=_num(src, "time_limit_s", data.get("time_limit_s", 600.0), positive=True),
         seed=None if data.get("seed") is None else _int(src, "seed", data["seed"]),
+        world_key=_str(src, "world_key", data["world_key"]) if "world_key" in data else "",
         assignment=_str(src, "assignment", data.get("assignment", "usar")),
         task=_parse_task(src, data.get("task", {})),
     )
@@ -119,6 +121,7 @@ _TOP_LEVEL = [
     "name",
     "time_limit_s",
     "seed",
+    "world_key",
     "camera",
     "robots",
     "aruco_lookup_locations",
@@ -441,6 +444,8 @@ def _head_tables(scn: Scenario) -> dict[str, Any]:
     }
     if scn.seed is not None:
         data["seed"] = scn.seed
+    if scn.world_key:
+        data["world_key"] = scn.world_key
     if scn.assignment != "usar":
         data["assignment"] = scn.assignment
     cam = scn.camera
@@ -500,6 +505,7 @@ _LINE_COMMENTS: dict[tuple[str, str], str] = {
     ("", "name"): "names the default output recordings/NAME.mcap: letters, digits, _ . -",
     ("", "time_limit_s"): "s, the mission's time limit (1..3600)",
     ("", "seed"): "the variant seed this world came from",
+    ("", "world_key"): "digest of the secret key of a hidden variant (see docs/batch.md)",
     ("", "walls"): "x, y: centre (m); yaw (rad); length (m, 0.01..50); thickness (m, 0.15); "
     "height (m, 1)",
     ("", "boxes"): "x, y, z: centre (m); size_x, size_y, size_z (m, 0.01..50); yaw (rad)",

@@ -35,6 +35,7 @@ from usar_replay.core.errors import InvalidScenario
 from usar_replay.core.rotations import wrap_angle
 from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
 from usar_replay.world.scenario import Box, Marker, Scenario
+from usar_replay.world.world_key import WorldKey
 
 __all__ = [
     "MAX_DRIVE_FRACTION",
@@ -205,11 +206,15 @@ def drive_time_s(scn: Scenario, grid: OccupancyGrid | None = None) -> float:
     return length / Limits().max_linear
 
 
-def make_variant(base: Scenario, seed: int) -> Scenario:
-    """The world of ``base`` with its markers moved and targets recomputed, from ``seed``."""
+def make_variant(base: Scenario, seed: int, key: WorldKey | None = None) -> Scenario:
+    """The world of ``base`` with its markers moved and targets recomputed, from ``seed``.
+
+    With a world ``key`` (:mod:`usar_replay.world.world_key`) the random stream is seeded by
+    HMAC-SHA256(key, seed): the world cannot be derived from the seed without the key, and it
+    records the key's digest (``world_key``)."""
     if seed < 0:
         raise InvalidScenario(f"--seed {seed}: must be >= 0")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(seed if key is None else key.rng_seed(seed))
     grid = OccupancyGrid.from_scenario(base)
     candidates = faces(base)
     ids = sorted(m.id for m in base.markers)
@@ -245,6 +250,7 @@ def make_variant(base: Scenario, seed: int) -> Scenario:
             markers=tuple(sorted(markers, key=lambda m: m.id)),
             targets=tuple(targets),
             seed=seed,
+            world_key="" if key is None else key.digest,
         )
         if check_variant(variant, grid) is None:
             return variant

@@ -1,0 +1,109 @@
+"""The course's aruco_detect, run by the recorder: detections the mission cannot forge.
+
+Why here and not in the mission process: the rubric's "detected" lines must be computed only
+from what the mission cannot forge. aruco_detect is part of the course's world (the students
+launch it, they do not write it), so the recorder runs it, on the very bytes of each recorded
+camera frame, with the run's ``[detector]`` settings, and hands its
+``/fiducial_transforms`` to the mission as an input, written to the log as the ``sim``
+publisher (the course's infrastructure). A mission that publishes ``/fiducial_transforms``
+itself is refused (:class:`~usar_replay.node.executor.PublishPolicy`); one that brings its own
+detector publishes on its own topic, compared by replay and never graded as a detection.
+
+The detector keeps aruco_detect's ``enable_detections`` switch: a ``std_msgs/Bool`` the mission
+publishes on :data:`~usar_replay.core.contract.ENABLE_DETECTIONS` turns it off and on from the
+next camera frame (the built-in explorer enables it only while it searches at a target, so the
+frames taken on the way are never decoded, as before). Everything is a pure function of the
+recorded bytes and the mission's recorded outputs, so the detections replay exactly: they are
+recorded inputs, which replay hands to the mission as they were logged.
+
+Where the detections go in a tick: right after the camera frame, where the mission's own
+``ArucoDetect`` used to deliver them (before odometry), so a mission sees the same messages in
+the same order as when it ran the detector itself, and keeps its score.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.settings import DetectorParams
+from usar_replay.grading.assignment import Assignment
+from usar_replay.world.detect import detect
+
+__all__ = ["CourseDetector", "mission_inputs"]
+
+Wire = tuple[str, str, bytes]
+_FIDUCIALS_TYPE = msgs.FiducialTransformArray.__msgtype__
+
+
+def mission_inputs(asg: Assignment, course_detections: bool) -> tuple[str, ...]:
+    """The topics the world publishes to a mission: the simulator's, then (with the course's
+    detector) ``/fiducial_transforms``."""
+    extra = (asg.course_detections,) if course_detections and asg.course_detections else ()
+    return (*asg.sim_topics, *extra)
+
+
+class CourseDetector:
+    """aruco_detect on the recorder's side: one instance per run, fed tick by tick."""
+
+    def __init__(self, params: DetectorParams, asg: Assignment) -> None:
+        self.params = params
+        self.topic = asg.course_detections
+        self.image_topic = asg.image_topic
+        self.info_topic = asg.camera_info_topic
+        self.enabled = True
+        """aruco_detect starts enabled; the mission's ``Bool`` switches it."""
+        self.seq = 0
+        """Frames detected so far (aruco_detect's ``image_seq`` counts only those)."""
+        self._info: tuple[bytes, msgs.CameraInfo] | None = None
+
+    @classmethod
+    def for_run(cls, params: DetectorParams, asg: Assignment) -> CourseDetector | None:
+        """The run's detector; None for an assignment whose world has none."""
+        return cls(params, asg) if asg.course_detections else None
+
+    def note_outputs(self, outputs: Iterable[tuple[str, msgs.Message]]) -> None:
+        """The mission's outputs of a tick: an ``enable_detections`` switch acts from the next
+        frame (the mission received this tick's frame before it could publish)."""
+        for topic, value in outputs:
+            if topic == contract.ENABLE_DETECTIONS and isinstance(value, msgs.Bool):
+                self.enabled = value.data
+
+    def add_detections(self, wire: Sequence[Wire]) -> list[Wire]:
+        """The tick's inputs with the detections of its camera frame right after the frame
+        (unchanged when there is no frame, no ``CameraInfo`` yet, or detection is off)."""
+        out = list(wire)
+        if not self.enabled:
+            return out
+        for i, (topic, msgtype, data) in enumerate(wire):
+            if topic == self.info_topic:
+                self._note_info(data, msgtype)
+            elif topic == self.image_topic and self._info is not None:
+                image = cdr.decode(data, msgtype)
+                assert isinstance(image, msgs.CompressedImage)
+                found = detect(image, self._info[1], self.params, self.seq)
+                self.seq += 1
+                out.insert(i + 1, (self.topic, _FIDUCIALS_TYPE, cdr.encode(found)))
+                break
+        return out
+
+    def replay_tick(
+        self, inputs: Sequence[Wire], recorded_outputs: Sequence[Wire]
+    ) -> tuple[list[Wire], list[Wire], list[Wire]]:
+        """Replay's re-run: (the tick's inputs with this detector's detections in place of the
+        recorded ones, the recorded detections, the re-run's). The tick's *recorded*
+        ``enable_detections`` switches then act from the next frame, as they did live (so the
+        re-run needs no answer from the mission and replay keeps ticks in flight)."""
+        recorded = [w for w in inputs if w[0] == self.topic]
+        out = self.add_detections([w for w in inputs if w[0] != self.topic])
+        redone = [w for w in out if w[0] == self.topic]
+        for topic, msgtype, data in recorded_outputs:
+            if topic == contract.ENABLE_DETECTIONS and msgtype == msgs.Bool.__msgtype__:
+                self.note_outputs([(topic, cdr.decode(data, msgtype))])
+        return out, recorded, redone
+
+    def _note_info(self, data: bytes, msgtype: str) -> None:
+        if self._info is None or self._info[0] != data:
+            info = cdr.decode(data, msgtype)
+            assert isinstance(info, msgs.CameraInfo)
+            self._info = (data, info)
