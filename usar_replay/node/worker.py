@@ -163,6 +163,9 @@ class MissionLimits:
     hidden: tuple[str, ...] = ()
     """Files the jailed mission may not read even when they lie in a readable folder (the log
     being written, or replayed, next to the mission's file)."""
+    work_dir: str = ""
+    """The jailed mission's writable folder and working directory: default a fresh one,
+    removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
 
 
 class MissionEnded(UsarError):
@@ -447,12 +450,14 @@ class MissionProcess:
         self.boundary = BoundaryCheck(self.policy)
         self.shutdown_requested = False
         self._work: str | None = None
+        self._own_work = False
         self._jail: jail.Jail | None = None
         policy = self.limits.sandbox
         jailed = _use_jail(self.limits)
         if jailed:
             # the mission's own writable folder (its working directory), removed at close
-            self._work = tempfile.mkdtemp(prefix="usar-mission-")
+            self._own_work = not self.limits.work_dir
+            self._work = self.limits.work_dir or tempfile.mkdtemp(prefix="usar-mission-")
             if policy is not None:
                 policy = replace(
                     policy,
@@ -545,7 +550,8 @@ class MissionProcess:
         if self._jail is not None:
             self._jail.close()
         if self._work is not None:
-            shutil.rmtree(self._work, ignore_errors=True)
+            if self._own_work:
+                shutil.rmtree(self._work, ignore_errors=True)
             self._work = None
 
     def _died(self, doing: str) -> MissionEnded:

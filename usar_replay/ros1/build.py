@@ -124,6 +124,24 @@ def _errors(output: str, limit: int = 60) -> str:
     return "\n".join(picked[:limit])
 
 
+def _sandboxed(cmd: list[str], workspace: Path) -> tuple[list[str], dict[str, str]]:
+    """``cmd`` in the kernel sandbox when there is one: a package's CMakeLists.txt runs
+    whatever it likes at build time (``execute_process``), so the build is the student's code
+    too. It reads the system and Debian's ROS configuration, writes only the workspace, and has
+    no network. Without bubblewrap (or with ``USAR_SANDBOX=off``) it runs as it is, as a
+    mission does then."""
+    from usar_replay.node import jail
+
+    ok, _ = jail.bwrap_available()
+    if not ok or os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
+        return cmd, catkin_env()
+    env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
+    # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version
+    etc = [p for p in ("/etc/catkin", "/etc/ros", "/etc/debian_version") if Path(p).exists()]
+    argv = jail.jail_argv(cmd, ro_binds=etc, work_dir=str(workspace), env=env)
+    return argv, env
+
+
 def catkin_env() -> dict[str, str]:
     """The environment catkin and roslaunch run in: Debian's tools first, no venv Python."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
@@ -144,11 +162,12 @@ def build(pkg: Package, workspace: Path, jobs: int = 2, timeout_s: float = 900.0
     cmd = ["catkin_make", "-C", str(workspace), "-DPYTHON_EXECUTABLE=/usr/bin/python3"]
     cmd += [f"-j{jobs}"]  # no -l: on a shared machine a load limit stalls the build
     start = time.perf_counter()  # for the build time shown to people only
+    argv, env = _sandboxed(cmd, workspace)
     try:
         proc = subprocess.run(
-            cmd,
+            argv,
             cwd=workspace,
-            env=catkin_env(),
+            env=env,
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,

@@ -53,6 +53,16 @@ class Ros1Options:
     """Reuse a workspace built before from the same files (:func:`cached_build`)."""
 
 
+_ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
+
+
+def _ros_etc() -> tuple[str, ...]:
+    """What of ``/etc`` the graph reads, bound read-only into the sandbox like ``/usr``:
+    Debian's ROS 1 configuration (catkin's environment hooks set ``ROS_PACKAGE_PATH``) and
+    name resolution (roslaunch resolves ``localhost``)."""
+    return tuple(p for p in _ROS_ETC if Path(p).exists())
+
+
 def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
     """What the log's ``mission.toml`` says: how the package was started and its sha256."""
     how = f"--launch {options.launch}" if options.launch else f"--node {options.node}"
@@ -97,9 +107,15 @@ class Ros1Process(MissionProcess):
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
             limits = limits or MissionLimits()
             startup = max(limits.startup_timeout_s, options.connect_timeout_s + 30.0)
-            # the kernel sandbox (bubblewrap) is for Python missions; the graph gets its own
-            # network namespace instead (usar_replay.ros1.isolation)
-            limits = dataclasses.replace(limits, startup_timeout_s=startup, jail="off")
+            # the bridge and the whole graph it starts run in the kernel sandbox (bubblewrap) as
+            # a Python mission does: reading the built workspace, writing only the run's folder,
+            # in a network namespace of their own whose loopback carries the ROS traffic
+            limits = dataclasses.replace(
+                limits,
+                startup_timeout_s=startup,
+                read_roots=(str(self.built.workspace), *_ros_etc()),
+                work_dir=str(self.run_dir),
+            )
             super().__init__(
                 target, parameters, sim_topics=sim_topics, sim_frames=sim_frames, limits=limits
             )
@@ -108,9 +124,13 @@ class Ros1Process(MissionProcess):
             raise
 
     def _argv(self, fd: int) -> list[str]:
-        """The bridge, in its own network namespace (it writes its output to the run's folder
-        and leads its own session, so the graph it starts is one process group)."""
+        """The bridge (it writes its output to the run's folder and leads its own session, so
+        the graph it starts is one process group). In the kernel sandbox it already has a
+        network namespace of its own; without one it gets just that
+        (:func:`usar_replay.ros1.isolation.isolated_command`)."""
         cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
+        if self._jail is not None:
+            return cmd
         return isolated_command(cmd, isolate=self.options.isolate)
 
     def close(self) -> None:
