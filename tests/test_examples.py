@@ -207,7 +207,7 @@ def test_stamped_now_and_looked_up_at_latest(room_log: tuple[Path, RecordResult]
     # 10 Hz is the camera's), each a copy of an earlier frame's detection
     assert broadcasts and all(tf.header.stamp.ns % 100_000_000 == 0 for tf in broadcasts)
     measured = report.check("marker_frame.only_on_detection").measured
-    assert f"{len(broadcasts)} broadcasts, 0 without a detection" in measured
+    assert f"{len(broadcasts)} broadcasts, 0 without a matching detection" in measured
     stored = [m for _, m, _ in kept if isinstance(m, msgs.FiducialTransformArray)]
     assert [m.header.frame_id for m in stored if m.transforms][-1:] == [contract.MAP]
 

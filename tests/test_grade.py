@@ -245,7 +245,7 @@ def test_a_broadcast_on_a_frame_without_detection(
     report = grade_file(path)
     assert report.failed_ids() == ["marker_frame.only_on_detection"]
     line = report.check("marker_frame.only_on_detection")
-    assert "1 without a detection" in line.measured and line.evidence_ns == stamps[-1]
+    assert "1 without a matching detection" in line.measured and line.evidence_ns == stamps[-1]
 
 
 def test_a_run_longer_than_10_minutes_fails_the_time_limit(

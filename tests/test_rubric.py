@@ -65,8 +65,12 @@ def detect(g: Grader, ids: list[int], t: int) -> msgs.FiducialTransformArray:
     arr = msgs.FiducialTransformArray(
         header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.OPTICAL_FRAME),
         transforms=tuple(
+            # the camera sits at map's origin (see broadcast): a marker's detection is its pose
             msgs.FiducialTransform(
-                fiducial_id=k, transform=msgs.Transform(translation=msgs.Vector3(z=1.0 + k))
+                fiducial_id=k,
+                transform=msgs.Transform(
+                    translation=msgs.Vector3(x=MARKERS[k][0], y=MARKERS[k][1], z=MARKERS[k][2])
+                ),
             )
             for k in ids
         ),
@@ -213,8 +217,40 @@ def test_only_on_detection_counts_broadcasts_without_one_or_off_the_camera() -> 
     broadcast(g, 0, 8 * S, parent=contract.MAP)
     line = only_on_detection(g)
     assert not line.passed and line.value == 2 and line.limit == 0
-    assert line.measured == "3 broadcasts, 2 without a detection, 1 with another parent"
+    assert line.measured == "3 broadcasts, 2 without a matching detection, 1 with another parent"
     assert line.evidence_ns == 7 * S
+
+
+def test_an_older_detection_stamped_anew_is_not_a_detection() -> None:
+    """The "stamped now" bug: frame 6 s saw marker 0 elsewhere (the camera turned), but the
+    broadcast stamped 6 s is exactly frame 5 s's detection."""
+    g = Grader(world())
+    old = detect(g, [0], 5 * S).transforms[0].transform
+    moved = msgs.FiducialTransform(
+        fiducial_id=0,
+        transform=msgs.Transform(translation=msgs.Vector3(x=2.02, y=1.0, z=0.2)),
+    )
+    g.feed(
+        contract.FIDUCIALS,
+        msgs.FiducialTransformArray(
+            header=msgs.Header(stamp=msgs.Time.from_ns(6 * S), frame_id=contract.OPTICAL_FRAME),
+            transforms=(moved,),
+        ),
+        6 * S,
+    )
+    stale = msgs.TransformStamped(
+        header=msgs.Header(stamp=msgs.Time.from_ns(6 * S), frame_id=contract.OPTICAL_FRAME),
+        child_frame_id=contract.MARKER_FRAME,
+        transform=old,
+    )
+    g.feed(contract.TF, msgs.TFMessage(transforms=(stale,)), 6 * S)
+    line = only_on_detection(g)
+    assert not line.passed and line.evidence_ns == 6 * S
+    assert line.measured == "1 broadcast, 1 without a matching detection, 0 with another parent"
+    fresh = Grader(world())
+    detect(fresh, [0], 5 * S)
+    broadcast(fresh, 0, 5 * S)  # its own frame's detection: fine
+    assert only_on_detection(fresh).passed
 
 
 def test_only_on_detection_gives_no_credit_when_nothing_was_broadcast() -> None:

@@ -33,8 +33,10 @@ line (``Check.id``)                  points  passes when
                                              non-finite one is the worst)
 ``marker_frame.only_on_detection``   4       ``marker_frame`` was broadcast, and every such
                                              broadcast is a child of the camera's optical
-                                             frame, stamped with a detected frame ("nothing
-                                             broadcast" fails: no credit without evidence)
+                                             frame, stamped with a detected frame, and not
+                                             an older frame's detection stamped anew
+                                             ("nothing broadcast" fails: no credit without
+                                             evidence)
 ``explorer.home_before_follower``    4       after its last target the explorer came within
                                              ``home_m`` of its start before the follower moved
 ``follower.marker_k``                12      the follower came within ``follower_visit_m`` of
@@ -329,11 +331,12 @@ class Grader:
             if self.wrong_parent_ns is None:
                 self.wrong_parent_ns = t_ns
         detections = self._recent.get(tf.header.stamp.ns, ())
-        if not detections:
+        if not detections or self._stale_copy(tf):
             self.without_detection += 1
             if self.without_detection_ns is None:
                 self.without_detection_ns = t_ns
-        if not detections or tf.header.frame_id != contract.OPTICAL_FRAME:
+            self.bad_broadcasts += 1
+        elif tf.header.frame_id != contract.OPTICAL_FRAME:
             self.bad_broadcasts += 1
         try:
             in_map = self.buffer.lookup_transform(
@@ -364,6 +367,20 @@ class Grader:
                 err = math.inf
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
+
+    def _stale_copy(self, tf: msgs.TransformStamped) -> bool:
+        """Is this broadcast an older frame's detection stamped with a newer frame (the
+        "stamped now" bug)? Its pose is not where its own frame's detections put a marker
+        (:data:`BROADCAST_MATCH_M`) but is exactly one of an earlier frame's. Any other pose
+        (an identity, an offset) is judged by the broadcast line, not here."""
+        stamp = tf.header.stamp.ns
+        if _near_a_detection(tf.transform, self._recent.get(stamp, ()), BROADCAST_MATCH_M):
+            return False
+        return any(
+            _near_a_detection(tf.transform, found, 1e-9)
+            for s, found in self._recent.items()
+            if s < stamp
+        )
 
     def found_markers(self) -> tuple[FoundMarker, ...]:
         """The markers broadcast as ``marker_frame`` (attributed as :func:`marker_broadcast`
@@ -397,6 +414,29 @@ class Grader:
             thresholds=self.resolved_thresholds(),
             scenario=self.scenario.name,
         )
+
+
+BROADCAST_MATCH_M = 0.005
+"""How close ``marker_frame`` must be to a detection at its stamp (in the camera frame) to be
+that detection's broadcast. A broadcaster copies the detected pose, so an honest one is exact;
+a copy of an older frame's detection stamped "now" is off by the turn since that frame (about
+1-2.5 cm at 0.1 rad/s and 10 Hz, 1-2.5 m away) and is, exactly, that older detection."""
+
+
+def _near_a_detection(
+    transform: msgs.Transform, detections: tuple[msgs.FiducialTransform, ...], within_m: float
+) -> bool:
+    """Does this broadcast put the marker within ``within_m`` of one of ``detections`` (in the
+    camera frame)? Not when there are none."""
+    p = transform.translation
+    return any(
+        math.dist(
+            (p.x, p.y, p.z),
+            (f.transform.translation.x, f.transform.translation.y, f.transform.translation.z),
+        )
+        <= within_m
+        for f in detections
+    )
 
 
 def _detected_id(
@@ -621,7 +661,7 @@ def only_on_detection(g: Grader) -> Check:
     else:
         measured = (
             f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
-            f"detection, {g.wrong_parent} with another parent"
+            f"matching detection, {g.wrong_parent} with another parent"
         )
     return Check(
         id="marker_frame.only_on_detection",
