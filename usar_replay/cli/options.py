@@ -83,6 +83,22 @@ def load_scenario(args: argparse.Namespace) -> Scenario:
     return base
 
 
+def add_world_options(p: argparse.ArgumentParser) -> None:
+    """The options that name a world, as :func:`load_scenario` reads them (``record`` and
+    ``scenario`` take the same ones): a file or the assignment's world, a seeded variant (with
+    its key), and the camera's size, rate and encoding."""
+    p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
+    p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
+    add_world_key(p)
+    p.add_argument(
+        "--assignment",
+        choices=["usar", "ros2-final"],
+        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+    )
+    p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
+    p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
+
+
 def add_world_key(p: argparse.ArgumentParser) -> None:
     """``--world-key FILE``: the secret that keeps ``--seed`` worlds hidden."""
     p.add_argument(

@@ -26,17 +26,8 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
     p = sub.add_parser("record", help="run the mission in pybullet and record it to MCAP")
-    p.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the course world)")
-    p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
-    options.add_world_key(p)
-    p.add_argument(
-        "--assignment",
-        choices=["usar", "ros2-final"],
-        help="the built-in world of this assignment (default usar; a scenario file names its own)",
-    )
+    options.add_world_options(p)
     p.add_argument("--out", metavar="PATH", help="output .mcap (default: recordings/NAME.mcap)")
-    p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
-    p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
     p.add_argument(
         "--renderer", choices=["auto", "tiny", "egl"], default="auto", help="pybullet renderer"
     )

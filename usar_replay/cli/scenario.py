@@ -20,16 +20,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p = sub.add_parser(
         "scenario", help="print a world as TOML (the course, a seeded variant, or a checked file)"
     )
-    p.add_argument("--scenario", metavar="FILE", help="scenario TOML to read (default: the course)")
-    p.add_argument("--seed", type=int, help="a seeded variant: markers moved, targets recomputed")
-    options.add_world_key(p)
-    p.add_argument(
-        "--assignment",
-        choices=["usar", "ros2-final"],
-        help="the built-in world of this assignment (default usar; a scenario file names its own)",
-    )
-    p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
-    p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")
+    options.add_world_options(p)
     p.add_argument("--out", metavar="FILE", help="write the TOML here instead of stdout")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument(

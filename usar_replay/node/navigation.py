@@ -29,7 +29,14 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
 from usar_replay.node.node import Node, Time
 from usar_replay.node.tf2 import Buffer, TransformException, TransformListener
-from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, grid_from_msg
+from usar_replay.world.nav import (
+    Limits,
+    Navigator,
+    NavStatus,
+    OccupancyGrid,
+    goal_status,
+    grid_from_msg,
+)
 
 __all__ = ["NavResult", "NavigateClient"]
 
@@ -247,24 +254,17 @@ class NavigateClient:
     def _finish(self, status: NavStatus, reason: str) -> None:
         ok = status is NavStatus.SUCCEEDED
         t_ns = self.node.get_clock().now().nanoseconds
-        pose = self.pose or (math.nan, math.nan, math.nan)
         self._cmd.publish(msgs.Twist())
-        values = (
-            msgs.KeyValue(key="goal", value=self._goal_name),
-            msgs.KeyValue(key="seq", value=str(self._goal_seq)),
-            msgs.KeyValue(key="x", value=repr(pose[0])),
-            msgs.KeyValue(key="y", value=repr(pose[1])),
-            msgs.KeyValue(key="yaw", value=repr(pose[2])),
-            msgs.KeyValue(key="started_ns", value=str(self._started_ns)),
-            msgs.KeyValue(key="ended_ns", value=str(t_ns)),
-        )
         self._status_pub.publish(
-            msgs.DiagnosticStatus(
-                level=msgs.DiagnosticStatus.OK if ok else msgs.DiagnosticStatus.ERROR,
-                name=self._goal_name,
-                message=SUCCEEDED if ok else f"failed: {reason}",
-                hardware_id=self.robot,
-                values=values,
+            goal_status(
+                self.robot,
+                self._goal_name,
+                self._goal_seq,
+                ok,
+                reason,
+                self.pose,
+                self._started_ns,
+                t_ns,
             )
         )
         text = f"{self.robot}: goal {self._goal_name} " + ("reached" if ok else f"failed: {reason}")

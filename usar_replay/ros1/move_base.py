@@ -29,7 +29,14 @@ from typing import Any
 
 from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
-from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, robot_disc
+from usar_replay.world.nav import (
+    Limits,
+    Navigator,
+    NavStatus,
+    OccupancyGrid,
+    goal_status,
+    robot_disc,
+)
 
 __all__ = ["GOAL_TOLERANCE_M", "MoveBase"]
 
@@ -181,21 +188,8 @@ class MoveBase:
             handle.set_succeeded(_result(), "goal reached")
         else:
             handle.set_aborted(_result(), reason)
-        p = pose or (math.nan, math.nan, math.nan)
-        status = msgs.DiagnosticStatus(
-            level=msgs.DiagnosticStatus.OK if ok else msgs.DiagnosticStatus.ERROR,
-            name=self._name,
-            message="succeeded" if ok else f"failed: {reason}",
-            hardware_id=self.robot,
-            values=(
-                msgs.KeyValue(key="goal", value=self._name),
-                msgs.KeyValue(key="seq", value=str(self._seq)),
-                msgs.KeyValue(key="x", value=repr(p[0])),
-                msgs.KeyValue(key="y", value=repr(p[1])),
-                msgs.KeyValue(key="yaw", value=repr(p[2])),
-                msgs.KeyValue(key="started_ns", value=str(self._started_ns)),
-                msgs.KeyValue(key="ended_ns", value=str(t_ns)),
-            ),
+        status = goal_status(
+            self.robot, self._name, self._seq, ok, reason, pose, self._started_ns, t_ns
         )
         return [
             (contract.cmd_vel(self.robot), msgs.Twist()),

@@ -37,6 +37,7 @@ from usar_replay.core.rotations import wrap_angle
 from usar_replay.world.scenario import Scenario, building_extent
 
 __all__ = [
+    "goal_status",
     "grid_from_msg",
     "grid_to_msg",
     "Limits",
@@ -500,3 +501,37 @@ def grid_from_msg(
     resolution = float(f"{info.resolution:.7g}")
     origin = (info.origin.position.x, info.origin.position.y)
     return OccupancyGrid(occupied, origin, resolution, robot_radius=robot_radius)
+
+
+# --- a goal's outcome as diagnostic_msgs/DiagnosticStatus (what /<robot>/goal_status carries) ---
+
+
+def goal_status(
+    robot: str,
+    name: str,
+    seq: int,
+    ok: bool,
+    reason: str,
+    pose: tuple[float, float, float] | None,
+    started_ns: int,
+    ended_ns: int,
+) -> msgs.DiagnosticStatus:
+    """How a goal ended, as every navigator reports it (the node API's and the ROS 1 bridge's
+    move_base): one shape in the log, whoever drove. ``pose`` is the robot's (x, y, yaw) in
+    ``map`` at the end (NaN when unknown)."""
+    x, y, yaw = pose or (math.nan, math.nan, math.nan)
+    return msgs.DiagnosticStatus(
+        level=msgs.DiagnosticStatus.OK if ok else msgs.DiagnosticStatus.ERROR,
+        name=name,
+        message="succeeded" if ok else f"failed: {reason}",
+        hardware_id=robot,
+        values=(
+            msgs.KeyValue(key="goal", value=name),
+            msgs.KeyValue(key="seq", value=str(seq)),
+            msgs.KeyValue(key="x", value=repr(x)),
+            msgs.KeyValue(key="y", value=repr(y)),
+            msgs.KeyValue(key="yaw", value=repr(yaw)),
+            msgs.KeyValue(key="started_ns", value=str(started_ns)),
+            msgs.KeyValue(key="ended_ns", value=str(ended_ns)),
+        ),
+    )
