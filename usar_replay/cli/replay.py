@@ -10,10 +10,12 @@ from typing import TYPE_CHECKING
 from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_MISSION, EXIT_OK
 from usar_replay.cli.textout import incomplete_note
+from usar_replay.core.errors import UsageError
 
 if TYPE_CHECKING:
     from usar_replay.grading.delta import RubricDelta
     from usar_replay.grading.verdict import GradeReport
+    from usar_replay.log.run import Run
     from usar_replay.pipeline.replay import ReplayReport
 
 __all__ = ["add_parser", "run"]
@@ -44,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
 
     options.check_outputs(args, [args.file])  # before minutes of work, not after
     run = open_run(args.file)
+    if not args.mission and run.mission.target.startswith("ros1:"):
+        return _ros1_as_recorded(args, run)
     changed = bool(args.set or args.settings)
     settings = options.run_settings(args, run.settings) if changed else None
     thresholds = options.thresholds(args)  # a bad thresholds file is a usage error before any work
@@ -98,6 +102,30 @@ def run(args: argparse.Namespace) -> int:
         print(incomplete_note(args.file, report.log_problem, "replayed"), file=sys.stderr)
         return EXIT_INCOMPLETE
     return code
+
+
+def _ros1_as_recorded(args: argparse.Namespace, run: Run) -> int:
+    """A ROS 1 run is not re-run: live ROS code is not deterministic (docs/ros1.md), so there
+    is nothing to compare bit for bit. ``--grade`` grades its recorded outputs, as ``usar
+    grade`` does, and says so; without it, one line says what to do."""
+    from usar_replay.grading.grade import grade_run
+    from usar_replay.grading.reports import to_table
+
+    if not args.grade:
+        raise UsageError(
+            f"{args.file} is a ROS 1 run ({run.mission.target.split()[0]}): live ROS code is "
+            "not re-run; `usar replay --grade` or `usar grade` grades its recorded outputs"
+        )
+    print(f"{args.file}: a ROS 1 run is not re-run (live ROS code is not deterministic);")
+    print("graded as recorded")
+    print()
+    report = grade_run(run, options.thresholds(args))
+    print(to_table(report))
+    options.reports_out(args, [report], (), [args.file])
+    if not report.log_complete:
+        print(incomplete_note(args.file, report.log_problem, "graded"), file=sys.stderr)
+        return EXIT_INCOMPLETE
+    return EXIT_OK if report.passed else EXIT_FAIL
 
 
 def _replay_reports_out(
