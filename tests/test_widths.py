@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import io
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from clitools import usar
 from conftest import one_room
 
 from usar_replay.batch.classreport import collect, to_table
@@ -65,13 +64,7 @@ COMMANDS = [
 
 @pytest.mark.parametrize(("args", "code"), COMMANDS, ids=[" ".join(a) for a, _ in COMMANDS])
 def test_every_line_fits(logs: Path, args: list[str], code: int) -> None:
-    out = subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        cwd=logs,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    out = usar(*args, cwd=logs)
     assert out.returncode == code, out.stderr[-2000:]
     assert "Traceback" not in out.stderr
     assert out.stdout.strip() or out.stderr.strip()

@@ -331,7 +331,7 @@ class Grader:
             if self.wrong_parent_ns is None:
                 self.wrong_parent_ns = t_ns
         detections = self._recent.get(tf.header.stamp.ns, ())
-        if not detections or self._stale_copy(tf):
+        if not detections or self._stale_copy(tf, detections):
             self.without_detection += 1
             if self.without_detection_ns is None:
                 self.without_detection_ns = t_ns
@@ -368,13 +368,15 @@ class Grader:
         if err > b.worst_m:
             b.worst_m, b.worst_ns = err, t_ns
 
-    def _stale_copy(self, tf: msgs.TransformStamped) -> bool:
+    def _stale_copy(
+        self, tf: msgs.TransformStamped, own: tuple[msgs.FiducialTransform, ...]
+    ) -> bool:
         """Is this broadcast an older frame's detection stamped with a newer frame (the
         "stamped now" bug)? Its pose is not where its own frame's detections put a marker
         (:data:`BROADCAST_MATCH_M`) but is exactly one of an earlier frame's. Any other pose
         (an identity, an offset) is judged by the broadcast line, not here."""
         stamp = tf.header.stamp.ns
-        if _near_a_detection(tf.transform, self._recent.get(stamp, ()), BROADCAST_MATCH_M):
+        if _near_a_detection(tf.transform, own, BROADCAST_MATCH_M):
             return False
         return any(
             _near_a_detection(tf.transform, found, 1e-9)
@@ -428,15 +430,13 @@ def _near_a_detection(
 ) -> bool:
     """Does this broadcast put the marker within ``within_m`` of one of ``detections`` (in the
     camera frame)? Not when there are none."""
-    p = transform.translation
-    return any(
-        math.dist(
-            (p.x, p.y, p.z),
-            (f.transform.translation.x, f.transform.translation.y, f.transform.translation.z),
-        )
-        <= within_m
-        for f in detections
-    )
+    return any(_apart_m(transform, f.transform) <= within_m for f in detections)
+
+
+def _apart_m(a: msgs.Transform, b: msgs.Transform) -> float:
+    """How far apart two transforms put their child frame's origin (metres)."""
+    p, q = a.translation, b.translation
+    return math.dist((p.x, p.y, p.z), (q.x, q.y, q.z))
 
 
 def _detected_id(
@@ -449,14 +449,7 @@ def _detected_id(
     for f in detections:
         if f.transform == transform:
             return f.fiducial_id
-    p = transform.translation
-    return min(
-        detections,
-        key=lambda f: math.dist(
-            (p.x, p.y, p.z),
-            (f.transform.translation.x, f.transform.translation.y, f.transform.translation.z),
-        ),
-    ).fiducial_id
+    return min(detections, key=lambda f: _apart_m(transform, f.transform)).fiducial_id
 
 
 # --- the rubric lines -------------------------------------------------------------------------

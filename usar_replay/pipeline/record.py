@@ -273,8 +273,10 @@ def record(
             reason=f"stopped at {limit_s:g} s of sim time",
         )
         try:
-            loop_args = (sim, writer, scenario, settings, asg, target, run, limit_s, progress)
-            _tick_loop(*loop_args, limits, process)
+            _tick_loop(
+                sim, writer, scenario, settings, asg, target, run, limit_s, progress, limits,
+                process,
+            )  # fmt: skip
         except MissionEnded as ended:
             run.outcome, run.reason = ended.verdict, ended.detail
         except KeyboardInterrupt:
