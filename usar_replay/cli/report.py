@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import options
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK, EXIT_USAGE
+from usar_replay.cli.textout import incomplete_note
 from usar_replay.core.errors import UsarError
 
 if TYPE_CHECKING:
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         entries.append((f, page.name, result, ""))
         print(f"wrote {page}")
         if not result.log_complete:
-            print(f"usar: {f}: the log is incomplete ({result.log_problem})", file=sys.stderr)
+            print(incomplete_note(f, result.log_problem, "reported"), file=sys.stderr)
             worst = max(worst, EXIT_INCOMPLETE)
     write_text(outputs[-1], index_page(entries), overwrite=args.overwrite, inputs=files)
     print(f"wrote {outputs[-1]} ({len(files)} recordings)")

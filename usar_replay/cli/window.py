@@ -15,6 +15,7 @@ import sys
 from collections.abc import Iterable
 
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK
+from usar_replay.cli.textout import incomplete_note
 from usar_replay.core.errors import UsageError
 
 __all__ = ["add_window", "finish", "window_ns", "write_lines"]
@@ -66,11 +67,9 @@ def write_lines(lines: Iterable[str]) -> int:
 
 
 def finish(problem: str, path: object, verb: str) -> int:
-    """Exit 0, or 3 with one line on stderr when the log was not whole (``problem``)."""
+    """Exit 0, or 3 with one line on stderr when the log was not whole (``problem``): the
+    note grade and replay print (:func:`usar_replay.cli.textout.incomplete_note`)."""
     if not problem:
         return EXIT_OK
-    print(
-        f"usar: {path}: the log is incomplete ({problem}); {verb} as far as it goes",
-        file=sys.stderr,
-    )
+    print(incomplete_note(str(path), problem, verb), file=sys.stderr)
     return EXIT_INCOMPLETE
