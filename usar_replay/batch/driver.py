@@ -40,6 +40,7 @@ from usar_replay.batch.plan import (
 from usar_replay.batch.run_one import max_points
 from usar_replay.core.errors import UsageError
 from usar_replay.core.outfiles import write_text
+from usar_replay.core.safe_text import safe_line
 from usar_replay.world.world_key import WorldKey
 
 __all__ = ["BatchSummary", "grade_class", "plan_class", "require_sandbox"]
@@ -81,7 +82,8 @@ class BatchSummary:
                 + ", ".join(f"{o.replace('_', ' ')} {n}" for o, n in sorted(outcomes.items()))
             )
         for r in self.errors:
-            first = r.error.strip().splitlines()[0] if r.error.strip() else "unknown error"
+            said = r.error.strip()
+            first = safe_line(said.splitlines()[0]) if said else "unknown error"
             out += textwrap.wrap(
                 f"error: {r.team} on {r.world}: {first} (it is redone next time)",
                 100,
@@ -199,7 +201,7 @@ class _Progress:
         if self.quiet or r.state == "interrupted":
             return
         if r.state == "error":
-            first = r.error.strip().splitlines()[0] if r.error.strip() else ""
+            first = safe_line(r.error.strip().splitlines()[0]) if r.error.strip() else ""
             self.console.print(f"ERROR {r.team} on {r.world}: {first}"[:100])
         else:
             self.console.print(

@@ -12,6 +12,7 @@ from usar_replay.cli import arguments, options
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
 from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
+from usar_replay.core.safe_text import safe_line
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -67,7 +68,7 @@ class _StatusLine:
     def __call__(self, p: Progress) -> None:
         text = (
             f"sim {p.sim_time_s:7.1f} s | markers {p.markers_found}/{p.markers_total} | "
-            f"frames {p.frames} | {p.last_log}"
+            f"frames {p.frames} | {safe_line(p.last_log)}"
         )[: self.width]
         if self.tty:
             if p.sim_time_s - self.last_print >= 0.5:

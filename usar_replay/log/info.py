@@ -16,9 +16,10 @@ import os
 import textwrap
 
 from usar_replay.core import settings
+from usar_replay.core.contract import SCENARIO_ATTACHMENT
 
 # Re-exported for record.py, which still imports it from here (contract.py is its home).
-from usar_replay.core.contract import SCENARIO_ATTACHMENT
+from usar_replay.core.safe_text import safe_line
 from usar_replay.log.run import Run, open_run
 
 __all__ = ["SCENARIO_ATTACHMENT", "describe", "is_whole", "open_checked"]
@@ -103,7 +104,7 @@ def describe(run: Run, *, quick: bool = False) -> str:
         lines += _field("What to do", advice)
     outcome = _OUTCOMES.get(run.outcome, run.outcome)
     if run.outcome_reason and run.outcome != "done":
-        outcome += f": {run.outcome_reason.splitlines()[0]}"
+        outcome += f": {safe_line(run.outcome_reason.splitlines()[0])}"
     lines += _field("Mission", outcome)
     lines += _field("Duration", f"{run.duration_s:.3f} s (sim time)")
     lines += _field("Start", f"{run.start_ns / 1e9:.3f} s")

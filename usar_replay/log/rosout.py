@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from usar_replay.core import contract, msgs
 from usar_replay.core.errors import UsageError
 from usar_replay.core.msg_text import WIDTH
+from usar_replay.core.safe_text import safe, safe_line
 from usar_replay.log.run import Run
 
 __all__ = ["LEVELS", "LogRequest", "entry_lines", "level_name", "level_value", "lines"]
@@ -65,9 +66,10 @@ def level_value(name: str) -> int:
 
 def entry_lines(t_ns: int, entry: msgs.Log, width: int = WIDTH) -> list[str]:
     """One entry as ``[INFO] [12.350] [explorer]: text``, wrapped to ``width``."""
-    head = f"[{level_name(entry.level)}] [{t_ns / 1e9:.3f}] [{entry.name}]: "
+    head = f"[{level_name(entry.level)}] [{t_ns / 1e9:.3f}] [{safe_line(entry.name)}]: "
     out: list[str] = []
-    for i, part in enumerate(entry.msg.expandtabs(4).splitlines() or [""]):
+    # the mission's text: control characters escaped, only its line breaks kept
+    for i, part in enumerate(safe(entry.msg.expandtabs(4)).splitlines() or [""]):
         out += textwrap.wrap(
             (head if i == 0 else _INDENT) + part,
             width,

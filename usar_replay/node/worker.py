@@ -49,6 +49,7 @@ from usar_replay import __version__
 from usar_replay.core import cdr, msgs
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.finite import NonFiniteValue
+from usar_replay.core.safe_text import safe_line
 from usar_replay.node import jail
 from usar_replay.node.boundary_check import (
     MAX_FRAME_BYTES,
@@ -176,6 +177,7 @@ class MissionEnded(UsarError):
 
     def __init__(self, verdict: str, detail: str) -> None:
         first = detail.strip().splitlines()[-1] if detail.strip() else verdict
+        first = safe_line(first)  # the mission's text: printed, never obeyed
         super().__init__(f"the mission {verdict.replace('_', ' ')}: {first}")
         self.verdict = verdict
         self.detail = detail

@@ -30,6 +30,7 @@ from typing import Any, TextIO
 
 from usar_replay import __version__
 from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.assignment import Assignment
@@ -532,4 +533,4 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     print("\n".join(w for line in lines for w in _fit(line)), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
         print(f"\nThe mission {result.outcome.replace('_', ' ')}:", file=out)
-        print(result.outcome_reason.rstrip(), file=out)
+        print(safe(result.outcome_reason.rstrip()), file=out)

@@ -42,6 +42,7 @@ from typing import Any
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.errors import LogError, UsageError
+from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
@@ -239,7 +240,8 @@ class ReplayReport:
         out.append(f"Replayed outputs' sha256: {self.digest}")
         if self.mission_failure is not None:
             out.append(f"The mission {self.mission_failure.replace('_', ' ')} during the replay:")
-            out += [f"  {line}" for line in self.mission_failure_detail.rstrip().splitlines()]
+            detail = safe(self.mission_failure_detail.rstrip())
+            out += [f"  {line}" for line in detail.splitlines()]
         if self.regression:
             why = []
             if not self.same_code:
