@@ -139,6 +139,7 @@ def _mission_limits(job: RunJob) -> Any:
         # grade and log are written by this process, outside it); never run bare by accident
         jail="required" if lim.get("sandbox", True) else "off",
         read_roots=(str(Path(job.submission_path).resolve()),),
+        hidden=(job.out_root,),  # never mounted, unless it lies in the team's folder
     )
 
 

@@ -31,6 +31,7 @@ __all__ = [
     "overrides",
     "run_settings",
     "limits",
+    "grader_paths",
     "OUTPUT_OPTIONS",
     "output_inputs",
     "check_outputs",
@@ -155,7 +156,18 @@ def limits(args: argparse.Namespace) -> MissionLimits:
         raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
     if args.mission_memory < 0:
         raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
-    return MissionLimits(tick_timeout_s=args.tick_timeout, memory_mb=args.mission_memory)
+    return MissionLimits(
+        tick_timeout_s=args.tick_timeout,
+        memory_mb=args.mission_memory,
+        hidden=grader_paths(args),
+    )
+
+
+def grader_paths(args: argparse.Namespace) -> tuple[str, ...]:
+    """Every file the grader passed in (the world, its key, the settings, the thresholds, the
+    output): the jailed mission never reads one, wherever it lies (usar_replay.node.hide)."""
+    names = ("scenario", "world_key", "settings", "thresholds", "out", "json", "junit", "csv")
+    return tuple(str(getattr(args, n)) for n in names if getattr(args, n, None))
 
 
 OUTPUT_OPTIONS = (("--json", "json"), ("--junit", "junit"), ("--csv", "csv"))

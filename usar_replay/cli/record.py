@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from usar_replay.core.settings import RunSettings
+    from usar_replay.node.worker import MissionLimits
     from usar_replay.pipeline.record import Progress, RecordResult
     from usar_replay.world.scenario import Scenario
 
@@ -114,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
                 settings,
                 progress=progress,
                 mission=args.mission,
-                limits=options.limits(args),
+                limits=_limits(args, out),
             )
     except KeyboardInterrupt as err:
         from usar_replay.core.signals import exit_code
@@ -167,5 +168,11 @@ def _record_ros1(
         raise UsageError(f"--rtf {args.rtf:g}: give a factor >= 0 (0: no cap)")
     opts = Ros1Options(launch=args.launch or "", node=args.node or "", rtf=args.rtf)
     return record_ros1(
-        scenario, out, args.ros1, settings, progress, options=opts, limits=options.limits(args)
+        scenario, out, args.ros1, settings, progress, options=opts, limits=_limits(args, out)
     )
+
+
+def _limits(args: argparse.Namespace, out: Path) -> MissionLimits:
+    """The mission's limits, with the output hidden from it even at its default path."""
+    limits = options.limits(args)
+    return dataclasses.replace(limits, hidden=(*limits.hidden, str(out)))

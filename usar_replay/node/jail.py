@@ -159,9 +159,10 @@ def jail_argv(
 
     ``ro_binds``: host paths mounted read-only at the same path (the system's libraries are
     added); ``work_dir``: mounted writable at its own path and the working directory; ``env``:
-    the whole environment (bwrap starts from an empty one); ``hidden``: existing files under a
-    bound folder that the process must not read (the log being written, when it lies next to
-    the mission's file: /dev/null is mounted over it, which a sandbox may not open);
+    the whole environment (bwrap starts from an empty one); ``hidden``: existing files and
+    folders (real paths) under a mounted folder that the process must not read (the log being
+    written, the grader's files next to the mission's file: /dev/null is mounted over a file,
+    an empty read-only tmpfs over a folder; :mod:`usar_replay.node.hide` finds them);
     ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
     loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
     outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
@@ -201,9 +202,17 @@ def jail_argv(
             continue
         out += ["--ro-bind", path, path]
         bound.append(path)
+    visible = [*bound, *_SYSTEM_BINDS, *_SYSTEM_FILES]
     for path in hidden:
         real = os.path.realpath(path)
-        if os.path.isfile(real) and _covered(real, bound):
+        if not _covered(real, visible):
+            continue  # not mounted: nothing to hide
+        if os.path.isdir(real):
+            # a folder of the grader's inside a mounted one: an empty read-only folder over it
+            # (not over a folder that holds a mounted one: that is the mission's own)
+            if not any(_covered(b, [real]) for b in (*bound, work_dir)):
+                out += ["--perms", "0555", "--tmpfs", real, "--remount-ro", real]
+        elif os.path.exists(real):
             out += ["--ro-bind", "/dev/null", real]
     out += ["--bind", work_dir, work_dir, "--chdir", work_dir]
     for key, value in sorted(env.items()):
@@ -244,6 +253,10 @@ class Jail:
     def __init__(self, limits: JailLimits | None = None) -> None:
         self.limits = limits or JailLimits()
         self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
+        self.memory_cgroup = _make_memory_cgroup(self.cgroup)
+        """The run's memory cgroup (no limit: RLIMIT_AS is the limit): where the kernel counts
+        the run's processes it killed for memory (:meth:`oom_killed`); None when none can be
+        made here (then a killed process is never called out of memory)."""
         self._info_r, self.info_fd = os.pipe()
         """Pass to :func:`jail_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
         self._pidfd: int | None = None
@@ -269,10 +282,26 @@ class Jail:
         itself into the cgroup and becomes bwrap, so every process of the run is counted from
         the first. (No ``preexec_fn``: Python code between fork and exec can deadlock a
         recorder whose renderer runs threads.)"""
-        if not self.cgroup:
+        groups = [g for g in (self.cgroup, self.memory_cgroup) if g]
+        if not groups:
             return list(argv)
-        procs = os.path.join(self.cgroup, "cgroup.procs")
-        return ["/bin/sh", "-c", 'echo 0 > "$0" 2>/dev/null; exec "$@"', procs, *argv]
+        procs = [os.path.join(g, "cgroup.procs") for g in dict.fromkeys(groups)]
+        script = "".join(f'echo 0 > "${i}" 2>/dev/null; ' for i in range(len(procs)))
+        return ["/bin/sh", "-c", script + f'shift {len(procs) - 1}; exec "$@"', *procs, *argv]
+
+    def oom_killed(self) -> bool:
+        """Whether the kernel's out-of-memory killer ended a process of this run (the memory
+        cgroup's ``oom_kill`` count: ``memory.events`` in cgroup v2, ``memory.oom_control``
+        in v1). Read it before :meth:`close`, which removes the cgroup."""
+        if not self.memory_cgroup:
+            return False
+        for name in ("memory.events", "memory.oom_control"):
+            with contextlib.suppress(OSError, ValueError):
+                for line in Path(self.memory_cgroup, name).read_text().splitlines():
+                    key, _, value = line.partition(" ")
+                    if key == "oom_kill":
+                        return int(value) > 0
+        return False
 
     def rlimits(self) -> dict[str, int]:
         """The rlimits the sandboxed program sets on itself before it runs untrusted code
@@ -307,24 +336,29 @@ class Jail:
             select.select([self._pidfd], [], [], 10.0)
             os.close(self._pidfd)
             self._pidfd = None
-        if not self.cgroup:
-            return
-        for _ in range(200):
-            try:
-                os.rmdir(self.cgroup)
-                break
-            except FileNotFoundError:
-                break
-            except OSError:
-                _kill_members(self.cgroup)
-                time.sleep(0.01)  # the kernel reaps the killed processes
-        self.cgroup = None
+        for group in (self.cgroup, self.memory_cgroup):
+            if group:
+                _remove_cgroup(group)
+        self.cgroup = self.memory_cgroup = None
 
     def __enter__(self) -> Jail:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _remove_cgroup(cgroup: str) -> None:
+    """Remove one of the run's cgroups, killing what is left in it first (nothing, normally)."""
+    for _ in range(200):
+        try:
+            os.rmdir(cgroup)
+            break
+        except FileNotFoundError:
+            break
+        except OSError:
+            _kill_members(cgroup)
+            time.sleep(0.01)  # the kernel reaps the killed processes
 
 
 def _kill_members(cgroup: str) -> None:
@@ -341,14 +375,20 @@ _counter = 0
 def _pids_root() -> str | None:
     """The folder of this process's pids cgroup (v1 ``pids`` hierarchy, or v2 with the pids
     controller delegated), or None."""
+    return _controller_root("pids")
+
+
+def _controller_root(controller: str) -> str | None:
+    """The folder of this process's cgroup with ``controller`` (its v1 hierarchy, or v2 with
+    the controller delegated), or None."""
     try:
         lines = Path("/proc/self/cgroup").read_text().splitlines()
     except OSError:
         return None
     for line in lines:
         _, controllers, path = line.split(":", 2)
-        if "pids" in controllers.split(","):
-            return os.path.join("/sys/fs/cgroup/pids", path.lstrip("/"))
+        if controller in controllers.split(","):
+            return os.path.join("/sys/fs/cgroup", controller, path.lstrip("/"))
     for line in lines:
         if line.startswith("0::"):
             base = os.path.join("/sys/fs/cgroup", line[3:].lstrip("/"))
@@ -356,8 +396,27 @@ def _pids_root() -> str | None:
                 enabled = Path(base, "cgroup.subtree_control").read_text().split()
             except OSError:
                 return None
-            return base if "pids" in enabled else None
+            return base if controller in enabled else None
     return None
+
+
+def _make_memory_cgroup(pids_cgroup: str | None) -> str | None:
+    """The run's memory cgroup, only to read its OOM count: in cgroup v2 the pids cgroup
+    itself when the memory controller is on there; in v1 a fresh one in the memory
+    hierarchy; else None."""
+    if pids_cgroup and os.path.exists(os.path.join(pids_cgroup, "memory.events")):
+        return pids_cgroup
+    root = _controller_root("memory")
+    if root is None or not os.access(root, os.W_OK):
+        return None  # no memory controller of ours: no per-run record
+    global _counter
+    _counter += 1
+    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
+    try:
+        os.mkdir(path)
+    except OSError:
+        return None
+    return path
 
 
 def _make_pids_cgroup(limit: int) -> str | None:

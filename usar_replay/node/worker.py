@@ -50,7 +50,7 @@ from usar_replay.core import cdr, msgs
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.finite import NonFiniteValue
 from usar_replay.core.safe_text import safe_line
-from usar_replay.node import jail
+from usar_replay.node import hide, jail
 from usar_replay.node.boundary_check import (
     MAX_FRAME_BYTES,
     MAX_MESSAGE_BYTES,
@@ -162,8 +162,10 @@ class MissionLimits:
     """What the jailed mission may read besides Python (default: its file's folder, or the
     folder its module was found in); a batch gives the team's submission."""
     hidden: tuple[str, ...] = ()
-    """Files the jailed mission may not read even when they lie in a readable folder (the log
-    being written, or replayed, next to the mission's file)."""
+    """Files and folders the jailed mission may not read even when they lie in a readable
+    folder (the log being written or replayed, and every file the grader passed in: the
+    world, the world key, the settings, the thresholds, the output; :mod:`~usar_replay.node.hide`
+    also finds their other hard-linked names)."""
     work_dir: str = ""
     """The jailed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
@@ -480,6 +482,14 @@ class MissionProcess:
             "sandbox": policy,
             "usar_version": __version__,
         }
+        hidden: list[str] = []
+        if self._jail is not None:
+            try:  # the grader's files, by any of their names under the mission's folders
+                roots = self.limits.read_roots or _submission_roots(target)
+                hidden = [*sum(hide.grader_files(self.limits.hidden, roots), ())]
+            except BaseException:
+                self._cleanup()
+                raise
         parent_sock, child_sock = socket.socketpair()
         with child_sock:
             # a fresh interpreter running this module: no fork of usar's state (pybullet, an
@@ -498,7 +508,7 @@ class MissionProcess:
                     work_dir=self._work,
                     env=env,
                     limits=self._jail.limits,
-                    hidden=self.limits.hidden,
+                    hidden=hidden,
                     info_fd=self._jail.info_fd,
                 )
             try:
@@ -574,13 +584,19 @@ class MissionProcess:
                 return MissionEnded(
                     "hung", f"the mission process used up its CPU-time limit while {doing}"
                 )
-            if signum == signal.SIGKILL:
+            if signum == signal.SIGKILL and self._jail is not None and self._jail.oom_killed():
                 return MissionEnded(
                     "out_of_memory",
-                    f"the mission process was killed ({name})"
-                    " while " + doing + "; most often the memory limit",
+                    f"the kernel's out-of-memory killer ended the mission process ({name}) "
+                    f"while {doing}",
                 )
-            return MissionEnded("crashed", f"the mission process died of {name} while {doing}")
+            # what happened, and no more: a SIGKILL is not called out of memory unless the
+            # kernel's record says so (a ROS 1 node may kill its bridge)
+            return MissionEnded(
+                "crashed",
+                f"crashed (signal {signum}): the mission process was killed by {name} "
+                f"while {doing}",
+            )
         return MissionEnded("crashed", f"the mission process exited (code {code}) while {doing}")
 
     def _wait(self, timeout_s: float, doing: str) -> bytes:
