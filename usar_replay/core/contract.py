@@ -37,6 +37,8 @@ __all__ = [
     "MISSION_ATTACHMENT",
     "OPTICAL_FRAME",
     "ARUCO_MARKERS",
+    "MISSION_ARUCO_MARKERS",
+    "MISSION_COPIES",
     "FINAL_DESTINATION_FRAME",
     "ORIGIN_FRAMES",
     "ROBOTS",
@@ -213,7 +215,18 @@ ROS2_OPTICAL_FRAME = "robot1/camera_rgb_optical_frame"
 ROS2_IMAGE = "/robot1/camera/rgb/image_raw/compressed"
 ROS2_CAMERA_INFO = "/robot1/camera/rgb/camera_info"
 ARUCO_MARKERS = "/aruco_markers"
-"""ros2_aruco's output: one ``ros2_aruco_interfaces/msg/ArucoMarkers`` per camera frame."""
+"""ros2_aruco's output: one ``ros2_aruco_interfaces/msg/ArucoMarkers`` per camera frame with a
+marker in it. In the ROS 2 final project's world the recorder runs the course's detector
+(trusted: the rubric counts only its detections) and this is a mission *input*, published by
+``sim``; what a mission publishes here is renamed :data:`MISSION_ARUCO_MARKERS`."""
+MISSION_ARUCO_MARKERS = "/mission/aruco_markers"
+"""Where a mission's own ``/aruco_markers`` go when the world provides the trusted ones (a
+mission written before the course's detector, which starts its own ``aruco_node``): recorded as
+the mission's output, compared by replay, never graded, and delivered only to the mission's
+subscribers on this name (its ``/aruco_markers`` subscribers get the course's detections)."""
+MISSION_COPIES = {ARUCO_MARKERS: MISSION_ARUCO_MARKERS}
+"""Trusted world topics a mission may still publish on: its messages are renamed to these
+names (ROS's remapping) instead of being refused, so older missions keep running."""
 FINAL_DESTINATION_FRAME = "final_destination"
 """The frame the mission broadcasts for the destination the marker chose (the project's name)."""
 ORIGIN_FRAMES = ("origin1", "origin2", "origin3", "origin4")

@@ -242,6 +242,7 @@ ROS2_FINAL = Assignment(
     rubric=_ros2_rubric,
     world=_ros2_final_world,
     variant=_make_ros2_variant,
+    course_detections=contract.ARUCO_MARKERS,
 )
 
 ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (USAR, ROS2_FINAL)}

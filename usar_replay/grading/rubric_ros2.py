@@ -5,7 +5,10 @@ one message at a time (a recorded log, or the outputs a replay recomputes), line
 :class:`~usar_replay.grading.grade.Check` with the measured value, the threshold and the sim time of
 the evidence. The robot is judged by the simulator's ground truth (``/ground_truth/robot1/pose``),
 never by what the mission believes; the ``final_destination`` frame by looking it up in ``map``
-with tf2's rules over everything on ``/tf_static`` and ``/tf``.
+with tf2's rules over everything on ``/tf_static`` and ``/tf``; the marker by the course's
+detector (``/aruco_markers`` as the world published it, the ``sim`` publisher: the recorder runs
+ros2_aruco on the recorded frames, :mod:`usar_replay.pipeline.course_detector`), never by what a
+mission publishes (its own copy is ``/mission/aruco_markers``, which the rubric does not read).
 
 ===============================  ======  ==========================================================
 line (``Check.id``)              points  passes when
@@ -17,8 +20,9 @@ line (``Check.id``)              points  passes when
                                          is connected and consistent with odometry
 ``aruco_target.reached``         10      the robot came within ``target_reached_m`` of
                                          ``aruco_target``
-``marker.detected``              10      ``/aruco_markers`` held the world's marker ID after the
-                                         robot reached ``aruco_target``
+``marker.detected``              10      the course's detector's ``/aruco_markers`` held the
+                                         world's marker ID after the robot reached
+                                         ``aruco_target``
 ``destination.chosen``           10      the first ``final_destination`` broadcast carries
                                          ``final_destination.aruco_<ID>`` for the detected ID
 ``final_destination.broadcast``  10      every ``final_destination`` broadcast is a child of
@@ -55,14 +59,15 @@ GRADE_TOPICS = (contract.TF_STATIC, contract.TF, contract.ARUCO_MARKERS, ODOM, T
 """The topics the grader reads; everything else is skipped without decoding."""
 REQUIRED_TOPICS = (TRUTH, ODOM)
 """Without these a log cannot be graded: the simulator writes them from the first tick.
-``/tf`` and ``/aruco_markers`` are the mission's: a mission that never publishes them is graded,
-and fails the lines that need them (the detection line saying so: :data:`NO_DETECTOR`)."""
+``/tf`` is the mission's and ``/aruco_markers`` the course's detector's, only for frames with a
+marker: a log without them is graded, and fails the lines that need them (the detection line
+saying so: :data:`NO_DETECTOR`)."""
 NO_DETECTOR = (
-    f"no {contract.ARUCO_MARKERS} in the log: no marker seen, or did the mission start the "
-    "detector node (ArucoNode)?"
+    f"nothing on {contract.ARUCO_MARKERS}: the course's detector never saw a marker "
+    "(did the robot turn the camera toward it?)"
 )
-"""What ``marker.detected`` measures when nothing was ever published on ``/aruco_markers``
-(aruco_node publishes only frames with a marker, so this is also a detector that saw none)."""
+"""What ``marker.detected`` measures when the course's detector never published on
+``/aruco_markers`` (it publishes only frames with a marker)."""
 POINTS = {
     "tf.odom_to_base": 10.0,
     "aruco_target.reached": 10.0,
@@ -403,5 +408,5 @@ class Grader:
         )
 
 
-RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS)
+RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS, trusted_topics=(contract.ARUCO_MARKERS,))
 """The ROS 2 final project rubric, as its assignment carries it."""

@@ -77,7 +77,7 @@ class PublishPolicy:
         """Why ``topic`` may not be published (empty when it may)."""
         if contract.is_ground_truth(topic):
             return f"{topic} is ground truth: a mission can neither read nor publish it"
-        if topic == contract.FIDUCIALS and topic in self.sim_topics:
+        if topic in (contract.FIDUCIALS, contract.ARUCO_MARKERS) and topic in self.sim_topics:
             return (
                 f"{topic} is the course's detector's output (trusted, run by usar); a mission "
                 "may not publish it: publish your own detector's results on a topic of your own"
@@ -87,6 +87,16 @@ class PublishPolicy:
         if not topic.startswith("/"):
             return f"{topic!r} is not an absolute topic name (it must start with '/')"
         return ""
+
+    def own_topic(self, topic: str) -> str:
+        """Where the mission's messages on ``topic`` go: the trusted detections the world
+        provides (the ROS 2 final project's ``/aruco_markers``) are renamed to the mission's
+        own copy (:data:`~usar_replay.core.contract.MISSION_COPIES`), as ROS remaps a topic;
+        any other topic is itself. The recorder never renames: a mission that sends the
+        trusted name past the node API is refused (:meth:`topic_problem`)."""
+        if topic in self.sim_topics:
+            return contract.MISSION_COPIES.get(topic, topic)
+        return topic
 
     def message_problem(self, topic: str, msg: msgs.Message) -> str:
         """Why this message may not be published (empty when it may)."""
@@ -162,11 +172,12 @@ class Executor:
 
     def provided_by_world(self, topic: str) -> bool:
         """Whether the world publishes ``topic`` to this mission (the simulator's topics, the
-        course's trusted ``/fiducial_transforms``): a node that would publish it stays idle."""
+        course's trusted ``/fiducial_transforms`` or ``/aruco_markers``): a node that would
+        publish it stays idle."""
         return topic in self.policy.sim_topics
 
     def check_publish_topic(self, topic: str) -> None:
-        problem = self.policy.topic_problem(topic)
+        problem = self.policy.topic_problem(self.policy.own_topic(topic))
         if problem:
             raise PublishRefused(problem)
 
@@ -180,7 +191,9 @@ class Executor:
         (:class:`~usar_replay.core.finite.NonFiniteValue`, a ``ValueError`` naming the field),
         more than :data:`~usar_replay.node.boundary_check.MAX_TICK_MESSAGES` messages in one
         tick (:class:`~usar_replay.node.boundary_check.OutputRefused`). The recorder checks
-        all of it again on its side."""
+        all of it again on its side. On a trusted topic the world provides, the message is the
+        mission's own copy (:meth:`PublishPolicy.own_topic`)."""
+        topic = self.policy.own_topic(topic)
         problem = self.policy.message_problem(topic, msg)
         if problem:
             raise PublishRefused(problem)

@@ -19,6 +19,14 @@ recorded inputs, which replay hands to the mission as they were logged.
 Where the detections go in a tick: right after the camera frame, where the mission's own
 ``ArucoDetect`` used to deliver them (before odometry), so a mission sees the same messages in
 the same order as when it ran the detector itself, and keeps its score.
+
+The ROS 2 final project's world runs ros2_aruco's ``aruco_node`` the same way: the detections of
+each frame with a marker in it, as ``ros2_aruco_interfaces/msg/ArucoMarkers`` on
+``/aruco_markers`` (nothing for a frame without one, and no on/off switch: ros2_aruco has none).
+A mission there that still publishes ``/aruco_markers`` itself (its own ``aruco_node``) is not
+refused: the node API renames its messages to
+:data:`~usar_replay.core.contract.MISSION_ARUCO_MARKERS` (recorded, compared by replay, never
+graded), and its ``/aruco_markers`` subscribers receive the course's detections.
 """
 
 from __future__ import annotations
@@ -28,17 +36,18 @@ from collections.abc import Iterable, Sequence
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
 from usar_replay.grading.assignment import Assignment
-from usar_replay.world.detect import detect
+from usar_replay.world.detect import aruco_markers, detect
 
 __all__ = ["CourseDetector", "mission_inputs"]
 
 Wire = tuple[str, str, bytes]
 _FIDUCIALS_TYPE = msgs.FiducialTransformArray.__msgtype__
+_ARUCO_TYPE = msgs.ArucoMarkers.__msgtype__
 
 
 def mission_inputs(asg: Assignment, course_detections: bool) -> tuple[str, ...]:
     """The topics the world publishes to a mission: the simulator's, then (with the course's
-    detector) ``/fiducial_transforms``."""
+    detector) ``/fiducial_transforms`` or ``/aruco_markers``."""
     extra = (asg.course_detections,) if course_detections and asg.course_detections else ()
     return (*asg.sim_topics, *extra)
 
@@ -51,6 +60,9 @@ class CourseDetector:
         self.topic = asg.course_detections
         self.image_topic = asg.image_topic
         self.info_topic = asg.camera_info_topic
+        self.ros2_aruco = self.topic == contract.ARUCO_MARKERS
+        """ros2_aruco's ``aruco_node`` (``ArucoMarkers`` for frames with a marker, no switch)
+        rather than aruco_detect (a ``FiducialTransformArray`` per searched frame)."""
         self.enabled = True
         """aruco_detect starts enabled; the mission's ``Bool`` switches it."""
         self.seq = 0
@@ -65,13 +77,16 @@ class CourseDetector:
     def note_outputs(self, outputs: Iterable[tuple[str, msgs.Message]]) -> None:
         """The mission's outputs of a tick: an ``enable_detections`` switch acts from the next
         frame (the mission received this tick's frame before it could publish)."""
+        if self.ros2_aruco:
+            return
         for topic, value in outputs:
             if topic == contract.ENABLE_DETECTIONS and isinstance(value, msgs.Bool):
                 self.enabled = value.data
 
     def add_detections(self, wire: Sequence[Wire]) -> list[Wire]:
         """The tick's inputs with the detections of its camera frame right after the frame
-        (unchanged when there is no frame, no ``CameraInfo`` yet, or detection is off)."""
+        (unchanged when there is no frame, no ``CameraInfo`` yet, or detection is off; for
+        ros2_aruco, also when the frame has no marker)."""
         out = list(wire)
         if not self.enabled:
             return out
@@ -83,7 +98,10 @@ class CourseDetector:
                 assert isinstance(image, msgs.CompressedImage)
                 found = detect(image, self._info[1], self.params, self.seq)
                 self.seq += 1
-                out.insert(i + 1, (self.topic, _FIDUCIALS_TYPE, cdr.encode(found)))
+                if not self.ros2_aruco:
+                    out.insert(i + 1, (self.topic, _FIDUCIALS_TYPE, cdr.encode(found)))
+                elif found.transforms:
+                    out.insert(i + 1, (self.topic, _ARUCO_TYPE, cdr.encode(aruco_markers(found))))
                 break
         return out
 

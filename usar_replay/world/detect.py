@@ -44,6 +44,7 @@ __all__ = [
     "DICTIONARIES",
     "DetectError",
     "DetectorParams",
+    "aruco_markers",
     "decode_grey",
     "decode_image",
     "detect",
@@ -290,6 +291,27 @@ def detect(
 ) -> msgs.FiducialTransformArray:
     """Markers in one compressed frame, their poses in the camera's optical frame."""
     return detect_with_corners(image, info, params, image_seq)[0]
+
+
+def aruco_markers(found: msgs.FiducialTransformArray) -> msgs.ArucoMarkers:
+    """:func:`detect`'s result as ros2_aruco's ``aruco_node`` publishes it on
+    ``/aruco_markers``: the IDs and, in the same order, each pose in the optical frame, under
+    the image's header."""
+    return msgs.ArucoMarkers(
+        header=found.header,
+        marker_ids=tuple(f.fiducial_id for f in found.transforms),
+        poses=tuple(
+            msgs.Pose(
+                position=msgs.Point(
+                    x=f.transform.translation.x,
+                    y=f.transform.translation.y,
+                    z=f.transform.translation.z,
+                ),
+                orientation=f.transform.rotation,
+            )
+            for f in found.transforms
+        ),
+    )
 
 
 def marker_range(f: msgs.FiducialTransform) -> float:
