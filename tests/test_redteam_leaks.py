@@ -7,12 +7,18 @@
   terminal with every control character escaped (``usar record``, ``usar log``, ``usar info``).
 - 11: a process killed by SIGKILL is ``crashed (signal 9)``, not ``out_of_memory`` (a Python
   mission here; the ROS 1 bridge killed by its own node in :mod:`test_ros1`'s way below).
+- 12: in the ROS 2 final project a mission that forges ``/aruco_markers`` (the true ID at a
+  true-looking pose, the other IDs anywhere) gains nothing: its messages are renamed
+  ``/mission/aruco_markers`` and never graded; sent past the node API under the trusted name
+  they are refused. An honest older mission that starts its own ``aruco_node`` still runs and
+  gets the built-in mission's grade, line for line.
 
 Needs bubblewrap (CI installs it): skipped only where it is missing or cannot make namespaces.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import shutil
 import textwrap
@@ -23,9 +29,16 @@ from clitools import usar
 from conftest import one_room
 
 from usar_replay.cli.main import main
+from usar_replay.core import contract, msgs
+from usar_replay.core.settings import RunSettings
+from usar_replay.grading.grade import GradeReport, grade_file
 from usar_replay.log.run import open_run
 from usar_replay.node.jail import bwrap_available
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.pipeline.replay import replay
 from usar_replay.ros1 import debian
+from usar_replay.world.ros2_world import ros2_final_world
+from usar_replay.world.scenario import Scenario
 from usar_replay.world.scenario_toml import save
 
 _OK, _WHY = bwrap_available()
@@ -243,3 +256,177 @@ def test_a_ros1_node_that_kills_the_bridge_is_crashed_by_signal(
     assert run.outcome == "crashed", (run.outcome, run.outcome_reason)
     assert "signal 9" in run.outcome_reason, run.outcome_reason
     shutil.rmtree(pkg)
+
+
+# --- point 12: the ROS 2 final project's markers come from the course's detector -------------
+
+_ROS2_HEAD = """
+    from usar_replay.api import contract
+    from usar_replay.core import msgs
+    from usar_replay.missions.ros2_final import OdomUpdater, TargetReacher
+    from usar_replay.node.node import current_executor
+"""
+
+FORGER = (
+    _ROS2_HEAD
+    + """
+    def forged():
+        # the world's marker (ID 1 in the built-in world) 1.1 m straight ahead, as the camera
+        # would see it, and the other IDs at made-up places
+        ahead = msgs.Pose(position=msgs.Point(z=1.1), orientation=msgs.Quaternion(w=1.0))
+        far = msgs.Pose(position=msgs.Point(x=3.0, z=-2.0), orientation=msgs.Quaternion(w=1.0))
+        return msgs.ArucoMarkers(
+            header=msgs.Header(frame_id="robot1/camera_rgb_optical_frame"),
+            marker_ids=(1, 0, 2, 3),
+            poses=(ahead, far, far, far),
+        )
+
+    class Forger(TargetReacher):
+        # never turns to look: claims marker 1 at aruco_target and drives on to its destination
+        def __init__(self):
+            super().__init__()
+            self.fake = self.create_publisher(msgs.ArucoMarkers, contract.ARUCO_MARKERS)
+            self.create_timer(0.1, lambda: self.fake.publish(forged()))
+
+        def _at_target(self, result):
+            self.fake.publish(forged())
+            self.destination = self.destination_for(1)
+            self.phase = "lookup"
+            self._broadcast()
+
+    def main():
+        OdomUpdater()
+        Forger()
+"""
+)
+
+OLD_DETECTOR = (
+    _ROS2_HEAD
+    + """
+    from usar_replay.world.detect import aruco_markers, detect
+
+    class OwnArucoNode:
+        # a mission written before the course's detector: its own aruco_node on /aruco_markers
+        def __init__(self, node):
+            from usar_replay.core.settings import DetectorParams, from_mapping
+
+            group = {k: p.value for k, p in node.get_parameters_by_prefix("detector").items()}
+            self.params = from_mapping(DetectorParams, group, "detector.")
+            self.info, self.seq = None, 0
+            self.pub = node.create_publisher(msgs.ArucoMarkers, "/aruco_markers")
+            node.create_subscription(msgs.CameraInfo, contract.ROS2_CAMERA_INFO, self.on_info)
+            node.create_subscription(msgs.CompressedImage, contract.ROS2_IMAGE, self.on_image)
+
+        def on_info(self, msg):
+            self.info = msg
+
+        def on_image(self, msg):
+            if self.info is None:
+                return
+            found = detect(msg, self.info, self.params, self.seq)
+            self.seq += 1
+            if found.transforms:
+                self.pub.publish(aruco_markers(found))
+
+    def main():
+        from usar_replay.api import Node
+
+        OdomUpdater()
+        OwnArucoNode(Node("aruco_node"))
+        TargetReacher()
+"""
+)
+
+SMUGGLER = (
+    _ROS2_HEAD
+    + """
+    class Smuggler(TargetReacher):
+        # past the node API: the trusted name put straight into the tick's outputs
+        def _on_timer(self):
+            ex = current_executor()
+            ex._outputs.append((contract.ARUCO_MARKERS, msgs.ArucoMarkers(marker_ids=(1,))))
+            super()._on_timer()
+
+    def main():
+        OdomUpdater()
+        Smuggler()
+"""
+)
+
+
+def _ros2_world() -> Scenario:
+    """The built-in world with a 320x240 camera, as tests/test_ros2_final.py records it."""
+    world = ros2_final_world()
+    return dataclasses.replace(
+        world, camera=dataclasses.replace(world.camera, width=320, height=240)
+    )
+
+
+def _ros2_record(folder: Path, name: str, source: str) -> tuple[Path, RecordResult]:
+    mission = folder / f"{name}.py"
+    mission.write_text(textwrap.dedent(source))
+    out = folder / f"{name}.mcap"
+    return out, record(_ros2_world(), out, RunSettings(), mission=str(mission))
+
+
+@pytest.fixture(scope="module")
+def ros2_builtin(tmp_path_factory: pytest.TempPathFactory) -> GradeReport:
+    out = tmp_path_factory.mktemp("ros2") / "builtin.mcap"
+    assert record(_ros2_world(), out, RunSettings()).outcome == "done"
+    return grade_file(out)
+
+
+def test_forged_aruco_markers_gain_nothing(tmp_path: Path, ros2_builtin: GradeReport) -> None:
+    """Point 12: forged detections (the true ID at a true-looking pose, the others anywhere)
+    are recorded as the mission's own, never graded: the robot never looked, so no detection
+    and nothing that needs one."""
+    out, result = _ros2_record(tmp_path, "forger", FORGER)
+    assert result.outcome == "done", result.outcome_reason  # it ran: renamed, not refused
+    run = open_run(out)
+    assert run.reader.publishers(contract.ARUCO_MARKERS) <= {"sim"}
+    forged = [m for m in run.messages([contract.MISSION_ARUCO_MARKERS])]
+    assert forged and {m.publisher for m in forged} == {"mission"}
+    report = grade_file(out)
+    assert {"marker.detected", "destination.reached", "time_limit"} <= set(report.failed_ids())
+    # without point 12 these forgeries scored the built-in mission's 60: now 20 points less
+    assert report.points <= ros2_builtin.points - 20
+    # the forger drove where marker 1 leads, so nothing else differs: what it lost is exactly
+    # what it could only have had by detecting the marker
+    assert report.check("destination.chosen").passed
+    assert not result.found  # `usar record`'s summary counts no marker either
+
+
+def test_aruco_markers_sent_past_the_node_api_are_refused(tmp_path: Path) -> None:
+    """Point 12: the trusted name straight into the outputs is refused at the boundary."""
+    out, result = _ros2_record(tmp_path, "smuggler", SMUGGLER)
+    assert result.outcome == "refused", (result.outcome, result.outcome_reason)
+    assert "course's detector" in result.outcome_reason
+    run = open_run(out)
+    assert run.reader.publishers(contract.ARUCO_MARKERS) <= {"sim"}
+    assert not grade_file(out).check("marker.detected").passed
+
+
+def test_an_old_mission_with_its_own_aruco_node_grades_as_before(
+    tmp_path: Path, ros2_builtin: GradeReport
+) -> None:
+    """Point 12: a mission that still starts its own detector on /aruco_markers runs, its
+    detections are recorded as /mission/aruco_markers, and it grades as the built-in mission
+    does (which is what it graded before: tests/test_ros2_final.py), line for line."""
+    out, result = _ros2_record(tmp_path, "old", OLD_DETECTOR)
+    assert result.outcome == "done", result.outcome_reason
+    run = open_run(out)
+    own = [
+        mid
+        for m in run.messages([contract.MISSION_ARUCO_MARKERS])
+        if isinstance(m.msg, msgs.ArucoMarkers)
+        for mid in m.msg.marker_ids
+    ]
+    assert set(own) == {1}
+    report = grade_file(out)
+    assert report.points == ros2_builtin.points == 60
+    assert [(c.id, c.passed, c.measured, c.evidence_ns) for c in report.checks] == [
+        (c.id, c.passed, c.measured, c.evidence_ns) for c in ros2_builtin.checks
+    ]
+    # and it replays bit for bit: the course's detections from the recorded frames
+    replayed = replay(run)
+    assert replayed.identical, replayed.lines()
