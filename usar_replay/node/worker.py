@@ -47,7 +47,7 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.core import cdr, msgs
-from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.core.finite import NonFiniteValue
 from usar_replay.node import jail
 from usar_replay.node.boundary_check import (
@@ -166,19 +166,6 @@ class MissionLimits:
     work_dir: str = ""
     """The jailed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
-
-
-class MissionEnded(UsarError):
-    """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
-    ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason."""
-
-    exit_code = 4
-
-    def __init__(self, verdict: str, detail: str) -> None:
-        first = detail.strip().splitlines()[-1] if detail.strip() else verdict
-        super().__init__(f"the mission {verdict.replace('_', ' ')}: {first}")
-        self.verdict = verdict
-        self.detail = detail
 
 
 # --- the wire ---------------------------------------------------------------------------------
