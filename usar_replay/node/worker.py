@@ -72,11 +72,6 @@ __all__ = [
 
 BUILTIN = "builtin"
 """``--mission builtin`` (the default): the course's reference mission."""
-_BUILTIN_MODULES = {
-    "builtin": "usar_replay.missions.usar:main",
-    "usar": "usar_replay.missions.usar:main",
-    "ros2-final": "usar_replay.missions.ros2_final:main",
-}
 
 _TICK, _OUT, _CRASH, _READY, _STOP, _REFUSED = b"T", b"O", b"C", b"R", b"S", b"F"
 _USAR_DIR = str(Path(__file__).resolve().parent)
@@ -109,7 +104,10 @@ def resolve_target(spec: str | None) -> MissionTarget:
             f"mission {spec!r} is a ROS 1 package: only Python missions are re-run here; "
             "grade its recorded outputs with usar grade, or record it again with --ros1"
         )
-    text = _BUILTIN_MODULES.get(spec, spec)
+    # a reference mission's name (builtin, an assignment's): the assignment's module:function
+    from usar_replay.world.assignment import mission_path
+
+    text = mission_path(spec) or spec
     attr = "main"
     if text.endswith(".py") or "/" in text or os.sep in text:
         file_part = text
