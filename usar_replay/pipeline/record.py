@@ -408,7 +408,7 @@ def _tick_loop(
             if latency:
                 _step(sim, commands, steps_per_tick)
                 nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-            commands = _take_outputs(proc, writer, tick.t, run, detector)
+            commands = _take_outputs(proc, writer, tick.t, run, detector, asg.robot_names)
             if progress is not None:
                 progress(_progress(run, tick.t, scenario))
             if proc.shutdown_requested:
@@ -436,19 +436,20 @@ def _take_outputs(
     t: int,
     run: _Run,
     detector: CourseDetector | None = None,
+    robots: tuple[str, ...] = contract.ROBOTS,
 ) -> list[tuple[str, msgs.Twist]]:
     """What the mission published at this tick (checked by the process boundary), written as
     the ``mission`` publisher; returns the cmd_vels for the simulator, notes the stored markers
     and the last log line, and hands the course's detector its enable switch."""
     commands: list[tuple[str, msgs.Twist]] = []
+    drives = {contract.cmd_vel(r): r for r in robots}  # the assignment's robots, by topic
     outputs = proc.receive()
     if detector is not None:
         detector.note_outputs((topic, value) for topic, _, _, value in outputs)
     for topic, msgtype, raw, value in outputs:
         writer.write_raw(topic, msgtype, raw, t, publisher="mission")
-        robot = contract.robot_of_topic(topic)
-        if robot is not None and topic == contract.cmd_vel(robot):
-            assert isinstance(value, msgs.Twist)
+        robot = drives.get(topic)
+        if robot is not None and isinstance(value, msgs.Twist):
             commands.append((robot, value))
         elif topic == contract.MARKER_POSES and isinstance(value, msgs.FiducialTransformArray):
             run.markers = {
