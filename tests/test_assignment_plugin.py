@@ -221,3 +221,33 @@ def test_the_docs_show_the_entry_point() -> None:
     text = doc.read_text(encoding="utf-8")
     assert '[project.entry-points."usar_replay.assignments"]' in text
     assert "register_rubric" in text
+
+
+def test_the_toy_replays_bit_for_bit(plugin: Path, toy_log: tuple[Path, str]) -> None:
+    """The log says ``--mission toy-patrol``: replay finds it through the package's entry point."""
+    log, _ = toy_log
+    out = _usar(plugin, log.parent, "replay", log.name)
+    assert out.returncode == 0, out.stderr + out.stdout
+
+
+def test_an_assignment_and_the_rubric_registry_have_one_home_each() -> None:
+    """``Assignment`` and the assignments' table are defined once (the world layer); the rubric
+    registry once (grading); nothing else keeps a list of assignment names."""
+    import ast
+
+    package = Path(__file__).resolve().parents[1] / "usar_replay"
+    homes: dict[str, list[str]] = {}
+    for path in sorted(package.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in tree.body:
+            names = []
+            if isinstance(node, ast.ClassDef):
+                names = [node.name]
+            elif isinstance(node, ast.Assign | ast.AnnAssign):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                names = [t.id for t in targets if isinstance(t, ast.Name)]
+            for name in names:
+                homes.setdefault(name, []).append(str(path.relative_to(package)))
+    assert homes["Assignment"] == ["world/assignment.py"]
+    assert homes["ASSIGNMENTS"] == ["world/assignment.py"]
+    assert homes["_RUBRICS"] == ["grading/rubrics.py"]

@@ -23,7 +23,7 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from usar_replay.batch.plan import (
     GRADE_FORMAT,
@@ -34,6 +34,10 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsarError
 from usar_replay.core.outfiles import write_text
+
+if TYPE_CHECKING:
+    from usar_replay.core.settings import Thresholds
+    from usar_replay.grading.grade import LiveGrade
 
 __all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
 
@@ -55,7 +59,7 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def _thresholds(thresholds_toml: str) -> Any:
+def _thresholds(thresholds_toml: str) -> Thresholds | None:
     """The batch's thresholds, parsed from the job's data (None: the course's)."""
     from usar_replay.core.settings import Thresholds, from_toml
 
@@ -65,7 +69,7 @@ def _thresholds(thresholds_toml: str) -> Any:
 
 
 def rubric(
-    log: Path, scenario_toml: str, thresholds_toml: str, graded: Any = None
+    log: Path, scenario_toml: str, thresholds_toml: str, graded: LiveGrade | None = None
 ) -> dict[str, Any]:
     """The grade of one log as plain data: the only place that knows grade.py's names (so a
     rename there is a fix here). ``graded``: the recorder's
@@ -109,7 +113,9 @@ def rubric(
     }
 
 
-def grade_run(job: RunJob, record: dict[str, Any], graded: Any = None) -> dict[str, Any]:
+def grade_run(
+    job: RunJob, record: dict[str, Any], graded: LiveGrade | None = None
+) -> dict[str, Any]:
     """Grade the run's log (``graded``: as :func:`rubric` takes it) and write
     ``<world>.grade.json`` (atomically)."""
     log = job.path(".mcap")
@@ -170,7 +176,7 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
     return record_ros1(scenario, log, package, settings, watchdog, limits=limits)
 
 
-def record_run(job: RunJob) -> tuple[dict[str, Any], Any]:
+def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
     """Record the run (replacing whatever a cut-off run left): its manifest entry, and the
     grade the recorder fed while writing the log (None when the file must be graded: a run
     past its wall-clock limit, or a ROS 1 package's run).
