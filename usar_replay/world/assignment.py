@@ -41,7 +41,6 @@ if TYPE_CHECKING:
 __all__ = [
     "ASSIGNMENTS",
     "Assignment",
-    "BUILTIN",
     "ENTRY_POINT_GROUP",
     "ROS2_FINAL",
     "USAR",
@@ -58,9 +57,6 @@ __all__ = [
 
 ENTRY_POINT_GROUP = "usar_replay.assignments"
 """Entry points in this group name a function that registers assignments (and their rubrics)."""
-
-BUILTIN = "builtin"
-"""``--mission builtin`` (the default of a US&R world): the course's reference mission."""
 
 
 class VariantMaker(Protocol):
@@ -224,7 +220,7 @@ USAR = Assignment(
     static_links=lambda scenario: (),
     starts=_usar_starts,
     parameters=usar_parameters,
-    builtin_mission=BUILTIN,
+    builtin_mission="builtin",  # node.worker.BUILTIN: the default --mission
     mission="usar_replay.missions.usar:main",
     world=course_world,
     variant=_make_variant,
