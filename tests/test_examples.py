@@ -27,7 +27,8 @@ from example_worlds import CORRIDOR_SETTINGS, corridor, quick_room
 from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import RecordSettings, RunSettings
-from usar_replay.grading.grade import GRADE_TOPICS, Grader, GradeReport, grade_file
+from usar_replay.grading.grade import GradeReport, grade_file
+from usar_replay.grading.rubric_usar import GRADE_TOPICS, Grader
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import ReplayReport, replay

@@ -23,16 +23,8 @@ from logtools import SyntheticRun, rewrite, synthetic_mission, truncate_at
 from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissingTopic, UsageError
-from usar_replay.grading.grade import (
-    DETECTION_MEMORY_NS,
-    MAX_VISITS,
-    Grader,
-    GradeReport,
-    Thresholds,
-    grade_file,
-    load_thresholds,
-)
-from usar_replay.grading.rubric_usar import NO_DETECTOR
+from usar_replay.grading.grade import GradeReport, Thresholds, grade_file, load_thresholds
+from usar_replay.grading.rubric_usar import DETECTION_MEMORY_NS, MAX_VISITS, NO_DETECTOR, Grader
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult

@@ -21,13 +21,12 @@ import pytest
 from usar_replay.core import contract, msgs
 from usar_replay.core.errors import InvalidScenario
 from usar_replay.core.settings import RecordSettings, RunSettings
-from usar_replay.grading import assignment
 from usar_replay.grading.grade import GradeReport, grade_file
 from usar_replay.log.run import open_run
 from usar_replay.node.executor import PublishPolicy
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import outputs_digest, replay
-from usar_replay.world import scenario, scenario_toml
+from usar_replay.world import assignment, scenario, scenario_toml
 from usar_replay.world.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "ros2_final"

@@ -23,7 +23,7 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from usar_replay.batch.plan import (
     GRADE_FORMAT,
@@ -34,6 +34,10 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsarError
 from usar_replay.core.outfiles import write_text
+
+if TYPE_CHECKING:
+    from usar_replay.core.settings import Thresholds
+    from usar_replay.grading.grade import LiveGrade
 
 __all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
 
@@ -55,24 +59,38 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any]:
+def _thresholds(thresholds_toml: str) -> Thresholds | None:
+    """The batch's thresholds, parsed from the job's data (None: the course's)."""
+    from usar_replay.core.settings import Thresholds, from_toml
+
+    if not thresholds_toml:
+        return None
+    return from_toml(Thresholds, thresholds_toml, "thresholds.toml", table="thresholds")
+
+
+def rubric(
+    log: Path, scenario_toml: str, thresholds_toml: str, graded: LiveGrade | None = None
+) -> dict[str, Any]:
     """The grade of one log as plain data: the only place that knows grade.py's names (so a
-    rename there is a fix here). A log that cannot be graded at all (the mission crashed before
-    the first tick, no log) gets every line of the rubric failed with 0 points."""
-    from usar_replay.grading.grade import Grader, grade_file, load_thresholds
+    rename there is a fix here). ``graded``: the recorder's
+    :class:`~usar_replay.grading.grade.LiveGrade` of this log, fed with these thresholds while
+    it was written (then the file is not read again); else the file is graded. A log that
+    cannot be graded at all (the mission crashed before the first tick, no log) gets every line
+    of its assignment's rubric failed with 0 points."""
+    from usar_replay.grading.grade import grade_file
+    from usar_replay.grading.rubrics import rubric_for
     from usar_replay.world.scenario_toml import from_toml
 
-    thresholds = None
-    if thresholds_toml:
-        tmp = Path("thresholds.toml")
-        tmp.write_text(thresholds_toml, encoding="utf-8")
-        thresholds = load_thresholds(tmp)
+    thresholds = _thresholds(thresholds_toml)
     try:
-        report = grade_file(log, thresholds)
+        report = graded.report(log) if graded is not None else grade_file(log, thresholds)
         zero = False
     except UsarError as err:
-        report = Grader(from_toml(scenario_toml), thresholds).report(
-            str(log), log_complete=False, log_problem=str(err)
+        scenario = from_toml(scenario_toml)
+        report = (
+            rubric_for(scenario)
+            .grader(scenario, thresholds)
+            .report(str(log), log_complete=False, log_problem=str(err))
         )
         zero = True
     checks: list[dict[str, Any]] = [
@@ -95,8 +113,11 @@ def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any
     }
 
 
-def grade_run(job: RunJob, record: dict[str, Any]) -> dict[str, Any]:
-    """Grade the run's log and write ``<world>.grade.json`` (atomically)."""
+def grade_run(
+    job: RunJob, record: dict[str, Any], graded: LiveGrade | None = None
+) -> dict[str, Any]:
+    """Grade the run's log (``graded``: as :func:`rubric` takes it) and write
+    ``<world>.grade.json`` (atomically)."""
     log = job.path(".mcap")
     grade = {
         "format": GRADE_FORMAT,
@@ -107,7 +128,7 @@ def grade_run(job: RunJob, record: dict[str, Any]) -> dict[str, Any]:
         "log": log.name,
         "log_sha256": record["log_sha256"],
         "thresholds_sha256": job.thresholds_sha256,
-        **rubric(log, job.scenario_toml, job.thresholds_toml),
+        **rubric(log, job.scenario_toml, job.thresholds_toml, graded),
     }
     text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
     write_text(job.path(".grade.json"), text, overwrite=True)
@@ -156,8 +177,10 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
     return record_ros1(scenario, log, package, settings, watchdog, limits=limits)
 
 
-def record_run(job: RunJob) -> dict[str, Any]:
-    """Record the run (replacing whatever a cut-off run left) and write its manifest entry.
+def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
+    """Record the run (replacing whatever a cut-off run left): its manifest entry, and the
+    grade the recorder fed while writing the log (None when the file must be graded: a run
+    past its wall-clock limit, or a ROS 1 package's run).
 
     Raises KeyboardInterrupt (not WallLimit) when cut off: then nothing is written."""
     from usar_replay.core.settings import RunSettings
@@ -178,13 +201,21 @@ def record_run(job: RunJob) -> dict[str, Any]:
             raise KeyboardInterrupt
 
     start = time.perf_counter()  # wall time is for people and the wall-limit verdict only
+    graded = None
     try:
         if job.target.startswith(ROS1_TARGET_PREFIX):
             result = _record_ros1(job, scenario, log, settings, watchdog)
         else:
             result = record(
-                scenario, log, settings, watchdog, mission=job.target, limits=_mission_limits(job)
+                scenario,
+                log,
+                settings,
+                watchdog,
+                mission=job.target,
+                limits=_mission_limits(job),
+                thresholds=_thresholds(job.thresholds_toml),
             )
+            graded = result.grade
         outcome, reason = result.outcome, result.outcome_reason
         sim_s = result.sim_duration_s
     except WallLimit:
@@ -206,7 +237,7 @@ def record_run(job: RunJob) -> dict[str, Any]:
         "sim_duration_s": round(sim_s, 3),
         "wall_s": round(wall_s, 3),
     }
-    return rec
+    return rec, graded
 
 
 def _write_record(job: RunJob, rec: dict[str, Any]) -> None:
@@ -219,10 +250,10 @@ def run(job: RunJob) -> dict[str, Any]:
     signal.signal(signal.SIGTERM, _on_sigterm)
     record = finished_record(job) if job.grade_only else None
     if record is None:
-        record = record_run(job)
+        record, graded = record_run(job)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the grade is quick: let it finish
         job.path(".run.json").unlink(missing_ok=True)
-        grade = grade_run(job, record)
+        grade = grade_run(job, record, graded)
         _write_record(job, record)
     else:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -249,9 +280,10 @@ if __name__ == "__main__":
 
 
 def max_points(scenario_toml: str) -> float:
-    """The rubric's full marks on a world (for runs that have no grade)."""
-    from usar_replay.grading.grade import Grader
+    """The full marks of the world's assignment's rubric (for runs that have no grade)."""
+    from usar_replay.grading.rubrics import rubric_for
     from usar_replay.world.scenario_toml import from_toml
 
-    report = Grader(from_toml(scenario_toml)).report("", log_complete=False)
+    scenario = from_toml(scenario_toml)
+    report = rubric_for(scenario).grader(scenario, None).report("", log_complete=False)
     return round(sum(c.max_points for c in report.checks), 3)

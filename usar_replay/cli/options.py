@@ -56,10 +56,12 @@ def parse_camera(text: str) -> tuple[int, int, float]:
 
 
 def load_scenario(args: argparse.Namespace) -> Scenario:
-    from usar_replay.grading import assignment
-    from usar_replay.world import scenario_toml
+    from usar_replay.world import assignment, scenario_toml
 
     kind = getattr(args, "assignment", None)
+    if kind and kind not in assignment.names():
+        known = ", ".join(assignment.names())
+        raise UsageError(f"--assignment {kind}: no such assignment (known: {known})")
     base = (
         scenario_toml.load(args.scenario)
         if args.scenario
@@ -93,8 +95,9 @@ def add_world_options(p: argparse.ArgumentParser) -> None:
     add_world_key(p)
     p.add_argument(
         "--assignment",
-        choices=["usar", "ros2-final"],
-        help="the built-in world of this assignment (default usar; a scenario file names its own)",
+        metavar="NAME",
+        help="the built-in world of this assignment: usar (default), ros2-final or one a package"
+        " adds (docs/assignments.md); a scenario file names its own",
     )
     p.add_argument("--camera", metavar="WxH@HZ", help="camera size and rate, e.g. 640x480@10")
     p.add_argument("--encoding", choices=["png", "jpeg"], help="recorded frame encoding")

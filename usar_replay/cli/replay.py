@@ -38,8 +38,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def run(args: argparse.Namespace) -> int:
     from usar_replay.grading.delta import rubric_delta
-    from usar_replay.grading.grade import grade_run, rubric_for
+    from usar_replay.grading.grade import grade_run
     from usar_replay.grading.reports import to_table
+    from usar_replay.grading.rubrics import rubric_for
     from usar_replay.grading.verdict import RubricGrader
     from usar_replay.log.run import open_run
     from usar_replay.pipeline.replay import check_not_damaged, replay

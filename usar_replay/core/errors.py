@@ -7,6 +7,8 @@ and is allowed to raise with a traceback.
 
 from __future__ import annotations
 
+from usar_replay.core.safe_text import safe_line
+
 __all__ = [
     "UsarError",
     "UsageError",
@@ -15,6 +17,9 @@ __all__ = [
     "NotAnMcapFile",
     "IncompleteLog",
     "MissingTopic",
+    "MissionEnded",
+    "DetectError",
+    "MissingRos1",
 ]
 
 
@@ -52,3 +57,30 @@ class IncompleteLog(LogError):
 
 class MissingTopic(LogError):
     """A topic the job needs is absent from the log."""
+
+
+class MissionEnded(UsarError):
+    """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
+    ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason.
+    (Raised by :mod:`usar_replay.node.worker`, which re-exports it.)"""
+
+    exit_code = 4
+
+    def __init__(self, verdict: str, detail: str) -> None:
+        first = detail.strip().splitlines()[-1] if detail.strip() else verdict
+        first = safe_line(first)  # the mission's text: printed, never obeyed
+        super().__init__(f"the mission {verdict.replace('_', ' ')}: {first}")
+        self.verdict = verdict
+        self.detail = detail
+
+
+class DetectError(UsarError):
+    """A frame that cannot be decoded (corrupt image bytes in a log). (Raised by
+    :mod:`usar_replay.world.detect`, which re-exports it.)"""
+
+    exit_code = 3
+
+
+class MissingRos1(UsageError):
+    """ROS 1 is not installed: the message is the ``apt-get install`` line to run. (Raised by
+    :mod:`usar_replay.ros1.debian`, which re-exports it.)"""

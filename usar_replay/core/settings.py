@@ -285,21 +285,29 @@ def to_toml(obj: Any) -> str:
     return tomli_w.dumps(to_mapping(obj))
 
 
-def from_toml(cls: type[T], text: str, source: str = "<settings>") -> T:
-    """Parse TOML text written by :func:`to_toml` (or by a person) into ``cls``."""
+def from_toml(
+    cls: type[T], text: str, source: str = "<settings>", table: str | None = None
+) -> T:
+    """Parse TOML text written by :func:`to_toml` (or by a person) into ``cls``; with
+    ``table``, only that table (``[thresholds]``) is read and the others are ignored, so one
+    text can carry settings for several tools. Errors start with ``source``."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise UsageError(f"{source}: invalid TOML: {err}") from err
+    if table is not None:
+        sub = data.get(table)
+        if not isinstance(sub, dict):
+            raise UsageError(f"{source}: expected a [{table}] table")
+        data = sub
     try:
-        return from_mapping(cls, data)
+        return from_mapping(cls, data, f"{table}." if table else "")
     except UsageError as err:
         raise UsageError(f"{source}: {err}") from err
 
 
 def load(cls: type[T], path: str | Path, table: str | None = None) -> T:
-    """Settings from a TOML file; with ``table``, only that table (``[thresholds]``) is read and
-    the others are ignored, so one file can carry settings for several tools."""
+    """Settings from a TOML file (:func:`from_toml` of its text, errors naming the path)."""
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError as err:
@@ -307,19 +315,7 @@ def load(cls: type[T], path: str | Path, table: str | None = None) -> T:
     except (OSError, UnicodeDecodeError) as err:
         why = err.__class__.__name__
         raise UsageError(f"{path}: cannot read the settings file: {why}") from err
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise UsageError(f"{path}: invalid TOML: {err}") from err
-    if table is not None:
-        sub = data.get(table)
-        if not isinstance(sub, dict):
-            raise UsageError(f"{path}: expected a [{table}] table")
-        data = sub
-    try:
-        return from_mapping(cls, data, f"{table}." if table else "")
-    except UsageError as err:
-        raise UsageError(f"{path}: {err}") from err
+    return from_toml(cls, text, str(path), table)
 
 
 _TRUE = frozenset({"1", "true", "yes", "on"})

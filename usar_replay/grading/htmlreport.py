@@ -9,7 +9,7 @@ the camera frame in which each marker was first detected. Everything is embedded
 as PNG, the frames as the recorded image bytes), so a page is one file with no links out.
 
 The robots, their camera topic and their colours come from the run's assignment
-(:func:`usar_replay.grading.assignment.of`): the US&R explorer and follower, or the ROS 2 final
+(:func:`usar_replay.world.assignment.of`): the US&R explorer and follower, or the ROS 2 final
 project's ``robot1``. A robot's colour is the palette's entry at its index in the assignment, so
 the first robot of every assignment looks the same.
 
@@ -31,11 +31,11 @@ from typing import TYPE_CHECKING
 
 from usar_replay import __version__
 from usar_replay.core import contract, msgs
-from usar_replay.grading.assignment import Assignment
-from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.grading.labels import Label, diameter_pt, place
 from usar_replay.grading.verdict import Check, GradeReport
 from usar_replay.log.run import Run
+from usar_replay.world.assignment import Assignment
+from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.scenario import Box, Cylinder, Scenario, Sphere
 
 if TYPE_CHECKING:

@@ -117,7 +117,7 @@ class RubricGrader(Protocol):
 class Rubric:
     """One assignment's rubric: how to make its grader and which topics it reads.
 
-    Why a value and not a module: an :class:`~usar_replay.grading.assignment.Assignment`
+    Why a value and not a module: an :class:`~usar_replay.world.assignment.Assignment`
     carries a factory for it, so grade, replay and the CLI ask the run's assignment for its
     rubric and never look a module up by name."""
 

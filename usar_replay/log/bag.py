@@ -25,7 +25,7 @@ import contextlib
 import errno
 import fcntl
 import os
-from collections.abc import Collection, Iterable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -88,6 +88,15 @@ LATCHED_TOPICS = frozenset({contract.TF_STATIC, contract.MAP_TOPIC})
 # --- CDR lives in usar_replay.core.cdr (re-exported here for older callers) ---------------------
 
 
+@dataclass(frozen=True, slots=True)
+class _Watcher:
+    """One :meth:`BagWriter.watch`: the topics, their allowed publishers, the callback."""
+
+    topics: frozenset[str]
+    only_from: Mapping[str, Collection[str]]
+    callback: Callable[[str, msgs.Message | None, int], None]
+
+
 class BagWriter:
     """Writes a usar log: one MCAP file, ``ros2`` profile, zstd chunks, indexes and summary.
 
@@ -130,6 +139,25 @@ class BagWriter:
         self.outcome = ""
         """How the run ended, written into the status record on close (see :meth:`close`)."""
         self.outcome_reason = ""
+        self._watchers: list[_Watcher] = []
+
+    def watch(
+        self,
+        topics: Iterable[str],
+        callback: Callable[[str, msgs.Message | None, int], None],
+        *,
+        only_from: Mapping[str, Collection[str]] | None = None,
+    ) -> None:
+        """From now on, ``callback(topic, value, log time)`` for every message written on
+        ``topics``, in write order, decoded from the written bytes: what
+        :meth:`BagReader.decoded` (same ``only_from``) will give of the finished file, as it is
+        written (``usar record`` grades while it records)."""
+        self._watchers.append(_Watcher(frozenset(topics), dict(only_from or {}), callback))
+
+    @property
+    def topics(self) -> frozenset[str]:
+        """The topics written so far."""
+        return frozenset(topic for topic, _ in self._channels)
 
     def __enter__(self) -> BagWriter:
         return self
@@ -225,6 +253,9 @@ class BagWriter:
         )
         self._last_time = log_time_ns
         self.message_count += 1
+        for w in self._watchers:
+            if topic in w.topics and publisher in w.only_from.get(topic, (publisher,)):
+                w.callback(topic, _decoded(topic, msgtype, log_time_ns, data), log_time_ns)
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
         """A metadata record (string map), e.g. the run's settings."""

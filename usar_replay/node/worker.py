@@ -47,9 +47,8 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.core import cdr, msgs
-from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.core.finite import NonFiniteValue
-from usar_replay.core.safe_text import safe_line
 from usar_replay.node import hide, jail
 from usar_replay.node.boundary_check import (
     MAX_FRAME_BYTES,
@@ -73,11 +72,6 @@ __all__ = [
 
 BUILTIN = "builtin"
 """``--mission builtin`` (the default): the course's reference mission."""
-_BUILTIN_MODULES = {
-    "builtin": "usar_replay.missions.usar:main",
-    "usar": "usar_replay.missions.usar:main",
-    "ros2-final": "usar_replay.missions.ros2_final:main",
-}
 
 _TICK, _OUT, _CRASH, _READY, _STOP, _REFUSED = b"T", b"O", b"C", b"R", b"S", b"F"
 _USAR_DIR = str(Path(__file__).resolve().parent)
@@ -110,7 +104,10 @@ def resolve_target(spec: str | None) -> MissionTarget:
             f"mission {spec!r} is a ROS 1 package: only Python missions are re-run here; "
             "grade its recorded outputs with usar grade, or record it again with --ros1"
         )
-    text = _BUILTIN_MODULES.get(spec, spec)
+    # a reference mission's name (builtin, an assignment's): the assignment's module:function
+    from usar_replay.world.assignment import mission_path
+
+    text = mission_path(spec) or spec
     attr = "main"
     if text.endswith(".py") or "/" in text or os.sep in text:
         file_part = text
@@ -169,20 +166,6 @@ class MissionLimits:
     work_dir: str = ""
     """The jailed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
-
-
-class MissionEnded(UsarError):
-    """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
-    ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason."""
-
-    exit_code = 4
-
-    def __init__(self, verdict: str, detail: str) -> None:
-        first = detail.strip().splitlines()[-1] if detail.strip() else verdict
-        first = safe_line(first)  # the mission's text: printed, never obeyed
-        super().__init__(f"the mission {verdict.replace('_', ' ')}: {first}")
-        self.verdict = verdict
-        self.detail = detail
 
 
 # --- the wire ---------------------------------------------------------------------------------

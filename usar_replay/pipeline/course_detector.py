@@ -35,7 +35,7 @@ from collections.abc import Iterable, Sequence
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
-from usar_replay.grading.assignment import Assignment
+from usar_replay.world.assignment import Assignment
 from usar_replay.world.detect import aruco_markers, detect
 
 __all__ = ["CourseDetector", "mission_inputs"]

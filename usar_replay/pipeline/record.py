@@ -13,6 +13,10 @@ outputs bit for bit.
 The log is self-contained: the scenario (``scenario.toml``), every setting (``settings.toml``),
 which mission code ran (``mission.toml``: target, module, sha256) and, on close, how the run
 ended (``usar.status``: the file's state and the mission's outcome).
+
+The run's rubric grades while the log is written (:class:`~usar_replay.grading.grade.LiveGrade`
+watches the writer): the status line and the summary count markers as ``usar grade`` does, and
+:attr:`RecordResult.grade` is the file's grade without reading the file again.
 """
 
 from __future__ import annotations
@@ -31,10 +35,9 @@ from typing import Any, TextIO
 from usar_replay import __version__
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.safe_text import safe
-from usar_replay.core.settings import RunSettings
+from usar_replay.core.settings import RunSettings, Thresholds
 from usar_replay.core.settings import to_toml as settings_to_toml
-from usar_replay.grading.assignment import Assignment
-from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.grading.grade import LiveGrade
 from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
@@ -49,6 +52,8 @@ from usar_replay.node.worker import (
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
+from usar_replay.world.assignment import Assignment
+from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.detect import image_codecs
 from usar_replay.world.nav import OccupancyGrid, grid_to_msg
 from usar_replay.world.scenario import Scenario
@@ -111,6 +116,8 @@ class RecordResult:
     found: tuple[FoundMarker, ...] = ()
     """The markers found as the rubric counts them (``usar grade`` agrees), for any mission."""
     markers_total: int = 0
+    grade: LiveGrade | None = None
+    """The rubric fed while recording: ``grade.report(path)`` is the file's grade."""
 
     @property
     def mission_done(self) -> bool:
@@ -133,7 +140,7 @@ def default_output(scenario: Scenario, directory: str | os.PathLike[str] = "reco
 
 def mission_parameters(scenario: Scenario, settings: RunSettings) -> dict[str, Any]:
     """The parameters a mission's nodes read, as the course's launch and parameter files give
-    them (the scenario's assignment says which: :mod:`usar_replay.grading.assignment`; for US&R
+    them (the scenario's assignment says which: :mod:`usar_replay.world.assignment`; for US&R
     ``aruco_lookup_locations.target_k``, ``<robot>.home``, ``mission.*``, ``detector.*``).
     Never a marker position."""
     return assignment_of(scenario).parameters(scenario, settings)
@@ -231,6 +238,8 @@ class _Run:
     frames: int = 0
     markers: dict[int, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     last_log: str = ""
+    live: LiveGrade | None = None
+    """The rubric fed as the log is written: the status line's marker count."""
 
 
 def record(
@@ -243,6 +252,7 @@ def record(
     limits: MissionLimits | None = None,
     target: MissionTarget | None = None,
     process: Callable[..., MissionProcess] = MissionProcess,
+    thresholds: Thresholds | None = None,
 ) -> RecordResult:
     """Run ``mission`` (default: the built-in one) on ``scenario`` and write the log to ``out``.
 
@@ -258,6 +268,8 @@ def record(
     ``target`` and ``process`` let another front end take the mission process's place (the
     ROS 1 bridge: :mod:`usar_replay.ros1.process`): ``process(target, parameters, sim_topics=,
     sim_frames=, limits=)`` must speak the mission process's tick protocol.
+
+    ``thresholds`` are the rubric's for :attr:`RecordResult.grade` (default: the course's).
     """
     settings = settings or RunSettings()
     rs = settings.record
@@ -265,13 +277,16 @@ def record(
     target = target or resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
+    live = LiveGrade(scenario, thresholds)
     with _simulator(scenario, settings, asg) as sim, bag.BagWriter(out) as writer:
+        live.attach(writer, sim.now_ns)  # the first message (the true markers) is at now
         renderer = _write_header(writer, sim, scenario, settings, target)
         run = _Run(
             t0=sim.now_ns,
             last_t=sim.now_ns,
             outcome="max_sim_time" if rs.max_sim_time_s else "time_limit",
             reason=f"stopped at {limit_s:g} s of sim time",
+            live=live,
         )
         try:
             _tick_loop(
@@ -286,7 +301,6 @@ def record(
         _close_run(writer, run)
         message_count = writer.message_count
     wall_time = time.perf_counter() - wall_start
-    found = _found_as_graded(Path(out))
     return RecordResult(
         path=Path(out),
         status="complete",
@@ -300,8 +314,9 @@ def record(
         marker_errors_m=_marker_errors(scenario, run.markers),
         renderer=renderer,
         mission=target.spec,
-        found=found,
+        found=live.found_markers(),
         markers_total=len(scenario.markers),
+        grade=live,
     )
 
 
@@ -394,7 +409,7 @@ def _tick_loop(
             if latency:
                 _step(sim, commands, steps_per_tick)
                 nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-            commands = _take_outputs(proc, writer, tick.t, run, detector)
+            commands = _take_outputs(proc, writer, tick.t, run, detector, asg.robot_names)
             if progress is not None:
                 progress(_progress(run, tick.t, scenario))
             if proc.shutdown_requested:
@@ -422,19 +437,20 @@ def _take_outputs(
     t: int,
     run: _Run,
     detector: CourseDetector | None = None,
+    robots: tuple[str, ...] = contract.ROBOTS,
 ) -> list[tuple[str, msgs.Twist]]:
     """What the mission published at this tick (checked by the process boundary), written as
     the ``mission`` publisher; returns the cmd_vels for the simulator, notes the stored markers
     and the last log line, and hands the course's detector its enable switch."""
     commands: list[tuple[str, msgs.Twist]] = []
+    drives = {contract.cmd_vel(r): r for r in robots}  # the assignment's robots, by topic
     outputs = proc.receive()
     if detector is not None:
         detector.note_outputs((topic, value) for topic, _, _, value in outputs)
     for topic, msgtype, raw, value in outputs:
         writer.write_raw(topic, msgtype, raw, t, publisher="mission")
-        robot = contract.robot_of_topic(topic)
-        if robot is not None and topic == contract.cmd_vel(robot):
-            assert isinstance(value, msgs.Twist)
+        robot = drives.get(topic)
+        if robot is not None and isinstance(value, msgs.Twist):
             commands.append((robot, value))
         elif topic == contract.MARKER_POSES and isinstance(value, msgs.FiducialTransformArray):
             run.markers = {
@@ -451,9 +467,9 @@ def _take_outputs(
 
 
 def _progress(run: _Run, t: int, scenario: Scenario) -> Progress:
-    return Progress(
-        (t - run.t0) / 1e9, len(run.markers), len(scenario.markers), run.frames, run.last_log
-    )
+    """The status line's facts; markers as the rubric counts them (any mission's)."""
+    found = len(run.live.found_markers()) if run.live is not None else len(run.markers)
+    return Progress((t - run.t0) / 1e9, found, len(scenario.markers), run.frames, run.last_log)
 
 
 def _close_run(writer: bag.BagWriter, run: _Run) -> None:
@@ -489,15 +505,6 @@ def _marker_errors(
 
 def _time(t_ns: int) -> msgs.Time:
     return msgs.Time.from_ns(t_ns)
-
-
-def _found_as_graded(path: Path) -> tuple[FoundMarker, ...]:
-    """The markers the fresh log shows found, observed by its own rubric: the summary must
-    count what ``usar grade`` counts, whatever topics the mission publishes."""
-    from usar_replay.grading.grade import observe_run
-    from usar_replay.log.run import open_run
-
-    return observe_run(open_run(path)).found_markers()
 
 
 def _fit(line: str, width: int = 100) -> list[str]:

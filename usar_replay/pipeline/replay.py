@@ -44,7 +44,6 @@ from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.errors import LogError, UsageError
 from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
-from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
 from usar_replay.node.worker import (
@@ -56,6 +55,7 @@ from usar_replay.node.worker import (
     resolve_target,
 )
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.world.assignment import of as assignment_of
 
 __all__ = [
     "MISSION_TF_KEY",

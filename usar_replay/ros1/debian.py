@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from usar_replay.core.errors import UsageError
+from usar_replay.core.errors import MissingRos1
 
 __all__ = ["APT_PACKAGES", "DIST_PACKAGES", "MissingRos1", "check", "install_line", "missing"]
 
@@ -71,10 +71,6 @@ _PROBES: dict[str, str] = {
     "python3-nav-msgs": str(DIST_PACKAGES / "nav_msgs" / "msg" / "__init__.py"),
     "python3-sensor-msgs": str(DIST_PACKAGES / "sensor_msgs" / "msg" / "__init__.py"),
 }
-
-
-class MissingRos1(UsageError):
-    """ROS 1 is not installed: the message is the ``apt-get install`` line to run."""
 
 
 def install_line(packages: list[str] | None = None) -> str:

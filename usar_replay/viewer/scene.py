@@ -20,7 +20,7 @@ The scene, on one time axis (the log's sim time in nanoseconds):
 * ``cmd_vel`` as scalars, ``/rosout``, goal outcomes, notes and rubric lines as text rows.
 
 The robots, their frames, the camera and the robots' colours come from the scenario's assignment
-(:func:`usar_replay.grading.assignment.of`; US&R when the log has no scenario): a ROS 2 final
+(:func:`usar_replay.world.assignment.of`; US&R when the log has no scenario): a ROS 2 final
 project run draws ``robot1`` as a US&R run draws the explorer and the follower. A robot's colour is
 :data:`ROBOT_PALETTE` at its index in the assignment.
 
@@ -43,8 +43,8 @@ from scipy.spatial.transform import Rotation
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.tf_tree import Buffer, TransformException
-from usar_replay.grading.assignment import USAR, Assignment
-from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.world.assignment import USAR, Assignment
+from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.scenario import Scenario
 
 if TYPE_CHECKING:

@@ -35,8 +35,6 @@ import rerun.blueprint as rrb
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.errors import UsageError, UsarError
-from usar_replay.grading.assignment import Assignment
-from usar_replay.grading.assignment import of as assignment_of
 from usar_replay.viewer import scene as sc
 from usar_replay.viewer.scene import ImageBatch, Scene, Strips
 from usar_replay.viewer.viewer_process import (
@@ -46,6 +44,8 @@ from usar_replay.viewer.viewer_process import (
     check_rrd,
     default_rrd_path,
 )
+from usar_replay.world.assignment import Assignment
+from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.scenario import Box, Scenario, building_extent
 
 if TYPE_CHECKING:

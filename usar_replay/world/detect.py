@@ -37,7 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from usar_replay.core import msgs
-from usar_replay.core.errors import UsarError
+from usar_replay.core.errors import DetectError
 from usar_replay.core.settings import DetectorParams
 
 __all__ = [
@@ -58,12 +58,6 @@ DICTIONARIES = tuple(
     [f"DICT_{n}X{n}_{k}" for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)]
     + ["DICT_ARUCO_ORIGINAL"]
 )
-class DetectError(UsarError):
-    """A frame that cannot be decoded (corrupt image bytes in a log)."""
-
-    exit_code = 3
-
-
 _REFINE = {
     "none": cv2.aruco.CORNER_REFINE_NONE,
     "subpix": cv2.aruco.CORNER_REFINE_SUBPIX,

@@ -132,7 +132,7 @@ class Scenario:
     (:mod:`usar_replay.world.world_key`): with one, ``seed`` alone does not give this world."""
     assignment: str = "usar"
     """Which assignment this world is for: ``usar`` (the two-robot US&R mission) or
-    ``ros2-final`` (the ROS 2 final project; :mod:`usar_replay.grading.assignment`)."""
+    ``ros2-final`` (the ROS 2 final project; :mod:`usar_replay.world.assignment`)."""
     task: tuple[tuple[str, float | str], ...] = ()
     """The assignment's own world data as flat ``dotted.key -> value`` pairs in key order (the
     file's ``[task]`` table; ``usar`` has none). :mod:`usar_replay.world.ros2_world` reads it."""
@@ -313,10 +313,6 @@ def check_count(source: str, path: str, n: int) -> None:
         raise field_error(source, path, f"holds {n}; a scenario has {lo} to {hi}")
 
 
-ASSIGNMENTS = ("usar", "ros2-final")
-"""The assignments a scenario may name (``assignment = "..."``)."""
-
-
 def _check_name(source: str, name: str) -> None:
     if not NAME_PATTERN.fullmatch(name) or ".." in name:
         raise field_error(
@@ -399,10 +395,6 @@ def validate(scn: Scenario, source: str = "scenario") -> None:
         raise field_error(source, "walls", "at least one wall is needed")
     if not scn.targets:
         raise field_error(source, "aruco_lookup_locations", "at least one target is needed")
-    if scn.assignment not in ASSIGNMENTS:
-        close = close_matches(scn.assignment, ASSIGNMENTS)
-        hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(ASSIGNMENTS)})"
-        raise field_error(source, "assignment", f"unknown assignment {scn.assignment!r}{hint}")
     check_ranges(scn, source)
     seen: dict[int, int] = {}
     for i, m in enumerate(scn.markers):

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from usar_replay.core.errors import InvalidScenario
+from usar_replay.world.assignment import check_known
 from usar_replay.world.scenario import (
     DICTIONARIES,
     WALL_HEIGHT,
@@ -99,6 +100,7 @@ def from_toml(text: str, source: str = "<string>") -> Scenario:
         assignment=_str(src, "assignment", data.get("assignment", "usar")),
         task=_parse_task(src, data.get("task", {})),
     )
+    check_known(scn.assignment, src)  # the registry (built-in or a package's entry point)
     validate(scn, src)
     return scn
 

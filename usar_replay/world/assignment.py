@@ -1,17 +1,20 @@
-"""Assignments: what differs between the course's US&R mission and its ROS 2 final project.
+"""Assignments: what differs between the course's US&R mission, its ROS 2 final project, and any
+assignment a course package adds.
 
 Why one value per assignment: recording, replay, grading and viewing are the same machinery for
 every assignment (sim -> mission process -> sim, one MCAP, per-tick replay, a streaming rubric);
 only names and a few rules differ: which robots there are and what their frames are called,
 which robot carries the camera, what the simulator publishes (a mission's inputs) and which tf
 links it owns (a mission may not broadcast them), the parameters a mission reads, the built-in
-reference mission, the rubric. A scenario names its assignment (``assignment = "ros2-final"``,
-default ``usar``); :func:`of` gives the :class:`Assignment`, and record, replay and grade take
-everything assignment-specific from it.
+reference mission (a ``module:function`` path). A scenario names its assignment
+(``assignment = "ros2-final"``, default ``usar``); :func:`of` gives the :class:`Assignment`, and
+record, replay, view and the mission process's loader take everything assignment-specific from
+it. The rubric that judges an assignment is not here: the world layer knows nothing of grading;
+:mod:`usar_replay.grading.rubrics` maps an assignment's name to its rubric.
 
-The rubric travels as a factory (:attr:`Assignment.rubric`): the assignment says which rubric
-judges it, and the rubric module is imported when first asked for (``usar info`` and the viewer
-read assignments without grading).
+One registry (:func:`register`, :func:`by_name`, :func:`of`) holds the assignments: the two
+built-in ones, and those a package declares under the entry-point group
+``usar_replay.assignments`` (loaded the first time a name is not known; ``docs/assignments.md``).
 
 The worlds and variant makers (:mod:`usar_replay.world.ros2_world`,
 :mod:`usar_replay.world.variants`: the planner, numpy and scipy) are imported when first called,
@@ -22,14 +25,14 @@ of its start-up loading scipy.
 from __future__ import annotations
 
 import dataclasses
+import importlib.metadata
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 from usar_replay.core import contract
 from usar_replay.core.settings import RunSettings
-from usar_replay.grading.verdict import Rubric
-from usar_replay.world.scenario import Scenario, course_world
+from usar_replay.world.scenario import Scenario, close_matches, course_world, field_error
 from usar_replay.world.world_key import WorldKey
 
 if TYPE_CHECKING:
@@ -38,13 +41,22 @@ if TYPE_CHECKING:
 __all__ = [
     "ASSIGNMENTS",
     "Assignment",
+    "ENTRY_POINT_GROUP",
     "ROS2_FINAL",
     "USAR",
     "by_name",
+    "check_known",
+    "load_plugins",
+    "mission_path",
+    "names",
     "of",
+    "register",
     "ros2_parameters",
     "usar_parameters",
 ]
+
+ENTRY_POINT_GROUP = "usar_replay.assignments"
+"""Entry points in this group name a function that registers assignments (and their rubrics)."""
 
 
 class VariantMaker(Protocol):
@@ -77,9 +89,10 @@ class Assignment:
     parameters: Callable[[Scenario, RunSettings], dict[str, Any]]
     """The parameters the mission's nodes read (never ground truth)."""
     builtin_mission: str
-    """The ``--mission`` name of the built-in reference mission."""
-    rubric: Callable[[], Rubric]
-    """The rubric that grades this assignment (its grader and the topics it reads)."""
+    """The ``--mission`` name of the reference mission (the default ``--mission``; the log's
+    ``mission.toml`` records it): :func:`mission_path` turns it into :attr:`mission`."""
+    mission: str
+    """The reference mission as a ``module:function`` path (``usar_replay.missions.usar:main``)."""
     world: Callable[[], Scenario]
     """The built-in world."""
     variant: VariantMaker
@@ -187,18 +200,6 @@ def _make_variant(scenario: Scenario, seed: int, key: WorldKey | None = None) ->
     return variants.make_variant(scenario, seed, key)
 
 
-def _usar_rubric() -> Rubric:
-    from usar_replay.grading import rubric_usar
-
-    return rubric_usar.RUBRIC
-
-
-def _ros2_rubric() -> Rubric:
-    from usar_replay.grading import rubric_ros2
-
-    return rubric_ros2.RUBRIC
-
-
 def _usar_starts(s: Scenario) -> tuple[tuple[float, float, float], ...]:
     return tuple((r.x, r.y, r.yaw) for r in (s.explorer, s.follower))
 
@@ -219,8 +220,8 @@ USAR = Assignment(
     static_links=lambda scenario: (),
     starts=_usar_starts,
     parameters=usar_parameters,
-    builtin_mission="builtin",
-    rubric=_usar_rubric,
+    builtin_mission="builtin",  # node.worker.BUILTIN: the default --mission
+    mission="usar_replay.missions.usar:main",
     world=course_world,
     variant=_make_variant,
     course_detections=contract.FIDUCIALS,
@@ -239,20 +240,85 @@ ROS2_FINAL = Assignment(
     starts=_ros2_starts,
     parameters=ros2_parameters,
     builtin_mission="ros2-final",
-    rubric=_ros2_rubric,
+    mission="usar_replay.missions.ros2_final:main",
     world=_ros2_final_world,
     variant=_make_ros2_variant,
     course_detections=contract.ARUCO_MARKERS,
 )
 
 ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (USAR, ROS2_FINAL)}
+"""Every known assignment by name (the registry; add to it with :func:`register`)."""
+
+_plugins_loaded = False
+
+
+def register(assignment: Assignment) -> Assignment:
+    """Make ``assignment`` known by its name (its rubric is registered separately, with
+    :func:`usar_replay.grading.rubrics.register_rubric`). Registering the same value twice is
+    harmless; another assignment under a taken name is a ValueError."""
+    known = ASSIGNMENTS.get(assignment.name)
+    if known is not None and known != assignment:
+        raise ValueError(f"assignment {assignment.name!r} is already registered")
+    ASSIGNMENTS[assignment.name] = assignment
+    return assignment
+
+
+def load_plugins() -> None:
+    """Call each ``usar_replay.assignments`` entry point's function once (it registers its
+    package's assignments and rubrics)."""
+    global _plugins_loaded
+    if _plugins_loaded:
+        return
+    _plugins_loaded = True
+    for ep in sorted(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP), key=str):
+        ep.load()()
+
+
+def _lookup(name: str) -> Assignment | None:
+    if name not in ASSIGNMENTS:
+        load_plugins()
+    return ASSIGNMENTS.get(name)
+
+
+def names() -> tuple[str, ...]:
+    """The known assignments' names (the built-in ones first)."""
+    load_plugins()
+    return tuple(ASSIGNMENTS)
 
 
 def by_name(name: str) -> Assignment:
     """The assignment called ``name`` (KeyError when there is none)."""
-    return ASSIGNMENTS[name]
+    found = _lookup(name)
+    if found is None:
+        raise KeyError(name)
+    return found
+
+
+def check_known(name: str, source: str = "scenario") -> None:
+    """An ``InvalidScenario`` naming the field when no assignment is called ``name``."""
+    if _lookup(name) is None:
+        known = names()
+        close = close_matches(name, known)
+        hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(known)})"
+        raise field_error(source, "assignment", f"unknown assignment {name!r}{hint}")
 
 
 def of(scenario: Scenario) -> Assignment:
-    """The assignment a scenario is for."""
+    """The assignment a scenario is for (an ``InvalidScenario`` when it is not known)."""
+    check_known(scenario.assignment, f"world {scenario.name}")
     return ASSIGNMENTS[scenario.assignment]
+
+
+def mission_path(spec: str) -> str | None:
+    """The ``module:function`` of a reference mission named by ``--mission`` (``builtin``, or
+    an assignment's name or its :attr:`~Assignment.builtin_mission`); None for anything else (a
+    file or a module path)."""
+    if ":" in spec or "/" in spec or spec.endswith(".py"):
+        return None
+    for asg in ASSIGNMENTS.values():
+        if spec in (asg.name, asg.builtin_mission):
+            return asg.mission
+    if _plugins_loaded or "." in spec:
+        return None
+    load_plugins()
+    return mission_path(spec)
