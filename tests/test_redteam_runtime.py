@@ -32,7 +32,7 @@ RUN = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_
 
 # --- point 5: a mission that never reads its socket -------------------------------------------
 
-DEAF = '''
+DEAF = """
 import struct, sys
 from multiprocessing.connection import Connection
 
@@ -46,7 +46,7 @@ def main() -> None:
     empty = b"O" + struct.pack("<qI", 0, 0) + b"\\x00"
     for _ in range(1_000_000):
         conn.send_bytes(empty)
-'''
+"""
 
 
 @needs_jail

@@ -517,9 +517,7 @@ class MissionProcess:
         self._conn = multiprocessing.connection.Connection(parent_sock.detach())
         self._in_flight = 0
         try:
-            self._send_frame(
-                pickle.dumps(self._setup), self.limits.startup_timeout_s, "starting"
-            )
+            self._send_frame(pickle.dumps(self._setup), self.limits.startup_timeout_s, "starting")
             self._wait(self.limits.startup_timeout_s, "starting (import and main())")
         except BaseException:
             self.close()
