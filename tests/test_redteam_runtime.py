@@ -13,6 +13,7 @@ tests run anywhere.
 from __future__ import annotations
 
 import dataclasses
+import os
 from pathlib import Path
 
 import pytest
@@ -62,3 +63,47 @@ def test_a_mission_that_stops_reading_is_hung_within_the_tick_timeout(tmp_path: 
     assert "did not read its input within 1 s" in result.outcome_reason
     run = open_run(out)
     assert run.file_state == "complete" and run.outcome == "hung"
+
+
+# --- point 8: a team folder usar must not read --------------------------------------------------
+
+
+def _hostile_folders(subs: Path) -> dict[str, str]:
+    """Team folders with a mission and one thing a plain read would hang or die on; returns
+    each team's expected reason."""
+    minimal = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
+    reasons = {}
+    for team in ("fifo", "zero", "sparse", "linkout"):
+        folder = subs / team
+        folder.mkdir()
+        (folder / "mission.py").write_text(minimal, encoding="utf-8")
+    os.mkfifo(subs / "fifo" / "weights.bin")
+    reasons["fifo"] = "weights.bin: not a regular file"
+    (subs / "zero" / "data.bin").symlink_to("/dev/zero")
+    reasons["zero"] = "data.bin: a link leaving the team's folder"
+    with open(subs / "sparse" / "big.bin", "wb") as f:
+        f.truncate(30 * 1024**3)  # 30 GB, no block of it written
+    reasons["sparse"] = "big.bin: 32212254720 bytes; a file is at most"
+    (subs / "linkout" / "helpers.py").symlink_to("/etc/passwd")
+    reasons["linkout"] = "helpers.py: a link leaving the team's folder"
+    return reasons
+
+
+def test_unusable_team_folders_are_that_teams_verdict(tmp_path: Path) -> None:
+    from usar_replay.batch.plan import discover
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    reasons = _hostile_folders(subs)
+    (subs / "honest").mkdir()
+    (subs / "honest" / "mission.py").write_bytes(
+        (ROOT / "examples" / "minimal_mission.py").read_bytes()
+    )
+    (subs / "honest" / "inner.py").symlink_to("mission.py")  # a link inside is fine
+    found = {s.team: s for s in discover(subs)}
+    assert set(found) == {*reasons, "honest"}
+    for team, reason in reasons.items():
+        assert found[team].problem_outcome == "bad_submission", team
+        assert found[team].problem.startswith("unusable submission: " + reason), found[team]
+        assert found[team].target == ""
+    assert found["honest"].problem == "" and found["honest"].target.endswith("mission.py")
