@@ -107,3 +107,96 @@ def test_unusable_team_folders_are_that_teams_verdict(tmp_path: Path) -> None:
         assert found[team].problem.startswith("unusable submission: " + reason), found[team]
         assert found[team].target == ""
     assert found["honest"].problem == "" and found["honest"].target.endswith("mission.py")
+
+
+# --- point 6: a mission that floods the log ----------------------------------------------------
+
+FLOOD = """
+from usar_replay.api import CompressedImage, Node
+
+NOISE = bytes(range(256)) * 2048  # 512 KiB a message, 4 a tick: 2 MiB per tick
+
+
+class Flood(Node):
+    def __init__(self) -> None:
+        super().__init__("flood")
+        self.pubs = [self.create_publisher(CompressedImage, f"/noise{i}") for i in range(4)]
+        self.create_timer(0.1, self.on_timer)
+
+    def on_timer(self) -> None:
+        for pub in self.pubs:
+            pub.publish(CompressedImage(format="raw", data=NOISE))
+
+
+def main() -> None:
+    Flood()
+"""
+
+TF_BOMB = """
+from usar_replay.api import Node, TransformBroadcaster, TransformStamped, Header
+
+
+class Bomb(Node):
+    def __init__(self) -> None:
+        super().__init__("bomb")
+        self.tf = TransformBroadcaster(self)
+        self.create_timer(0.1, self.on_timer)
+
+    def on_timer(self) -> None:
+        stamp = self.get_clock().now().to_msg()
+        self.tf.sendTransform([
+            TransformStamped(header=Header(stamp=stamp, frame_id="explorer_tf/camera_link"),
+                             child_frame_id="marker_frame")
+            for _ in range(5000)
+        ])
+
+
+def main() -> None:
+    Bomb()
+"""
+
+
+def _record_attack(tmp_path: Path, source: str, **limits: object) -> tuple[Path, object]:
+    mission = tmp_path / "attack.py"
+    mission.write_text(source, encoding="utf-8")
+    out = tmp_path / "attack.mcap"
+    lim = MissionLimits(jail="required" if _OK else "off", **limits)  # type: ignore[arg-type]
+    return out, record(one_room(), out, RUN, mission=str(mission), limits=lim)
+
+
+def test_a_log_over_its_byte_budget_is_refused_closed_and_gradeable(tmp_path: Path) -> None:
+    from usar_replay.grading.grade import grade_file
+
+    out, result = _record_attack(tmp_path, FLOOD, max_log_mib=4)
+    assert result.outcome == "refused", result.outcome_reason  # type: ignore[attr-defined]
+    assert "passed its budget of 4 MiB" in result.outcome_reason  # type: ignore[attr-defined]
+    run = open_run(out)
+    assert run.file_state == "complete" and run.outcome == "refused"
+    assert out.stat().st_size < 5 * 1024 * 1024  # the tick that crossed it was not written
+    report = grade_file(out)
+    assert report.checks  # graded: a report with its lines, not an error
+
+
+def test_a_tf_message_with_thousands_of_transforms_is_refused(tmp_path: Path) -> None:
+    out, result = _record_attack(tmp_path, TF_BOMB)
+    assert result.outcome == "refused", result.outcome_reason  # type: ignore[attr-defined]
+    assert "5000 transforms" in result.outcome_reason  # type: ignore[attr-defined]
+    assert open_run(out).file_state == "complete"
+
+
+def test_the_recorder_refuses_too_many_transforms_whatever_the_mission_process_says() -> None:
+    from usar_replay.core import cdr, msgs
+    from usar_replay.node.boundary_check import BoundaryCheck, OutputRefused
+    from usar_replay.node.executor import PublishPolicy
+
+    check = BoundaryCheck(PublishPolicy(sim_topics=(), sim_frames=()))
+    one = msgs.TransformStamped(
+        header=msgs.Header(frame_id="explorer_tf/camera_link"), child_frame_id="marker_frame"
+    )
+    tf = msgs.TFMessage.__msgtype__
+    ok = cdr.encode(msgs.TFMessage(transforms=(one,) * 1000))
+    assert len(check.check([("/tf", tf, ok)] * 10)) == 10  # 1,000 a message, 10,000 a tick
+    with pytest.raises(OutputRefused, match="1001 transforms"):
+        check.check([("/tf", tf, cdr.encode(msgs.TFMessage(transforms=(one,) * 1001)))])
+    with pytest.raises(OutputRefused, match="11000 transforms in one tick"):
+        check.check([("/tf", tf, ok)] * 11)

@@ -58,6 +58,7 @@ from usar_replay.node.boundary_check import (
     PublishRefused,
 )
 from usar_replay.node.executor import Executor, PublishPolicy
+from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
 from usar_replay.node.sandbox import SandboxPolicy
 from usar_replay.node.wire_io import send_within
 
@@ -167,6 +168,9 @@ class MissionLimits:
     work_dir: str = ""
     """The jailed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
+    max_log_mib: int = DEFAULT_MAX_LOG_MIB
+    """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
+    (:mod:`usar_replay.node.log_budget`)."""
 
 
 class MissionEnded(UsarError):
@@ -449,6 +453,7 @@ class MissionProcess:
         self.limits = limits or MissionLimits()
         self.policy = PublishPolicy(sim_topics=sim_topics, sim_frames=sim_frames)
         self.boundary = BoundaryCheck(self.policy)
+        self.budget = LogBudget(self.limits.max_log_mib)
         self.shutdown_requested = False
         self._work: str | None = None
         self._own_work = False
@@ -628,6 +633,7 @@ class MissionProcess:
                 self._wait(0, "handling a tick")
             raise self._died("handling a tick") from None
         self._in_flight += 1
+        self.budget.inputs(inputs)
 
     def _send_frame(self, frame: bytes, timeout_s: float, doing: str) -> None:
         """Write one frame to the process within ``timeout_s`` wall seconds, or end it as
@@ -657,6 +663,9 @@ class MissionProcess:
             out = self.boundary.check(items)
         except OutputRefused as err:
             raise self._refuse(str(err)) from None
+        over = self.budget.outputs(items)
+        if over:
+            raise self._refuse(over)
         self.shutdown_requested = self.shutdown_requested or bool(flag)
         return out
 
