@@ -117,6 +117,10 @@ class Limits:
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
     """Keep the mission to its own files (usar_replay.node.sandbox)."""
+    max_log_mib: int = 2048
+    """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
+    grade_s: float = 600.0
+    """Wall seconds to grade one log (past it: the grade says ``grade_limit``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -34,6 +34,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsarError
 from usar_replay.core.outfiles import write_text
+from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB
 
 __all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
 
@@ -134,6 +135,7 @@ def _mission_limits(job: RunJob) -> Any:
         startup_timeout_s=float(lim["startup_timeout_s"]),
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
+        max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
         sandbox=sandbox,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident

@@ -57,6 +57,8 @@ DICTIONARIES = tuple(
     [f"DICT_{n}X{n}_{k}" for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)]
     + ["DICT_ARUCO_ORIGINAL"]
 )
+
+
 class DetectError(UsarError):
     """A frame that cannot be decoded (corrupt image bytes in a log)."""
 
