@@ -9,9 +9,14 @@ working directory is the run's own scratch folder; the mission process (started 
 :func:`usar_replay.pipeline.record.record`) inherits it and the limits of :class:`MissionLimits`.
 
 Signals: SIGTERM means "past the wall-clock limit": the log is closed (marked interrupted), graded
-as far as it goes, and the run is finished with the outcome ``wall_limit``. SIGINT (Ctrl-C) means
-"cut off": the log is closed and the process exits 130 without a manifest entry, so the next
-batch redoes the run. Exit 0: the run's files are written.
+as far as it goes, and the run is finished with the outcome ``wall_limit``; a SIGTERM while the
+log is graded stops the grading, and the grade (every line failed) says ``wall_limit``. SIGINT
+(Ctrl-C) means "cut off": the log is closed and the process exits 130 without a manifest entry,
+so the next batch redoes the run. Exit 0: the run's files are written.
+
+Grading is bounded too: past ``grade_s`` wall seconds (``--grade-limit``) it stops and the
+grade says ``grade_limit`` with every line failed (a log built to be slow to grade, a grade
+bomb, is that team's verdict; the other teams are graded as usual).
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +55,40 @@ def _on_sigterm(_signum: int, _frame: object) -> None:
     raise WallLimit
 
 
+class GradeStopped(BaseException):
+    """Grading was stopped (its time limit, or the run's wall-clock limit): ``outcome`` is
+    ``grade_limit`` or ``wall_limit``. A BaseException so that no ``except Exception`` in the
+    grader takes it for a problem of the log."""
+
+    def __init__(self, outcome: str, reason: str) -> None:
+        super().__init__(reason)
+        self.outcome = outcome
+        self.reason = reason
+
+
+@contextmanager
+def grading_deadline(seconds: float) -> Iterator[None]:
+    """Within the block, SIGALRM after ``seconds`` of wall time and SIGTERM (the engine's wall
+    limit) raise :class:`GradeStopped`; after it SIGTERM is ignored (writing the files is
+    quick)."""
+
+    def on_alarm(_signum: int, _frame: object) -> None:
+        raise GradeStopped("grade_limit", f"grading took more than {seconds:g} s of wall time")
+
+    def on_term(_signum: int, _frame: object) -> None:
+        raise GradeStopped("wall_limit", "grading was stopped at the run's wall-clock limit")
+
+    previous = signal.signal(signal.SIGALRM, on_alarm)
+    signal.signal(signal.SIGTERM, on_term)
+    signal.setitimer(signal.ITIMER_REAL, max(seconds, 1e-3))
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def _sha256(path: Path) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as f:
@@ -56,10 +97,13 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any]:
+def rubric(
+    log: Path, scenario_toml: str, thresholds_toml: str, stopped: str = ""
+) -> dict[str, Any]:
     """The grade of one log as plain data: the only place that knows grade.py's names (so a
     rename there is a fix here). A log that cannot be graded at all (the mission crashed before
-    the first tick, no log) gets every line of the rubric failed with 0 points."""
+    the first tick, no log), or whose grading was ``stopped`` (why), gets every line of the
+    rubric failed with 0 points."""
     from usar_replay.grading.grade import Grader, grade_file, load_thresholds
     from usar_replay.world.scenario_toml import from_toml
 
@@ -69,6 +113,8 @@ def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any
         tmp.write_text(thresholds_toml, encoding="utf-8")
         thresholds = load_thresholds(tmp)
     try:
+        if stopped:
+            raise UsarError(stopped)
         report = grade_file(log, thresholds)
         zero = False
     except UsarError as err:
@@ -99,16 +145,23 @@ def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any
 def grade_run(job: RunJob, record: dict[str, Any]) -> dict[str, Any]:
     """Grade the run's log and write ``<world>.grade.json`` (atomically)."""
     log = job.path(".mcap")
+    outcome, reason = record["outcome"], record["outcome_reason"]
+    try:
+        with grading_deadline(float(job.limits.get("grade_s", 600.0))):
+            lines = rubric(log, job.scenario_toml, job.thresholds_toml)
+    except GradeStopped as stop:
+        outcome, reason = stop.outcome, f"{stop.reason} (the run: {outcome})"
+        lines = rubric(log, job.scenario_toml, job.thresholds_toml, stopped=stop.reason)
     grade = {
         "format": GRADE_FORMAT,
         "team": job.team,
         "world": job.world,
-        "outcome": record["outcome"],
-        "outcome_reason": record["outcome_reason"],
+        "outcome": outcome,
+        "outcome_reason": reason,
         "log": log.name,
         "log_sha256": record["log_sha256"],
         "thresholds_sha256": job.thresholds_sha256,
-        **rubric(log, job.scenario_toml, job.thresholds_toml),
+        **lines,
     }
     text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
     write_text(job.path(".grade.json"), text, overwrite=True)
@@ -221,7 +274,7 @@ def run(job: RunJob) -> dict[str, Any]:
     record = finished_record(job) if job.grade_only else None
     if record is None:
         record = record_run(job)
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the grade is quick: let it finish
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # until grading, which honours it again
         job.path(".run.json").unlink(missing_ok=True)
         grade = grade_run(job, record)
         _write_record(job, record)
