@@ -114,13 +114,13 @@ def test_unusable_team_folders_are_that_teams_verdict(tmp_path: Path) -> None:
 FLOOD = """
 from usar_replay.api import CompressedImage, Node
 
-NOISE = bytes(range(256)) * 2048  # 512 KiB a message, 4 a tick: 2 MiB per tick
+NOISE = bytes(range(256)) * 2048  # 512 KiB a message, 8 a tick: 4 MiB per tick
 
 
 class Flood(Node):
     def __init__(self) -> None:
         super().__init__("flood")
-        self.pubs = [self.create_publisher(CompressedImage, f"/noise{i}") for i in range(4)]
+        self.pubs = [self.create_publisher(CompressedImage, f"/noise{i}") for i in range(8)]
         self.create_timer(0.1, self.on_timer)
 
     def on_timer(self) -> None:
@@ -200,3 +200,101 @@ def test_the_recorder_refuses_too_many_transforms_whatever_the_mission_process_s
         check.check([("/tf", tf, cdr.encode(msgs.TFMessage(transforms=(one,) * 1001)))])
     with pytest.raises(OutputRefused, match="11000 transforms in one tick"):
         check.check([("/tf", tf, ok)] * 11)
+
+
+# --- point 7: grading is bounded, and SIGTERM stops it -----------------------------------------
+
+GRADE_BOMB = """
+from usar_replay.api import Header, Node, Transform, TransformBroadcaster, TransformStamped, Vector3
+
+
+class Bomb(Node):
+    def __init__(self) -> None:
+        super().__init__("bomb")
+        self.tf = TransformBroadcaster(self)
+        self.create_timer(0.1, self.on_timer)
+
+    def on_timer(self) -> None:
+        head = Header(stamp=self.get_clock().now().to_msg(), frame_id="explorer_tf/camera_link")
+        for k in range(10):  # at the caps: 1,000 distinct marker frames a message, 10 a tick
+            self.tf.sendTransform([
+                TransformStamped(header=head, child_frame_id="marker_frame", transform=Transform(
+                    translation=Vector3(x=1.0 + k + i * 1e-3)))
+                for i in range(1000)
+            ])
+
+
+def main() -> None:
+    Bomb()
+"""
+
+
+def test_sigterm_stops_grading_as_the_wall_limit() -> None:
+    import signal
+
+    from usar_replay.batch.run_one import GradeStopped, grading_deadline
+
+    with pytest.raises(GradeStopped) as stopped, grading_deadline(60.0):
+        os.kill(os.getpid(), signal.SIGTERM)  # the engine's wall limit, while grading
+        signal.sigtimedwait([], 0)  # a signal is handled at the next bytecode
+    assert stopped.value.outcome == "wall_limit"
+    assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN  # files are written after it
+
+
+# --- every point in one batch: each attacker its verdict, the honest grades unchanged -----------
+
+
+@needs_jail
+def test_a_class_of_runtime_attackers_gets_verdicts_and_honest_grades_do_not_move(
+    tmp_path: Path,
+) -> None:
+    import io
+    import json
+    import sys
+
+    from usar_replay.cli import main as cli
+    from usar_replay.world.scenario_toml import to_toml
+
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    subs.mkdir()
+    room = tmp_path / "room.toml"
+    room.write_text(to_toml(one_room()), encoding="utf-8")
+    honest = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
+    (subs / "honest_a.py").write_text(honest, encoding="utf-8")
+    (subs / "honest_z.py").write_text(honest, encoding="utf-8")
+    for team, source in (("deaf", DEAF), ("flood", FLOOD), ("bomb", GRADE_BOMB)):
+        (subs / f"{team}.py").write_text(source, encoding="utf-8")
+    reasons = _hostile_folders(subs)
+    buf, old = io.StringIO(), sys.stdout
+    sys.stdout = buf
+    try:
+        code = cli.main(
+            ["batch", str(subs), "--scenario", str(room), "-o", str(out), "--max-sim-time", "3",
+             "--tick-timeout", "5", "--max-log-mib", "48", "--grade-limit", "2", "--jobs", "2",
+             "--quiet"]
+        )  # fmt: skip
+    finally:
+        sys.stdout = old
+    assert code == 0, buf.getvalue()  # every team has its verdict: none made the batch fail
+
+    def grade(team: str) -> dict[str, object]:
+        data: dict[str, object] = json.loads((out / team / "room.grade.json").read_text())
+        return data
+
+    a, z = grade("honest_a"), grade("honest_z")
+    assert a["outcome"] == z["outcome"] == "max_sim_time"
+    mine = ("team", "log_sha256")
+    assert {k: v for k, v in a.items() if k not in mine} == {
+        k: v for k, v in z.items() if k not in mine
+    }
+    assert grade("deaf")["outcome"] == "hung"
+    assert "did not read its input" in str(grade("deaf")["outcome_reason"])
+    assert grade("flood")["outcome"] == "refused"
+    assert "budget of 48 MiB" in str(grade("flood")["outcome_reason"])
+    bomb = grade("bomb")
+    assert bomb["outcome"] == "grade_limit" and bomb["points"] == 0.0, bomb["outcome_reason"]
+    summary = (out / "summary.csv").read_text(encoding="utf-8")
+    for team, reason in reasons.items():
+        assert not (out / team / "room.grade.json").exists()  # nothing of it was run
+        line = next(x for x in summary.splitlines() if x.startswith(team + ","))
+        assert "unusable submission: " + reason in line, line

@@ -146,6 +146,8 @@ def grade_run(job: RunJob, record: dict[str, Any]) -> dict[str, Any]:
     """Grade the run's log and write ``<world>.grade.json`` (atomically)."""
     log = job.path(".mcap")
     outcome, reason = record["outcome"], record["outcome_reason"]
+    import usar_replay.grading.grade  # noqa: F401 - imported before the clock starts
+
     try:
         with grading_deadline(float(job.limits.get("grade_s", 600.0))):
             lines = rubric(log, job.scenario_toml, job.thresholds_toml)
