@@ -8,8 +8,9 @@ outputs, as CDR: what the log stores, before compression) in tick order, so a re
 replay reach the same verdict at the same tick. Crossing it ends the run as ``refused``; the
 tick's outputs are not written and the log is closed as usual, gradeable.
 
-The default (:data:`DEFAULT_MAX_LOG_MIB`, 2 GiB) is about twenty times the course world's log
-(about 100 MB at 640x480 and 10 Hz, every frame lossless): no honest run comes near it.
+The default (:data:`DEFAULT_MAX_LOG_MIB`, 2 GiB) is about forty times the course world's run
+(measured: 49 MiB of messages, a 15 MB file, for the built-in mission's 466 s of sim time):
+no honest run comes near it.
 """
 
 from __future__ import annotations
