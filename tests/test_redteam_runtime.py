@@ -298,3 +298,18 @@ def test_a_class_of_runtime_attackers_gets_verdicts_and_honest_grades_do_not_mov
         assert not (out / team / "room.grade.json").exists()  # nothing of it was run
         line = next(x for x in summary.splitlines() if x.startswith(team + ","))
         assert "unusable submission: " + reason in line, line
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("record", "--max-log-mib", "-1"),
+        ("batch", "subs", "-o", "out", "--max-log-mib", "-1"),
+        ("batch", "subs", "-o", "out", "--grade-limit", "0"),
+    ],
+)
+def test_a_bad_budget_or_grade_limit_is_one_line(tmp_path: Path, args: tuple[str, ...]) -> None:
+    from clitools import one_error_line, usar
+
+    (tmp_path / "subs").mkdir()
+    one_error_line(usar(*args, cwd=tmp_path), 2, args[-2])
