@@ -38,8 +38,10 @@ OUTCOME_MARKS = {
     "refused": "R",
     "build_failed": "B",
     "wall_limit": "W",
+    "grade_limit": "G",
     "interrupted": "I",
     "no_mission": "N",
+    "bad_submission": "U",
     "": "?",
 }
 """The letter after a world's points in the table when the run did not end ``done``."""
@@ -53,8 +55,10 @@ OUTCOME_WORDS = {
     "refused": "the mission published something it may not",
     "build_failed": "the ROS 1 package did not build",
     "wall_limit": "the run took longer than its wall-clock limit",
+    "grade_limit": "grading the log took longer than --grade-limit",
     "interrupted": "the run was interrupted",
     "no_mission": "no mission found in the submission",
+    "bad_submission": "the submission's folder is unusable (a special file, a link out, too big)",
     "": "not run",
 }
 GRADESCOPE_VISIBILITY = ("visible", "hidden", "after_due_date", "after_published")
@@ -89,12 +93,13 @@ def collect(plan: Plan, max_points: dict[str, float]) -> ClassGrades:
     teams = [s.team for s in plan.submissions]
     worlds = [w.name for w in plan.worlds]
     problems = {s.team: s.problem for s in plan.submissions if s.problem}
+    problem_outcomes = {s.team: s.problem_outcome for s in plan.submissions if s.problem}
     cells: dict[tuple[str, str], Cell] = {}
     for team in teams:
         for world in worlds:
             full = max_points.get(world, 0.0)
             if team in problems:
-                cells[(team, world)] = Cell(True, "no_mission", 0.0, full, {})
+                cells[(team, world)] = Cell(True, problem_outcomes[team], 0.0, full, {})
                 continue
             g = read_json(plan.out_root / team / f"{world}.grade.json")
             if g is None or g.get("format") != GRADE_FORMAT:

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay import __version__
+from usar_replay.batch.team_files import UnusableSubmission, submission_digest
 from usar_replay.core.errors import UsageError
 from usar_replay.world.world_key import WorldKey
 
@@ -64,7 +65,6 @@ ROS1_TARGET_PREFIX = "ros1:"
 DEFAULT_MISSION_FILE = "mission.py"
 WORK_DIR = ".work"
 _NAME = re.compile(r"[^A-Za-z0-9._-]+")
-_SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,6 +80,9 @@ class Submission:
     sha256: str
     """Digest of every file of the submission (sorted relative paths and bytes)."""
     problem: str = ""
+    problem_outcome: str = "no_mission"
+    """The verdict of every run of a submission with a :attr:`problem`: ``no_mission``, or
+    ``bad_submission`` for a folder usar will not read (:mod:`usar_replay.batch.team_files`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -114,6 +117,10 @@ class Limits:
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
     """Keep the mission to its own files (usar_replay.node.sandbox)."""
+    max_log_mib: int = 2048
+    """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
+    grade_s: float = 600.0
+    """Wall seconds to grade one log (past it: the grade says ``grade_limit``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -225,24 +232,6 @@ def team_name(raw: str) -> str:
     return name
 
 
-def submission_digest(path: Path) -> str:
-    """sha256 over every file of a submission (relative path and bytes, sorted), so that a
-    change in any helper module reruns the team; caches and hidden files are left out."""
-    h = hashlib.sha256()
-    if path.is_file():
-        h.update(path.read_bytes())
-        return h.hexdigest()
-    files = []
-    for root, dirs, names in os.walk(path):
-        dirs[:] = sorted(d for d in dirs if d not in _SKIP_DIRS and not d.startswith("."))
-        files += [Path(root) / n for n in names if not n.startswith(".") and not n.endswith(".pyc")]
-    for f in sorted(files, key=lambda p: p.relative_to(path).as_posix()):
-        rel = f.relative_to(path).as_posix().encode()
-        data = f.read_bytes()
-        h.update(len(rel).to_bytes(4, "little") + rel + len(data).to_bytes(8, "little") + data)
-    return h.hexdigest()
-
-
 def _folder_target(folder: Path) -> tuple[str, str]:
     """(target, problem) of a team folder: ``usar.toml``'s ``[mission] target`` or
     ``mission.py``."""
@@ -293,17 +282,26 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
         if entry.is_file() and entry.suffix == ".py":
             raw, target, problem = entry.stem, str(entry.resolve()), ""
         elif entry.is_dir():
-            raw = entry.name
-            target, problem = _folder_target(entry)
+            raw, target, problem = entry.name, "", ""
         else:
             continue
         team = team_name(raw)
+        outcome = "no_mission"
+        try:  # first: nothing else of a folder is read before it is known to be safe to read
+            digest = submission_digest(entry.resolve())
+        except (UnusableSubmission, OSError) as err:
+            reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
+            target, problem, digest = "", f"unusable submission: {reason}", ""
+            outcome = "bad_submission"
+        else:
+            if entry.is_dir():
+                target, problem = _folder_target(entry)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(Submission(team, entry.resolve(), target, submission_digest(entry), problem))
+        subs.append(Submission(team, entry.resolve(), target, digest, problem, outcome))
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
     return subs
@@ -432,7 +430,9 @@ def make_plan(
             )
             if sub.problem:
                 plan.invalid.append(
-                    RunResult(sub.team, world.name, "graded", "no_mission", error=sub.problem)
+                    RunResult(
+                        sub.team, world.name, "graded", sub.problem_outcome, error=sub.problem
+                    )
                 )
                 continue
             record = finished_record(job)

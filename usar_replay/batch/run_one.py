@@ -9,9 +9,14 @@ working directory is the run's own scratch folder; the mission process (started 
 :func:`usar_replay.pipeline.record.record`) inherits it and the limits of :class:`MissionLimits`.
 
 Signals: SIGTERM means "past the wall-clock limit": the log is closed (marked interrupted), graded
-as far as it goes, and the run is finished with the outcome ``wall_limit``. SIGINT (Ctrl-C) means
-"cut off": the log is closed and the process exits 130 without a manifest entry, so the next
-batch redoes the run. Exit 0: the run's files are written.
+as far as it goes, and the run is finished with the outcome ``wall_limit``; a SIGTERM while the
+log is graded stops the grading, and the grade (every line failed) says ``wall_limit``. SIGINT
+(Ctrl-C) means "cut off": the log is closed and the process exits 130 without a manifest entry,
+so the next batch redoes the run. Exit 0: the run's files are written.
+
+Grading is bounded too: past ``grade_s`` wall seconds (``--grade-limit``) it stops and the
+grade says ``grade_limit`` with every line failed (a log built to be slow to grade, a grade
+bomb, is that team's verdict; the other teams are graded as usual).
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -34,6 +41,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsarError
 from usar_replay.core.outfiles import write_text
+from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
@@ -49,6 +57,40 @@ class WallLimit(KeyboardInterrupt):
 
 def _on_sigterm(_signum: int, _frame: object) -> None:
     raise WallLimit
+
+
+class GradeStopped(BaseException):
+    """Grading was stopped (its time limit, or the run's wall-clock limit): ``outcome`` is
+    ``grade_limit`` or ``wall_limit``. A BaseException so that no ``except Exception`` in the
+    grader takes it for a problem of the log."""
+
+    def __init__(self, outcome: str, reason: str) -> None:
+        super().__init__(reason)
+        self.outcome = outcome
+        self.reason = reason
+
+
+@contextmanager
+def grading_deadline(seconds: float) -> Iterator[None]:
+    """Within the block, SIGALRM after ``seconds`` of wall time and SIGTERM (the engine's wall
+    limit) raise :class:`GradeStopped`; after it SIGTERM is ignored (writing the files is
+    quick)."""
+
+    def on_alarm(_signum: int, _frame: object) -> None:
+        raise GradeStopped("grade_limit", f"grading took more than {seconds:g} s of wall time")
+
+    def on_term(_signum: int, _frame: object) -> None:
+        raise GradeStopped("wall_limit", "grading was stopped at the run's wall-clock limit")
+
+    previous = signal.signal(signal.SIGALRM, on_alarm)
+    signal.signal(signal.SIGTERM, on_term)
+    signal.setitimer(signal.ITIMER_REAL, max(seconds, 1e-3))
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def _sha256(path: Path) -> str:
@@ -69,20 +111,27 @@ def _thresholds(thresholds_toml: str) -> Thresholds | None:
 
 
 def rubric(
-    log: Path, scenario_toml: str, thresholds_toml: str, graded: LiveGrade | None = None
+    log: Path,
+    scenario_toml: str,
+    thresholds_toml: str,
+    graded: LiveGrade | None = None,
+    stopped: str = "",
 ) -> dict[str, Any]:
     """The grade of one log as plain data: the only place that knows grade.py's names (so a
     rename there is a fix here). ``graded``: the recorder's
     :class:`~usar_replay.grading.grade.LiveGrade` of this log, fed with these thresholds while
     it was written (then the file is not read again); else the file is graded. A log that
-    cannot be graded at all (the mission crashed before the first tick, no log) gets every line
-    of its assignment's rubric failed with 0 points."""
+    cannot be graded at all (the mission crashed before the first tick, no log), or whose
+    grading was ``stopped`` (why), gets every line of its assignment's rubric failed with 0
+    points."""
     from usar_replay.grading.grade import grade_file
     from usar_replay.grading.rubrics import rubric_for
     from usar_replay.world.scenario_toml import from_toml
 
     thresholds = _thresholds(thresholds_toml)
     try:
+        if stopped:
+            raise UsarError(stopped)
         report = graded.report(log) if graded is not None else grade_file(log, thresholds)
         zero = False
     except UsarError as err:
@@ -119,16 +168,30 @@ def grade_run(
     """Grade the run's log (``graded``: as :func:`rubric` takes it) and write
     ``<world>.grade.json`` (atomically)."""
     log = job.path(".mcap")
+    outcome, reason = record["outcome"], record["outcome_reason"]
+    import usar_replay.grading.grade  # noqa: F401 - imported before the clock starts
+
+    limit_s = float(job.limits.get("grade_s", 600.0))
+    try:
+        if graded is not None and graded.seconds > limit_s:  # graded while it recorded
+            raise GradeStopped(
+                "grade_limit", f"grading took more than {limit_s:g} s of wall time"
+            )
+        with grading_deadline(limit_s):
+            lines = rubric(log, job.scenario_toml, job.thresholds_toml, graded)
+    except GradeStopped as stop:
+        outcome, reason = stop.outcome, f"{stop.reason} (the run: {outcome})"
+        lines = rubric(log, job.scenario_toml, job.thresholds_toml, stopped=stop.reason)
     grade = {
         "format": GRADE_FORMAT,
         "team": job.team,
         "world": job.world,
-        "outcome": record["outcome"],
-        "outcome_reason": record["outcome_reason"],
+        "outcome": outcome,
+        "outcome_reason": reason,
         "log": log.name,
         "log_sha256": record["log_sha256"],
         "thresholds_sha256": job.thresholds_sha256,
-        **rubric(log, job.scenario_toml, job.thresholds_toml, graded),
+        **lines,
     }
     text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
     write_text(job.path(".grade.json"), text, overwrite=True)
@@ -155,6 +218,7 @@ def _mission_limits(job: RunJob) -> Any:
         startup_timeout_s=float(lim["startup_timeout_s"]),
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
+        max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
         sandbox=sandbox,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident
@@ -251,7 +315,7 @@ def run(job: RunJob) -> dict[str, Any]:
     record = finished_record(job) if job.grade_only else None
     if record is None:
         record, graded = record_run(job)
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the grade is quick: let it finish
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # until grading, which honours it again
         job.path(".run.json").unlink(missing_ok=True)
         grade = grade_run(job, record, graded)
         _write_record(job, record)

@@ -93,6 +93,13 @@ def mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
         metavar="MIB",
         help="memory limit of the mission process in MiB (4096; 0: none)",
     )
+    p.add_argument(
+        "--max-log-mib",
+        type=int,
+        default=2048,
+        metavar="MIB",
+        help="byte budget of the run's log in MiB; past it the run is 'refused' (2048; 0: none)",
+    )
 
 
 def grade_outputs(p: argparse.ArgumentParser) -> None:

@@ -45,6 +45,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--mission-memory", type=int, default=4096, metavar="MIB", help="MiB (4096; 0: none)"
     )
     p.add_argument(
+        "--max-log-mib", type=int, default=2048, metavar="MIB", help="log budget (2048; 0: none)"
+    )
+    p.add_argument(
+        "--grade-limit", type=float, default=600.0, metavar="S", help="wall s to grade a log (600)"
+    )
+    p.add_argument(
         "--cpu-limit", type=int, default=1800, metavar="S", help="mission CPU s (1800; 0: none)"
     )
     p.add_argument(
@@ -78,11 +84,18 @@ def run(args: argparse.Namespace) -> int:
     jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
     if jobs < 1:
         raise UsageError(f"--jobs {jobs}: expected 1 or more")
-    for opt, value in (("--tick-timeout", args.tick_timeout), ("--wall-limit", args.wall_limit)):
+    positive = (
+        ("--tick-timeout", args.tick_timeout),
+        ("--wall-limit", args.wall_limit),
+        ("--grade-limit", args.grade_limit),
+    )
+    for opt, value in positive:
         if not value > 0:
             raise UsageError(f"{opt} {value}: expected a positive number of seconds")
-    if args.mission_memory < 0 or args.cpu_limit < 0:
-        raise UsageError("--mission-memory and --cpu-limit: expected 0 (none) or more")
+    if args.mission_memory < 0 or args.cpu_limit < 0 or args.max_log_mib < 0:
+        raise UsageError(
+            "--mission-memory, --cpu-limit and --max-log-mib: expected 0 (none) or more"
+        )
     base = RunSettings()
     if args.max_sim_time is not None:
         base = dc.replace(base, record=dc.replace(base.record, max_sim_time_s=args.max_sim_time))
@@ -97,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
         cpu_s=args.cpu_limit,
         wall_s=args.wall_limit,
         sandbox=not args.no_sandbox,
+        max_log_mib=args.max_log_mib,
+        grade_s=args.grade_limit,
     )
     out = Path(args.out)
     if out.exists() and not out.is_dir():

@@ -159,9 +159,12 @@ def limits(args: argparse.Namespace) -> MissionLimits:
         raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
     if args.mission_memory < 0:
         raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
+    if args.max_log_mib < 0:
+        raise UsageError(f"--max-log-mib {args.max_log_mib}: expected MiB >= 0 (0: none)")
     return MissionLimits(
         tick_timeout_s=args.tick_timeout,
         memory_mb=args.mission_memory,
+        max_log_mib=args.max_log_mib,
         hidden=grader_paths(args),
     )
 

@@ -214,12 +214,18 @@ class _TimeCache:
     Samples that share a stamp are all kept, in insertion order (tf2 (ROS 2) drops only an
     exact duplicate); a lookup at the newest stamp or in the middle gets the last inserted of
     that stamp, at the oldest stamp the first inserted, as tf2's ``findClosest`` does.
+
+    The exact-duplicate check at a shared stamp looks in a set of that stamp's samples (made
+    the first time a stamp is shared), not along them: a message with thousands of distinct
+    transforms of one child at one stamp (a grade bomb) costs linear time, not quadratic.
     """
 
     max_storage_ns: int
     stamps: list[int] = field(default_factory=list)
     samples: list[_Sample] = field(default_factory=list)
     static: bool = False
+    _shared: dict[int, set[tuple[str, Vec, Quat]]] = field(default_factory=dict)
+    """(parent, t, q) of the samples at each stamp that more than one sample has had."""
 
     def insert(self, s: _Sample) -> bool:
         """tf2's ``insertData``: prune by the newest stamp *before* the insert, refuse data
@@ -234,6 +240,8 @@ class _TimeCache:
                 cut = bisect.bisect_left(stamps, oldest_kept)
                 del stamps[:cut]
                 del self.samples[:cut]
+                for old in [t for t in self._shared if t < oldest_kept]:
+                    del self._shared[old]
             if s.stamp < oldest_kept:
                 return False
         if not stamps or s.stamp > stamps[-1]:  # the usual case, newer than all: no search
@@ -241,12 +249,15 @@ class _TimeCache:
             self.samples.append(s)
             return True
         i = bisect.bisect_right(stamps, s.stamp)
-        j = i - 1
-        while j >= 0 and stamps[j] == s.stamp:
-            d = self.samples[j]
-            if d.parent == s.parent and d.t == s.t and d.q == s.q:
-                return True  # an exact repeat: tf2 keeps one copy and reports success
-            j -= 1
+        seen = self._shared.get(s.stamp)
+        if seen is None:
+            lo = bisect.bisect_left(stamps, s.stamp)
+            seen = {(d.parent, d.t, d.q) for d in self.samples[lo:i]}
+            self._shared[s.stamp] = seen
+        key = (s.parent, s.t, s.q)
+        if key in seen:
+            return True  # an exact repeat: tf2 keeps one copy and reports success
+        seen.add(key)
         stamps.insert(i, s.stamp)
         self.samples.insert(i, s)
         return True
@@ -256,6 +267,7 @@ class _TimeCache:
         if not self.static:
             self.stamps.clear()
             self.samples.clear()
+            self._shared.clear()
 
     def latest(self) -> tuple[int, str]:
         """(newest stamp, its parent); static caches report stamp 0, as tf2's StaticCache."""

@@ -14,7 +14,7 @@ import time
 from collections.abc import Collection
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from usar_replay.core.errors import MissingTopic
 from usar_replay.core.settings import Thresholds, load
@@ -81,14 +81,24 @@ class LiveGrade:
         self.rubric = rubric_for(scenario)
         self.grader = self.rubric.grader(scenario, thresholds)
         self._writer: BagWriter | None = None
+        self.seconds = 0.0
+        """Wall seconds spent grading so far: a resource count for the batch's grade limit
+        (a grade bomb costs its time while it records), never part of a verdict."""
 
     def attach(self, writer: BagWriter, start_ns: int) -> None:
         """Watch ``writer`` from its first message on (written at ``start_ns``: the log's
         start, which the rubric's clock counts from)."""
         self.grader.start_ns = start_ns
         trusted = {topic: ("sim",) for topic in self.rubric.trusted_topics}
-        writer.watch(self.rubric.grade_topics, self.grader.feed, only_from=trusted)
+        writer.watch(self.rubric.grade_topics, self._feed, only_from=trusted)
         self._writer = writer
+
+    def _feed(self, *args: Any) -> None:
+        began = time.perf_counter()
+        try:
+            self.grader.feed(*args)
+        finally:
+            self.seconds += time.perf_counter() - began
 
     def found_markers(self) -> tuple[FoundMarker, ...]:
         """The markers found so far, as the rubric counts them."""

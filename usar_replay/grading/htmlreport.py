@@ -109,16 +109,13 @@ class RunPicture:
 _Pose = tuple[msgs.Vector3 | msgs.Point, msgs.Quaternion]
 
 
-def _detected(
-    topic: str, msg: msgs.Message | None
-) -> tuple[int, list[tuple[int, _Pose]]] | None:
+def _detected(topic: str, msg: msgs.Message | None) -> tuple[int, list[tuple[int, _Pose]]] | None:
     """The image stamp and (marker ID, pose in the camera's optical frame) of each detection
     in a detector's message: US&R's ``aruco_detect`` (``/fiducial_transforms``) or the ROS 2
     project's ``ros2_aruco`` (``/aruco_markers``); None for any other message."""
     if topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
         return msg.header.stamp.ns, [
-            (f.fiducial_id, (f.transform.translation, f.transform.rotation))
-            for f in msg.transforms
+            (f.fiducial_id, (f.transform.translation, f.transform.rotation)) for f in msg.transforms
         ]
     if topic == contract.ARUCO_MARKERS and isinstance(msg, msgs.ArucoMarkers):
         return msg.header.stamp.ns, [
@@ -445,9 +442,7 @@ def detection_figure(d: Detection) -> str:
     pts = " ".join(f"{u:.1f},{v:.1f}" for u, v in d.corners)
     us, vs = [u for u, _ in d.corners], [v for _, v in d.corners]
     side = max(max(us) - min(us), max(vs) - min(vs), 1.0)
-    body = [
-        _svg_frame(d, uri, (0.0, 0.0, float(w), float(h)), pts, FRAME_PX, "frame")
-    ]
+    body = [_svg_frame(d, uri, (0.0, 0.0, float(w), float(h)), pts, FRAME_PX, "frame")]
     if side < ZOOM_BELOW * w:
         half = side / 2 + max(side * 0.6, 6.0)
         cu, cv = (max(us) + min(us)) / 2, (max(vs) + min(vs)) / 2

@@ -82,6 +82,4 @@ def _first_free(
 
 
 def _free(c: tuple[float, float], r: float, placed: Sequence[Label], gap: float) -> bool:
-    return all(
-        math.dist(c, p.center) >= r + p.radius + gap - 1e-12 for p in placed
-    )
+    return all(math.dist(c, p.center) >= r + p.radius + gap - 1e-12 for p in placed)

@@ -10,6 +10,9 @@ sends can crash the recorder (today's ``struct.error`` on a garbage frame, the w
 What is refused (the limits are documented in docs/node-api.md, "Limits"):
 
 * more than :data:`MAX_TICK_MESSAGES` messages in one tick (a flood of ``/rosout`` lines);
+* more than :data:`MAX_MESSAGE_TRANSFORMS` transforms in one ``TFMessage`` or
+  ``FiducialTransformArray``, or :data:`MAX_TICK_TRANSFORMS` in one tick's messages together
+  (each is work for the grader's tf buffer: a grade bomb);
 * a message over :data:`MAX_MESSAGE_BYTES` (8 MiB) of CDR, or a tick over
   :data:`MAX_FRAME_BYTES` in all (the parent reads no further than that);
 * a type usar does not know, bytes that do not decode as the type they claim, a topic name over
@@ -36,12 +39,15 @@ __all__ = [
     "FIXED_TYPES",
     "MAX_FRAME_BYTES",
     "MAX_MESSAGE_BYTES",
+    "MAX_MESSAGE_TRANSFORMS",
     "MAX_TICK_MESSAGES",
+    "MAX_TICK_TRANSFORMS",
     "MAX_TOPICS",
     "MAX_TOPIC_CHARS",
     "BoundaryCheck",
     "OutputRefused",
     "PublishRefused",
+    "transforms_problem",
 ]
 
 MAX_MESSAGE_BYTES = 8 * 1024 * 1024
@@ -49,6 +55,11 @@ MAX_MESSAGE_BYTES = 8 * 1024 * 1024
 world is ~0.3 MiB; nothing a mission publishes comes near)."""
 MAX_TICK_MESSAGES = 10_000
 """Messages a mission may publish in one tick (the built-in mission publishes about ten)."""
+MAX_MESSAGE_TRANSFORMS = 1_000
+"""Transforms one ``TFMessage`` or ``FiducialTransformArray`` may carry (the course's largest is
+the simulator's ``/tf_static``, a dozen; the built-in mission's marker frames, one or two)."""
+MAX_TICK_TRANSFORMS = 10_000
+"""Transforms a mission may publish in one tick, all its messages together."""
 MAX_FRAME_BYTES = 64 * 1024 * 1024
 """All of one tick's outputs together, as framed on the wire (the parent reads no more)."""
 MAX_TOPICS = 1_000
@@ -92,6 +103,23 @@ class PublishRefused(PermissionError):
     ``refused``."""
 
 
+def _transform_count(msg: msgs.Message) -> int:
+    if isinstance(msg, msgs.TFMessage | msgs.FiducialTransformArray):
+        return len(msg.transforms)
+    return 0
+
+
+def transforms_problem(topic: str, msg: msgs.Message) -> str:
+    """Why ``msg`` carries too many transforms to be accepted ('' when it does not)."""
+    n = _transform_count(msg)
+    if n > MAX_MESSAGE_TRANSFORMS:
+        return (
+            f"{topic}: a {type(msg).__name__} with {n} transforms; a message carries at most "
+            f"{MAX_MESSAGE_TRANSFORMS}"
+        )
+    return ""
+
+
 class BoundaryCheck:
     """The parent's per-run state: which type each topic has; :meth:`check` one tick."""
 
@@ -107,7 +135,14 @@ class BoundaryCheck:
                 f"the mission published {len(items)} messages in one tick; at most "
                 f"{MAX_TICK_MESSAGES} are accepted"
             )
-        return [self._one(topic, msgtype, data) for topic, msgtype, data in items]
+        checked = [self._one(topic, msgtype, data) for topic, msgtype, data in items]
+        total = sum(_transform_count(value) for *_, value in checked)
+        if total > MAX_TICK_TRANSFORMS:
+            raise OutputRefused(
+                f"the mission published {total} transforms in one tick; at most "
+                f"{MAX_TICK_TRANSFORMS} are accepted"
+            )
+        return checked
 
     def _one(self, topic: str, msgtype: str, data: bytes) -> Checked:
         shown = topic if len(topic) <= MAX_TOPIC_CHARS else topic[:MAX_TOPIC_CHARS] + "..."
@@ -128,7 +163,7 @@ class BoundaryCheck:
                 f"the mission published bytes on {topic} that do not decode as {msgtype} "
                 f"({type(err).__name__})"
             ) from None
-        problem = self.policy.message_problem(topic, value)
+        problem = self.policy.message_problem(topic, value) or transforms_problem(topic, value)
         if problem:
             raise OutputRefused(problem)
         where = nonfinite_field(value)

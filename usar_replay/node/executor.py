@@ -39,7 +39,12 @@ from typing import Any
 
 from usar_replay.core import contract, msgs
 from usar_replay.core.finite import check_finite
-from usar_replay.node.boundary_check import MAX_TICK_MESSAGES, OutputRefused, PublishRefused
+from usar_replay.node.boundary_check import (
+    MAX_TICK_MESSAGES,
+    OutputRefused,
+    PublishRefused,
+    transforms_problem,
+)
 from usar_replay.node.node import (
     Node,
     Subscription,
@@ -190,14 +195,18 @@ class Executor:
         not publish (``PermissionError``), NaN or infinity in any field
         (:class:`~usar_replay.core.finite.NonFiniteValue`, a ``ValueError`` naming the field),
         more than :data:`~usar_replay.node.boundary_check.MAX_TICK_MESSAGES` messages in one
-        tick (:class:`~usar_replay.node.boundary_check.OutputRefused`). The recorder checks
-        all of it again on its side. On a trusted topic the world provides, the message is the
-        mission's own copy (:meth:`PublishPolicy.own_topic`)."""
+        tick or more than :data:`~usar_replay.node.boundary_check.MAX_MESSAGE_TRANSFORMS`
+        transforms in one message (:class:`~usar_replay.node.boundary_check.OutputRefused`).
+        The recorder checks all of it again on its side. On a trusted topic the world provides,
+        the message is the mission's own copy (:meth:`PublishPolicy.own_topic`)."""
         topic = self.policy.own_topic(topic)
         problem = self.policy.message_problem(topic, msg)
         if problem:
             raise PublishRefused(problem)
         check_finite(topic, msg)
+        too_many = transforms_problem(topic, msg)  # a tf with thousands of frames
+        if too_many:
+            raise OutputRefused(too_many)
         if len(self._outputs) >= MAX_TICK_MESSAGES:
             raise OutputRefused(
                 f"{topic}: more than {MAX_TICK_MESSAGES} messages published in one tick"

@@ -58,7 +58,9 @@ from usar_replay.node.boundary_check import (
     PublishRefused,
 )
 from usar_replay.node.executor import Executor, PublishPolicy
+from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
 from usar_replay.node.sandbox import SandboxPolicy
+from usar_replay.node.wire_io import send_within
 
 __all__ = [
     "BUILTIN",
@@ -166,6 +168,9 @@ class MissionLimits:
     work_dir: str = ""
     """The jailed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
+    max_log_mib: int = DEFAULT_MAX_LOG_MIB
+    """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
+    (:mod:`usar_replay.node.log_budget`)."""
 
 
 # --- the wire ---------------------------------------------------------------------------------
@@ -435,6 +440,7 @@ class MissionProcess:
         self.limits = limits or MissionLimits()
         self.policy = PublishPolicy(sim_topics=sim_topics, sim_frames=sim_frames)
         self.boundary = BoundaryCheck(self.policy)
+        self.budget = LogBudget(self.limits.max_log_mib)
         self.shutdown_requested = False
         self._work: str | None = None
         self._own_work = False
@@ -464,6 +470,7 @@ class MissionProcess:
             "rlimits": self._jail.rlimits() if self._jail else {},
             "sandbox": policy,
             "usar_version": __version__,
+            "tick_timeout_s": self.limits.tick_timeout_s,
         }
         hidden: list[str] = []
         if self._jail is not None:
@@ -508,9 +515,9 @@ class MissionProcess:
             if self._jail is not None:
                 self._jail.started()
         self._conn = multiprocessing.connection.Connection(parent_sock.detach())
-        self._conn.send_bytes(pickle.dumps(self._setup))
         self._in_flight = 0
         try:
+            self._send_frame(pickle.dumps(self._setup), self.limits.startup_timeout_s, "starting")
             self._wait(self.limits.startup_timeout_s, "starting (import and main())")
         except BaseException:
             self.close()
@@ -531,7 +538,7 @@ class MissionProcess:
     def close(self) -> None:
         """Stop the process (politely, then for good)."""
         with contextlib.suppress(OSError, ValueError):
-            self._conn.send_bytes(_STOP)
+            send_within(self._conn, _STOP, 1.0)  # a peer that reads no more is killed below
         try:
             self._proc.wait(timeout=2.0)
         except subprocess.TimeoutExpired:
@@ -616,8 +623,10 @@ class MissionProcess:
 
     def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
         """Hand one tick to the mission without waiting (replay keeps several in flight)."""
+        # each tick already in flight may take its own tick timeout before the process reads on
+        timeout_s = self.limits.tick_timeout_s * (self._in_flight + 1)
         try:
-            self._conn.send_bytes(_pack(_TICK, t_ns, inputs))
+            self._send_frame(_pack(_TICK, t_ns, inputs), timeout_s, "handling a tick")
         except (BrokenPipeError, ConnectionResetError):
             # the process is gone (a crash while ticks were in flight): its report, if it sent
             # one, is waiting to be read; else say how it died
@@ -625,6 +634,21 @@ class MissionProcess:
                 self._wait(0, "handling a tick")
             raise self._died("handling a tick") from None
         self._in_flight += 1
+        self.budget.inputs(inputs)
+
+    def _send_frame(self, frame: bytes, timeout_s: float, doing: str) -> None:
+        """Write one frame to the process within ``timeout_s`` wall seconds, or end it as
+        ``hung``: a process that stops reading its socket must not block the recorder in a
+        write (:mod:`usar_replay.node.wire_io`)."""
+        if not send_within(self._conn, frame, timeout_s):
+            self._proc.kill()
+            self._proc.wait()
+            raise MissionEnded(
+                "hung",
+                f"the mission process did not read its input within {timeout_s:g} s of wall "
+                f"time while {doing}: it stopped reading its socket (or a callback does not "
+                "return); raise the limit with --tick-timeout",
+            )
 
     def receive(self) -> list[tuple[str, str, bytes, msgs.Message]]:
         """The outputs of the oldest tick in flight: (topic, type, CDR, decoded), checked."""
@@ -640,6 +664,9 @@ class MissionProcess:
             out = self.boundary.check(items)
         except OutputRefused as err:
             raise self._refuse(str(err)) from None
+        over = self.budget.outputs(items)
+        if over:
+            raise self._refuse(over)
         self.shutdown_requested = self.shutdown_requested or bool(flag)
         return out
 

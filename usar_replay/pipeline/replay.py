@@ -648,6 +648,7 @@ def _redetect(detector: CourseDetector, tick: _Tick, *, recorded_switches: bool)
     tick.inputs, recorded, redone = detector.replay_tick(
         tick.inputs, recorded_outputs if recorded_switches else []
     )
+
     def pending(items: list[tuple[str, str, bytes]]) -> list[_Pending]:
         return [_Pending(tp, tick.t, data, mt, _try_decode(data, mt)) for tp, mt, data in items]
 

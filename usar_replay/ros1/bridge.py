@@ -51,6 +51,7 @@ from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.core.tf_tree import Buffer, TransformException
 from usar_replay.node import jail
+from usar_replay.node.wire_io import send_within
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
@@ -146,6 +147,9 @@ class Bridge:
         config: dict[str, Any],
     ) -> None:
         self.conn = conn
+        # every write to the recorder ends by this deadline: a socket nobody reads (a node that
+        # took it) must not block the bridge for good (usar_replay.node.wire_io)
+        self.write_timeout_s = float(setup.get("tick_timeout_s", 10.0))
         self.config = config
         self.parameters: dict[str, Any] = setup["parameters"]
         self.rtf = float(config.get("rtf", 4.0))
@@ -398,7 +402,8 @@ class Bridge:
     # -- the loop -------------------------------------------------------------------------------
 
     def serve(self) -> None:
-        self.conn.send_bytes(_READY)
+        if not send_within(self.conn, _READY, self.write_timeout_s):
+            return
         while True:
             try:
                 frame = self.conn.recv_bytes()
@@ -422,11 +427,12 @@ class Bridge:
                     return
                 done = 1
             wire = [(topic, type(m).__msgtype__, cdr.encode(m)) for topic, m in outputs]
-            self.conn.send_bytes(_pack(_OUT, t_ns, wire, done))
+            if not send_within(self.conn, _pack(_OUT, t_ns, wire, done), self.write_timeout_s):
+                return
 
     def _crash(self, text: str) -> None:
         with contextlib.suppress(OSError, ValueError):
-            self.conn.send_bytes(_CRASH + text.encode("utf-8", errors="replace"))
+            send_within(self.conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
 
     def stop(self) -> None:
         if self.graph is not None:
@@ -480,7 +486,7 @@ def main(argv: list[str]) -> None:
     except BaseException as err:  # noqa: BLE001 - reported to the recorder as the verdict
         text = str(err) if isinstance(err, RuntimeError) else traceback.format_exc()
         with contextlib.suppress(OSError, ValueError):
-            conn.send_bytes(_CRASH + text.encode("utf-8", errors="replace"))
+            send_within(conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
     finally:
         bridge.stop()
 
