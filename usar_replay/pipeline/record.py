@@ -110,6 +110,9 @@ class RecordResult:
     found: tuple[FoundMarker, ...] = ()
     """The markers found as the rubric counts them (``usar grade`` agrees), for any mission."""
     markers_total: int = 0
+    build: str = ""
+    """A ROS 1 package's build, apart from the run's wall time (``catkin_make 14.2 s``,
+    ``cached``, ``failed``); '' for a Python mission."""
 
     @property
     def mission_done(self) -> bool:
@@ -512,6 +515,7 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     lines = [
         f"Recorded {result.path} ({result.size_bytes / 1e6:.1f} MB, {result.messages} messages,"
         f" {result.frames} camera frames)",
+        *([f"Build: {result.build} (not counted in the run's wall time)"] if result.build else []),
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
         f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
         f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
