@@ -64,8 +64,7 @@ def rubric(log: Path, scenario_toml: str, thresholds_toml: str) -> dict[str, Any
 
     thresholds = None
     if thresholds_toml:
-        tmp = Path("thresholds.toml")
-        tmp.write_text(thresholds_toml, encoding="utf-8")
+        tmp = write_text(Path("thresholds.toml"), thresholds_toml, overwrite=True)
         thresholds = load_thresholds(tmp)
     try:
         report = grade_file(log, thresholds)
