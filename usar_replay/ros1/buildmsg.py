@@ -45,31 +45,21 @@ def errors(output: str, limit: int = 60) -> str:
 
 
 def hint(output: str, package: str) -> str:
-    """One line saying what to change for a common mistake, or ''."""
+    """One line (within 100 columns for usual names) saying what to change, or ''."""
     m = re.search(r'Could not find a package configuration file provided by\s+"([^"]+)"', output)
     if m:
-        return (
-            f"hint: CMakeLists.txt asks for {m.group(1)!r}, which is not installed here: "
-            "check its name in find_package(...) and package.xml"
-        )
+        return f"hint: {m.group(1)!r} is not installed here: check its name in find_package(...)"
     m = re.search(r"fatal error: ([A-Za-z0-9_]+)/[A-Za-z0-9_]+\.h: No such file", output)
     if m and m.group(1) == package:
         return (
-            "hint: the package's own message headers were not generated before the code "
-            "using them: add add_dependencies(TARGET ${${PROJECT_NAME}_EXPORTED_TARGETS}) "
-            "after add_executable(TARGET ...)"
+            "hint: generate the messages first: add_dependencies(TARGET "
+            "${${PROJECT_NAME}_EXPORTED_TARGETS})"
         )
     if m:
         dep = m.group(1)
-        return (
-            f"hint: add {dep} to find_package(catkin REQUIRED COMPONENTS ...) in "
-            f"CMakeLists.txt and <depend>{dep}</depend> to package.xml"
-        )
+        return f"hint: add {dep} to find_package(catkin REQUIRED COMPONENTS ...) and package.xml"
     m = re.search(r"undefined reference to `(?:[a-z]+ )?([A-Za-z0-9_]+)::", output)
     if m:
         dep = _NAMESPACES.get(m.group(1), m.group(1))
-        return (
-            f"hint: {m.group(1)}:: is not linked: add {dep} to find_package(catkin REQUIRED "
-            "COMPONENTS ...) and ${catkin_LIBRARIES} to target_link_libraries(...)"
-        )
+        return f"hint: link {dep}: add it to find_package(catkin REQUIRED COMPONENTS ...)"
     return ""
