@@ -77,7 +77,7 @@ def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits
     return dataclasses.replace(
         base,
         wall_s=options.build_wall_s,
-        memory_mb=limits.memory_mb or base.memory_mb,
+        memory_mb=limits.memory_mb,
         cpu_s=limits.cpu_s or base.cpu_s,
     )
 
