@@ -181,8 +181,10 @@ def run_jailed(
     elif pids:
         limit = _limit_words("processes", limits)
     elif code != 0:
+        limited = {"memory": limits.memory_mb, "cpu": limits.cpu_s, "file": limits.file_mb,
+                   "processes": limits.processes}  # fmt: skip
         for pattern, which in _SAID:
-            if pattern.search(output):
+            if limited[which] > 0 and pattern.search(output):
                 limit = _limit_words(which, limits)
                 break
     return BuildOutcome(code, output, limit)
