@@ -309,3 +309,20 @@ def test_a_build_past_its_wall_limit_is_build_failed(tmp_path: Path) -> None:
     )
     assert outcome == "build_failed", reason
     assert reason.strip().splitlines()[-1] == "the build of sleeper exceeded its 2 s wall limit"
+
+
+def test_batch_files_are_never_written_or_read_through_links(tmp_path: Path) -> None:
+    """What a batch writes (grades, summaries) replaces a link at its final or temporary name
+    instead of writing through it, and a grade that is a link is not read on resume."""
+    from usar_replay.batch.plan import read_json
+    from usar_replay.core.outfiles import write_text
+
+    victim = tmp_path / "forged.json"  # a forged grade, or a .pth in site-packages
+    victim.write_text('{"points": 60}\n', encoding="utf-8")
+    grade = tmp_path / "room.grade.json"
+    grade.symlink_to(victim)
+    assert read_json(grade) is None
+    (tmp_path / f".room.grade.json.{os.getpid()}.tmp").symlink_to(victim)
+    write_text(grade, '{"points": 1}\n', overwrite=True)
+    assert victim.read_text(encoding="utf-8") == '{"points": 60}\n'
+    assert not grade.is_symlink() and read_json(grade) == {"points": 1}
