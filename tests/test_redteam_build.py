@@ -302,6 +302,15 @@ def test_a_big_file_at_build_time_is_cut(tmp_path: Path, cache: Path) -> None:
     assert _entries(cache, "filler") == []
 
 
+def test_a_spinning_build_process_is_stopped_by_its_cpu_limit(tmp_path: Path) -> None:
+    cmake = """
+    execute_process(COMMAND sh -c "while :; do :; done" RESULT_VARIABLE r)
+    message(FATAL_ERROR "spin: ${r}")
+    """
+    said = _fails(tmp_path, "spinner", cmake, BuildLimits(cpu_s=1))
+    assert said == "the build of spinner exceeded its CPU time limit (1 s per process)", said
+
+
 def test_a_build_past_its_wall_limit_is_build_failed(tmp_path: Path) -> None:
     pkg = package(tmp_path / "sleeper", "sleeper", "execute_process(COMMAND sleep 600)")
     outcome, reason = record_verdict(

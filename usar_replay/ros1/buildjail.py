@@ -88,8 +88,8 @@ _SAID = (
         re.compile(r"Cannot allocate memory|MemoryError|bad_alloc|memory exhausted|out of memory"),
         "memory",
     ),
-    (re.compile(r"CPU time limit exceeded"), "cpu"),
-    (re.compile(r"File size limit exceeded"), "file"),
+    (re.compile(r"CPU time limit exceeded|SIGXCPU"), "cpu"),
+    (re.compile(r"File size limit exceeded|SIGXFSZ"), "file"),
     (re.compile(r"Resource temporarily unavailable|[Cc]annot fork|fork: retry"), "processes"),
 )
 
