@@ -288,12 +288,10 @@ def _reuse(entry: Path, pkg: Package, underlays: tuple[Path, ...]) -> Built | No
         with os.fdopen(fd, "r", encoding="utf-8") as f:
             record = json.load(f)
         files = {str(k): str(v) for k, v in record["files"].items()}
-        seconds = float(record["seconds"])
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
     if tree.verify(entry / "ws", files):
         return None
-    del seconds  # the time it took then; this run took none
     return Built(entry / "ws", pkg, 0.0, cached=True, underlays=underlays)
 
 

@@ -19,12 +19,11 @@ Nothing here follows a link: entries are read with ``lstat`` and files opened ``
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import stat
 from pathlib import Path
 
-__all__ = ["TreeRefused", "check", "freeze", "manifest", "read_manifest", "verify", "write_new"]
+__all__ = ["TreeRefused", "check", "freeze", "manifest", "verify", "write_new"]
 
 
 class TreeRefused(Exception):
@@ -129,16 +128,3 @@ def write_new(path: Path, text: str) -> None:
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o444)
     with os.fdopen(fd, "w", encoding="utf-8") as f:
         f.write(text)
-
-
-def read_manifest(path: Path) -> dict[str, str] | None:
-    """The manifest at ``path`` (never through a link), or None when it is missing or bad."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
-        with os.fdopen(fd, "r", encoding="utf-8") as f:
-            data = json.load(f)
-    except (OSError, ValueError):
-        return None
-    if not isinstance(data, dict) or not all(isinstance(v, str) for v in data.values()):
-        return None
-    return {str(k): v for k, v in data.items()}
