@@ -273,8 +273,16 @@ def _fails(tmp_path: Path, name: str, cmake: str, limits: BuildLimits | None = N
 
 
 def test_a_fork_bomb_at_build_time_is_stopped(tmp_path: Path) -> None:
-    said = _fails(tmp_path, "forker", 'execute_process(COMMAND sh -c '
-                  '"for i in $(seq 400); do sleep 5 & done; wait")')  # fmt: skip
+    """400 processes at configure time: the build's pids cgroup (or, where none can be made,
+    RLIMIT_NPROC) refuses the 257th, and the build says which limit it hit."""
+    cmake = """
+    execute_process(COMMAND sh -c "for i in $(seq 400); do sleep 5 & done; wait"
+                    ERROR_VARIABLE e)
+    if(e)
+      message(FATAL_ERROR "fork bomb: ${e}")
+    endif()
+    """
+    said = _fails(tmp_path, "forker", cmake)
     assert said == "the build of forker exceeded its process limit (256 processes)", said
 
 
