@@ -174,7 +174,7 @@ def run_jailed(
         pids = _pids_hit(box.cgroup)
     finally:
         box.close()
-    output = keep.decode("utf-8", errors="replace")
+    output = bytes(keep).decode("utf-8", errors="replace")
     limit = ""
     if timed_out:
         limit = f"its {limits.wall_s:g} s wall limit"

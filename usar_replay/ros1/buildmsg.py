@@ -29,7 +29,11 @@ _NAMESPACES = {
 def student_paths(output: str, src: Path, user: Path) -> str:
     """``output`` with the private copy's folder ``src`` written as the student's ``user``."""
     mine = str(user.resolve())
-    return output.replace(str(src) + "/", mine + "/").replace(str(src), mine)
+    out = output.replace(str(src) + "/", mine + "/").replace(str(src), mine)
+    # CMake names a package's files relative to the workspace's src/: "CMake Error at PKG/..."
+    return re.sub(
+        rf"(CMake (?:Error|Warning)[^\n]*? at ){re.escape(src.name)}/", rf"\1{mine}/", out
+    )
 
 
 def errors(output: str, limit: int = 60) -> str:
