@@ -75,7 +75,9 @@ def execute(job_json: str) -> dict[str, Any]:
     work.mkdir(parents=True)
     output = work / "output.txt"
     env = dict(os.environ, TMPDIR=str(work), OMP_NUM_THREADS="1", PYTHONDONTWRITEBYTECODE="1")
-    with open(output, "wb") as out:
+    # a new file in a folder only usar writes (the run's sandbox gets a folder inside it)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC
+    with os.fdopen(os.open(output, flags, 0o666), "wb") as out:
         proc = subprocess.Popen(
             [sys.executable, "-m", "usar_replay.batch.run_one"],
             stdin=subprocess.PIPE,

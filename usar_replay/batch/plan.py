@@ -31,6 +31,7 @@ import hashlib
 import json
 import os
 import re
+import stat
 import tomllib
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
@@ -353,9 +354,14 @@ def make_worlds(
 
 def read_json(path: Path) -> dict[str, Any] | None:
     """A JSON object, or None for a file that is missing or not one (a cut write cannot be
-    one: writes are atomic; a hand-edited file can)."""
+    one: writes are atomic; a hand-edited file can). Never read through a link: usar writes
+    its grades and records as plain files, so a link there is not one of them."""
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+        with os.fdopen(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                return None
+            data = json.loads(f.read(64 * 1024 * 1024).decode("utf-8"))
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None

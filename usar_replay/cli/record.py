@@ -53,6 +53,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         metavar="R",
         help="with --ros1: real-time factor cap (wall time per tick >= dt/R; 0: none)",
     )
+    ros1.add_argument(
+        "--build-timeout",
+        type=arguments.positive_seconds,
+        default=900.0,
+        metavar="S",
+        help="with --ros1: wall seconds the catkin build may take (900)",
+    )
     p.set_defaults(func=run)
 
 
@@ -166,7 +173,12 @@ def _record_ros1(
         raise UsageError("--ros1 and --mission: give one mission")
     if args.rtf < 0:
         raise UsageError(f"--rtf {args.rtf:g}: give a factor >= 0 (0: no cap)")
-    opts = Ros1Options(launch=args.launch or "", node=args.node or "", rtf=args.rtf)
+    opts = Ros1Options(
+        launch=args.launch or "",
+        node=args.node or "",
+        rtf=args.rtf,
+        build_wall_s=args.build_timeout,
+    )
     return record_ros1(
         scenario, out, args.ros1, settings, progress, options=opts, limits=_limits(args, out)
     )

@@ -5,7 +5,9 @@ Why one module: every command that writes (record, scenario, grade's JSON/JUnit/
 ``.rrd``, report's HTML) must keep the same promises, and a promise kept in five places is broken
 in one. Outputs are written to a temporary name beside the final one and renamed atomically when
 complete; a failure (a full disk, Ctrl-C) removes the temporary file and leaves whatever was at
-the final name untouched.
+the final name untouched. The temporary file is created new (``O_EXCL|O_NOFOLLOW``) and renamed
+over the final name, so a link found at either name is replaced, never written through (a batch
+runs as root: docs/batch.md's threat model).
 """
 
 from __future__ import annotations
@@ -83,7 +85,12 @@ def atomic_output(
     tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        f = open(tmp, "wb" if binary else "w", encoding=None if binary else "utf-8")  # noqa: SIM115
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()  # a cut-off write's, or a link planted there: removed, never followed
+        fd = os.open(
+            tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666
+        )
+        f = os.fdopen(fd, "wb" if binary else "w", encoding=None if binary else "utf-8")
     except OSError as err:
         raise _os_error(p, err) from err
     try:

@@ -118,6 +118,9 @@ class RecordResult:
     markers_total: int = 0
     grade: LiveGrade | None = None
     """The rubric fed while recording: ``grade.report(path)`` is the file's grade."""
+    build: str = ""
+    """A ROS 1 package's build, apart from the run's wall time (``catkin_make 14.2 s``,
+    ``cached``, ``failed``); '' for a Python mission."""
 
     @property
     def mission_done(self) -> bool:
@@ -520,6 +523,7 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
     lines = [
         f"Recorded {result.path} ({result.size_bytes / 1e6:.1f} MB, {result.messages} messages,"
         f" {result.frames} camera frames)",
+        *([f"Build: {result.build} (not counted in the run's wall time)"] if result.build else []),
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
         f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
         f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",

@@ -1,7 +1,10 @@
 """ros1: run a course's ROS 1 catkin package, unmodified, against usar's world.
 
 ``debian`` (the Debian packages ROS 1 needs, and the check that says what to install),
-``build`` (a private catkin workspace with usar's ``fiducial_msgs``; ``build_failed``),
+``build`` (usar's ``fiducial_msgs`` as an underlay, the package in a private overlay, the build
+cache; ``build_failed``), ``buildjail`` (the build in the run's sandbox and limits),
+``buildmsg`` (a failed build's errors in the student's folder, with a hint), ``tree`` (a built
+workspace checked, frozen, listed and verified),
 ``isolation`` (the one function that starts the bridge in its own network namespace),
 ``process`` (the recorder's side: the bridge takes the mission process's place),
 ``bridge`` (the bridge process: the tick protocol to the recorder, ROS 1 to the student's graph),

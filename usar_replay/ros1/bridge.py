@@ -169,8 +169,8 @@ class Bridge:
         os.environ.update(
             {k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")}
         )
-        devel_py = ws / "devel" / "lib" / "python3" / "dist-packages"
-        sys.path.insert(0, str(devel_py))  # the generated fiducial_msgs
+        for space in (ws, *map(Path, config.get("underlays", ()))):  # usar's fiducial_msgs
+            sys.path.insert(0, str(space / "devel" / "lib" / "python3" / "dist-packages"))
         if str(DIST_PACKAGES) not in sys.path:
             sys.path.append(str(DIST_PACKAGES))  # after usar's own numpy and OpenCV
         self.master: subprocess.Popen[bytes] | None = None

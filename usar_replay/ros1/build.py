@@ -1,10 +1,22 @@
-"""A private catkin workspace: usar's ``fiducial_msgs`` next to a copy of the package, built.
+"""Private catkin workspaces: usar's ``fiducial_msgs`` as an underlay, the package in an overlay.
 
-Why a copy in a temporary workspace: the student's folder is never written to (no ``build/``
-or ``devel/`` left behind, a read-only checkout works), and the workspace holds exactly two
-packages, so nothing else on the machine can change the build. A build that fails is the
-*package's* outcome, ``build_failed`` with the compiler's errors, recorded in the log like a
-crash; never a traceback of usar's.
+Why an underlay: a course machine has ``fiducial_msgs`` installed (built before the student's
+package, in another workspace), so a package's ``CMakeLists.txt`` that builds there builds here
+as it is: no ``add_dependencies(... ${catkin_EXPORTED_TARGETS})`` needed for usar's messages.
+The underlay is usar's own bytes, built once (in the sandbox all the same) and shared; the
+overlay holds a copy of the package alone, so the student's folder is never written to and
+nothing else on the machine can change the build.
+
+Why so careful with what the build leaves (issue 26): the build is the team's code
+(``execute_process`` at configure time) and runs as such (:mod:`usar_replay.ros1.buildjail`).
+usar writes nothing into the workspace the build can write: the build's output comes through a
+pipe, and what usar keeps about a build (its manifest, its time) lives in the workspace's
+parent folder, which no sandbox ever binds, created ``O_EXCL|O_NOFOLLOW``. Once the sandbox is
+gone the workspace is checked (no link out of it, no special file), frozen read-only and listed
+(:mod:`usar_replay.ros1.tree`); a run mounts it read-only, and a cached build is verified
+against its manifest before it is reused. A build that fails, or goes past a limit, is the
+*package's* outcome, ``build_failed`` with the compiler's errors (paths in the student's
+folder) and a hint; never a traceback of usar's.
 
 catkin_make runs as Debian's own program with a clean environment (``PATH=/usr/bin:/bin``,
 ``PYTHON_EXECUTABLE=/usr/bin/python3``): a virtual environment's or pyenv's ``python3`` on the
@@ -13,27 +25,39 @@ PATH has no ``catkin_pkg``, and catkin would pick it up.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
+import json
 import os
 import re
 import shutil
-import subprocess
+import stat
+import tempfile
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_replay.core.errors import UsageError
 from usar_replay.node.worker import MissionEnded
+from usar_replay.ros1 import buildmsg, tree
+from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 
 __all__ = [
     "FIDUCIAL_MSGS",
+    "BuildLimits",
     "Built",
     "Package",
     "build",
     "cache_root",
     "cached_build",
+    "catkin_env",
     "find_package",
     "package_sha256",
+    "private_build",
+    "remove_tree",
+    "underlay",
 ]
 
 FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
@@ -41,6 +65,8 @@ FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 
 _NAME = re.compile(r"<name>\s*([A-Za-z0-9_]+)\s*</name>")
 _SKIP = {"build", "devel", "install", ".git", "__pycache__", "log", "logs"}
+_RECORD = "built.json"
+"""Beside ``ws/``: the manifest of the built workspace and its build time (usar's alone)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,13 +79,15 @@ class Package:
 
 @dataclass(frozen=True, slots=True)
 class Built:
-    """A built workspace."""
+    """A built workspace (``entry/ws``), checked and frozen."""
 
     workspace: Path
     package: Package
     seconds: float
     """Wall seconds catkin_make took (0 for a build found in the cache)."""
     cached: bool = False
+    underlays: tuple[Path, ...] = field(default=())
+    """Workspaces this one extends (sourced by its ``devel/setup.bash``): usar's messages."""
 
     @property
     def setup(self) -> Path:
@@ -112,36 +140,6 @@ def _copy(pkg: Package, dest: Path) -> None:
         shutil.copy2(p, target)
 
 
-def _errors(output: str, limit: int = 60) -> str:
-    """The compiler's and CMake's errors from catkin_make's output (the lines that say what is
-    wrong and the ones after), or its last lines when none is marked."""
-    lines = output.splitlines()
-    keep: list[str] = []
-    for i, line in enumerate(lines):
-        if re.search(r"error|Error|ERROR", line):
-            keep += lines[i : i + 3]
-    picked = list(dict.fromkeys(keep)) or lines[-limit:]
-    return "\n".join(picked[:limit])
-
-
-def _sandboxed(cmd: list[str], workspace: Path) -> tuple[list[str], dict[str, str]]:
-    """``cmd`` in the kernel sandbox when there is one: a package's CMakeLists.txt runs
-    whatever it likes at build time (``execute_process``), so the build is the student's code
-    too. It reads the system and Debian's ROS configuration, writes only the workspace, and has
-    no network. Without bubblewrap (or with ``USAR_SANDBOX=off``) it runs as it is, as a
-    mission does then."""
-    from usar_replay.node import jail
-
-    ok, _ = jail.bwrap_available()
-    if not ok or os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
-        return cmd, catkin_env()
-    env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
-    # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version
-    etc = [p for p in ("/etc/catkin", "/etc/ros", "/etc/debian_version") if Path(p).exists()]
-    argv = jail.jail_argv(cmd, ro_binds=etc, work_dir=str(workspace), env=env)
-    return argv, env
-
-
 def catkin_env() -> dict[str, str]:
     """The environment catkin and roslaunch run in: Debian's tools first, no venv Python."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
@@ -150,44 +148,92 @@ def catkin_env() -> dict[str, str]:
     return env
 
 
-def build(pkg: Package, workspace: Path, jobs: int = 2, timeout_s: float = 900.0) -> Built:
-    """Copy ``pkg`` and usar's fiducial_msgs into ``workspace/src`` and run catkin_make.
+def _toplevel(src: Path) -> None:
+    """catkin_make's top-level CMakeLists.txt as a file of the workspace (catkin_make would make
+    it a link into /usr, and a built workspace holds no link that leaves it)."""
+    shutil.copyfile("/usr/share/catkin/cmake/toplevel.cmake", src / "CMakeLists.txt")
 
-    A failure raises :class:`MissionEnded` ``build_failed`` with the compiler's errors."""
-    src = workspace / "src"
-    src.mkdir(parents=True, exist_ok=True)
-    if pkg.name != "fiducial_msgs":
-        shutil.copytree(FIDUCIAL_MSGS, src / "fiducial_msgs")
-    _copy(pkg, src / pkg.name)
-    cmd = ["catkin_make", "-C", str(workspace), "-DPYTHON_EXECUTABLE=/usr/bin/python3"]
-    cmd += [f"-j{jobs}"]  # no -l: on a shared machine a load limit stalls the build
-    start = time.perf_counter()  # for the build time shown to people only
-    argv, env = _sandboxed(cmd, workspace)
-    try:
-        proc = subprocess.run(
-            argv,
-            cwd=workspace,
-            env=env,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            timeout=timeout_s,
-            check=False,
-        )
-    except subprocess.TimeoutExpired as err:
+
+def _catkin_make(
+    ws: Path, name: str, user: Path, underlays: tuple[Path, ...], limits: BuildLimits, jobs: int
+) -> None:
+    """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox; raise
+    ``build_failed`` with the errors (paths as the student's) and a hint, or return."""
+    from usar_replay.node import jail
+
+    cmd = ["catkin_make", "-C", str(ws), "-DPYTHON_EXECUTABLE=/usr/bin/python3", f"-j{jobs}"]
+    if underlays:  # as on a course machine: the underlay sourced, then catkin_make
+        cmd = [
+            "/bin/bash",
+            "-c",
+            'source "$0/devel/setup.bash" && exec "$@"',
+            str(underlays[-1]),
+            *cmd,
+        ]
+    ok, _ = jail.bwrap_available()
+    sandbox = ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
+    env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
+    # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version
+    etc = [p for p in ("/etc/catkin", "/etc/ros", "/etc/debian_version") if Path(p).exists()]
+    done = run_jailed(
+        cmd,
+        workspace=ws,
+        ro_binds=[*etc, *map(str, underlays)],
+        env=env if sandbox else catkin_env(),
+        limits=limits,
+        sandbox=sandbox,
+    )
+    output = buildmsg.student_paths(done.output, ws / "src" / name, user)
+    if done.limit:
         raise MissionEnded(
-            "build_failed", f"catkin_make took more than {timeout_s:g} s of wall time"
-        ) from err
-    output = proc.stdout.decode("utf-8", errors="replace")
-    (workspace / "build.log").write_text(output, encoding="utf-8")
-    if proc.returncode != 0:
+            "build_failed", f"{buildmsg.errors(output)}\nthe build of {name} exceeded {done.limit}"
+        )
+    if done.code != 0:
+        said = buildmsg.hint(output, name)
         raise MissionEnded(
             "build_failed",
-            f"catkin_make failed (exit {proc.returncode}) for package {pkg.name}:\n"
-            + _errors(output)
-            + f"\ncatkin_make failed for package {pkg.name}",
+            f"catkin_make failed (exit {done.code}) for package {name}:\n"
+            + buildmsg.errors(output)
+            + (f"\n{said}" if said else "")
+            + f"\ncatkin_make failed for package {name}",
         )
-    return Built(workspace, pkg, time.perf_counter() - start)
+
+
+def _seal(ws: Path, entry: Path, seconds: float) -> None:
+    """After the sandbox is gone: check ``ws`` (``build_failed`` when it holds a link out of it
+    or a special file), freeze it, and write its manifest beside it."""
+    try:
+        tree.check(ws)
+    except tree.TreeRefused as err:
+        raise MissionEnded("build_failed", str(err)) from err
+    tree.freeze(ws)
+    record = {"seconds": round(seconds, 1), "files": tree.manifest(ws)}
+    tree.write_new(entry / _RECORD, json.dumps(record, sort_keys=True))
+
+
+def build(
+    pkg: Package,
+    entry: Path,
+    *,
+    underlays: tuple[Path, ...] = (),
+    jobs: int = 2,
+    limits: BuildLimits | None = None,
+) -> Built:
+    """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``.
+
+    ``entry`` is usar's: only ``entry/ws`` is writable by the build. A failure raises
+    :class:`MissionEnded` ``build_failed`` with the compiler's errors."""
+    entry.mkdir(mode=0o700)
+    ws = entry / "ws"
+    src = ws / "src"
+    src.mkdir(parents=True)
+    _copy(pkg, src / pkg.name)
+    _toplevel(src)
+    start = time.perf_counter()  # for the build time shown to people only
+    _catkin_make(ws, pkg.name, pkg.path, underlays, limits or BuildLimits(), jobs)
+    seconds = time.perf_counter() - start
+    _seal(ws, entry, seconds)
+    return Built(ws, pkg, seconds, underlays=underlays)
 
 
 def cache_root() -> Path:
@@ -196,39 +242,119 @@ def cache_root() -> Path:
     return Path(base) / "usar" / "ros1"
 
 
-def _build_key(pkg: Package) -> str:
-    """Same package files, same fiducial_msgs, same usar, same compiler: the same build."""
+def _private_root(root: Path) -> Path:
+    """``root``, made if missing; refused unless it is a real folder of this user that nobody
+    else may write (another user, or a sandbox, could otherwise plant a build)."""
+    root.parent.mkdir(parents=True, exist_ok=True)
+    with contextlib.suppress(FileExistsError):
+        root.mkdir(mode=0o700)
+    st = os.lstat(root)
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.geteuid() or st.st_mode & 0o022:
+        raise UsageError(
+            f"{root}: the build cache must be a folder of this user that no one else may "
+            "write; remove it, or set XDG_CACHE_HOME to a private folder"
+        )
+    return root
+
+
+def remove_tree(path: Path) -> None:
+    """Remove a (frozen) build folder: write bits back on its folders first, never through a
+    link, then the whole tree."""
+    if not path.is_dir() or path.is_symlink():
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+        return
+    for dirpath, dirnames, _ in os.walk(path):
+        with contextlib.suppress(OSError):
+            os.chmod(dirpath, 0o700, follow_symlinks=False)
+        for d in dirnames:
+            with contextlib.suppress(OSError):
+                os.chmod(os.path.join(dirpath, d), 0o700, follow_symlinks=False)
+    shutil.rmtree(path, ignore_errors=True)
+
+
+def _usar_key(h: hashlib._Hash) -> None:
     from usar_replay import __version__
 
-    h = hashlib.sha256()
-    h.update(package_sha256(pkg).encode())
     h.update(package_sha256(Package(FIDUCIAL_MSGS, "fiducial_msgs")).encode())
     h.update(__version__.encode())
     h.update(str(shutil.which("g++")).encode())
-    return f"{pkg.name}-{h.hexdigest()[:20]}"
 
 
-def cached_build(pkg: Package, root: Path | None = None) -> Built:
-    """:func:`build` once per package content: a workspace built before (same files, same
-    fiducial_msgs, same usar) is reused as it is, read only. Why: catkin_make costs ~40 s of
-    CPU, and a class's runs (or a test's variants of one package) build the same files. The
-    workspace is built in place (catkin writes absolute paths into ``devel/``), under a lock so
-    that two runs never build one key at once; a failed build is not kept."""
-    import fcntl
+def _reuse(entry: Path, pkg: Package, underlays: tuple[Path, ...]) -> Built | None:
+    """The build at ``entry`` when it is exactly as it was built (its manifest), else None."""
+    try:
+        fd = os.open(entry / _RECORD, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+        with os.fdopen(fd, "r", encoding="utf-8") as f:
+            record = json.load(f)
+        files = {str(k): str(v) for k, v in record["files"].items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+    if tree.verify(entry / "ws", files):
+        return None
+    return Built(entry / "ws", pkg, 0.0, cached=True, underlays=underlays)
 
-    root = root or cache_root()
-    root.mkdir(parents=True, exist_ok=True)
-    key = _build_key(pkg)
-    ws = root / key
-    with (root / f"{key}.lock").open("w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if (ws / ".usar-built").is_file():
-            return Built(ws, pkg, 0.0, cached=True)
-        shutil.rmtree(ws, ignore_errors=True)
+
+def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -> Built:
+    """The verified build ``root/key``, or a new one made by ``make(entry)`` under a lock."""
+    entry = root / key
+    lock_fd = os.open(
+        root / f"{key}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600
+    )
+    try:
+        fcntl.flock(lock_fd, fcntl.LOCK_EX)
+        found = _reuse(entry, pkg, ()) if entry.is_dir() else None
+        if found is not None:
+            return found
+        remove_tree(entry)  # a cut-off build, or one that changed since: never trusted
         try:
-            built = build(pkg, ws)
+            return make(entry)
         except BaseException:
-            shutil.rmtree(ws, ignore_errors=True)
+            remove_tree(entry)
             raise
-        (ws / ".usar-built").write_text(f"{built.seconds:.1f}\n", encoding="utf-8")
-        return built
+    finally:
+        os.close(lock_fd)
+
+
+def underlay(root: Path | None = None, limits: BuildLimits | None = None) -> Path:
+    """usar's ``fiducial_msgs`` built in a workspace of its own (cached and verified like any
+    build: it is usar's own bytes, so every run may share it, and no sandbox can write it)."""
+    root = _private_root(root or cache_root())
+    h = hashlib.sha256(b"underlay")
+    _usar_key(h)
+    msgs = Package(FIDUCIAL_MSGS, "fiducial_msgs")
+    key = f"underlay-{h.hexdigest()[:20]}"
+    built = _cached(root, key, msgs, lambda entry: build(msgs, entry, limits=limits))
+    return built.workspace
+
+
+def cached_build(
+    pkg: Package, root: Path | None = None, limits: BuildLimits | None = None
+) -> Built:
+    """:func:`build` once per package content: a workspace built before from the same files
+    (same fiducial_msgs, same usar, same compiler) is reused when it is exactly as its manifest
+    says, read only. Why: catkin_make costs ~40 s of CPU, and a class's runs (or a test's
+    variants of one package) build the same files. Two teams share a build only when their
+    packages are the same bytes: the build ran those bytes alone, and nothing but usar can
+    write the cache. Built in place (catkin writes absolute paths into ``devel/``), under a
+    lock; a failed build is not kept."""
+    root = _private_root(root or cache_root())
+    under = () if pkg.name == "fiducial_msgs" else (underlay(root, limits),)
+    h = hashlib.sha256()
+    h.update(package_sha256(pkg).encode())
+    _usar_key(h)
+    key = f"{pkg.name}-{h.hexdigest()[:20]}"
+    made = _cached(root, key, pkg, lambda entry: build(pkg, entry, underlays=under, limits=limits))
+    return Built(made.workspace, pkg, made.seconds, made.cached, under)
+
+
+def private_build(pkg: Package, limits: BuildLimits | None = None) -> tuple[Built, Path]:
+    """:func:`build` in a fresh folder of its own (no cache; the underlay still is): the
+    built workspace and the folder to remove with :func:`remove_tree` when done."""
+    under = () if pkg.name == "fiducial_msgs" else (underlay(None, limits),)
+    holder = Path(tempfile.mkdtemp(prefix="usar-ros1-build-"))
+    try:
+        return build(pkg, holder / "entry", underlays=under, limits=limits), holder
+    except BaseException:
+        remove_tree(holder)
+        raise

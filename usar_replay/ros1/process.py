@@ -4,8 +4,9 @@
 bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the same socket, the same
 tick protocol, the same checks on what comes back (a student's ``/tf`` that moves a simulator
 frame is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is
-``crashed`` with its output, one that stops answering is ``hung``). Before the bridge starts,
-the package is built in a private workspace; a build that fails is ``build_failed``.
+``crashed`` with its output, one that stops answering is ``hung``). The package was built
+before (:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's
+underlay read-only.
 """
 
 from __future__ import annotations
@@ -24,10 +25,11 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
-from usar_replay.ros1.build import Package, build, cached_build, package_sha256
+from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
+from usar_replay.ros1.buildjail import BUILD_WALL_S
 from usar_replay.ros1.isolation import isolated_command
 
-__all__ = ["Ros1Options", "Ros1Process", "ros1_target"]
+__all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,6 +53,10 @@ class Ros1Options:
     """Leave the run's folder (bridge, master and graph output, ROS logs) on disk."""
     cache: bool = True
     """Reuse a workspace built before from the same files (:func:`cached_build`)."""
+    build_wall_s: float = BUILD_WALL_S
+    """Wall seconds the build may take (its other limits are the run's: memory, processes,
+    file size; CPU seconds per process are the run's ``cpu_s`` when set, else
+    :attr:`BuildLimits.cpu_s`)."""
 
 
 _ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
@@ -61,6 +67,19 @@ def _ros_etc() -> tuple[str, ...]:
     Debian's ROS 1 configuration (catkin's environment hooks set ``ROS_PACKAGE_PATH``) and
     name resolution (roslaunch resolves ``localhost``)."""
     return tuple(p for p in _ROS_ETC if Path(p).exists())
+
+
+def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits:
+    """The build's limits from the run's: the same memory per process (and the same process
+    count and file size as every jailed run), the run's CPU seconds per process when it has
+    some, and the build's own wall time."""
+    base = BuildLimits()
+    return dataclasses.replace(
+        base,
+        wall_s=options.build_wall_s,
+        memory_mb=limits.memory_mb,
+        cpu_s=limits.cpu_s or base.cpu_s,
+    )
 
 
 def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
@@ -76,7 +95,7 @@ def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
 
 
 class Ros1Process(MissionProcess):
-    """Build ``package``, then run the bridge as the mission process (see the module doc)."""
+    """Run the bridge as the mission process on ``built`` (see the module doc)."""
 
     def __init__(
         self,
@@ -88,24 +107,23 @@ class Ros1Process(MissionProcess):
         limits: MissionLimits | None = None,
         package: Package,
         options: Ros1Options,
+        built: Built,
     ) -> None:
         self.options = options
         self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
+        self.built = built
         try:
-            if options.cache:
-                self.built = cached_build(package)
-            else:
-                self.built = build(package, self.run_dir / "ws")
+            limits = limits or MissionLimits()
             config = {
                 "package": package.name,
                 "workspace": str(self.built.workspace),
+                "underlays": [str(u) for u in self.built.underlays],
                 "run_dir": str(self.run_dir),
             }
             config.update({k: v for k, v in asdict(options).items()})
             self._config_path = self.run_dir / "bridge.json"
             self._config_path.write_text(json.dumps(config), encoding="utf-8")
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
-            limits = limits or MissionLimits()
             startup = max(limits.startup_timeout_s, options.connect_timeout_s + 30.0)
             # the bridge and the whole graph it starts run in the kernel sandbox (bubblewrap) as
             # a Python mission does: reading the built workspace, writing only the run's folder,
@@ -113,7 +131,11 @@ class Ros1Process(MissionProcess):
             limits = dataclasses.replace(
                 limits,
                 startup_timeout_s=startup,
-                read_roots=(str(self.built.workspace), *_ros_etc()),
+                read_roots=(
+                    str(self.built.workspace),
+                    *map(str, self.built.underlays),
+                    *_ros_etc(),
+                ),
                 work_dir=str(self.run_dir),
             )
             super().__init__(

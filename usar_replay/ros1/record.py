@@ -4,6 +4,10 @@ The same recording as any other (:func:`usar_replay.pipeline.record.record`: sim
 ground truth, outcomes), with the bridge in the mission process's place. What is checked
 before anything runs, each a one-line usage error: ROS 1 is installed (else the ``apt-get``
 line), the folder is one catkin package, the launch file or executable exists in it.
+
+The package is built before the recording starts (so the run's wall time and real-time factor
+are the run's alone, and the build's time is reported apart: :attr:`RecordResult.build`); a
+build that fails is still a log, whose outcome is ``build_failed``.
 """
 
 from __future__ import annotations
@@ -13,14 +17,22 @@ import functools
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.worker import MissionLimits
+from usar_replay.node.worker import MissionEnded, MissionLimits
 from usar_replay.pipeline.record import Progress, RecordResult, record
 from usar_replay.ros1 import debian
-from usar_replay.ros1.build import Package, find_package
-from usar_replay.ros1.process import Ros1Options, Ros1Process, ros1_target
+from usar_replay.ros1.build import (
+    Built,
+    Package,
+    cached_build,
+    find_package,
+    private_build,
+    remove_tree,
+)
+from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
 from usar_replay.world.scenario import Scenario
 
 __all__ = ["choose_entry", "record_ros1"]
@@ -63,12 +75,36 @@ def record_ros1(
     debian.check()
     pkg = find_package(package)
     opts = choose_entry(pkg, options or Ros1Options())
-    return record(
-        scenario,
-        out,
-        settings,
-        progress,
-        limits=limits,
-        target=ros1_target(pkg, opts),
-        process=functools.partial(Ros1Process, package=pkg, options=opts),
-    )
+    build_limits = build_limits_for(limits or MissionLimits(), opts)
+    holder: Path | None = None
+    process: Callable[..., Any]
+    try:
+        built: Built
+        if opts.cache:
+            built = cached_build(pkg, limits=build_limits)
+        else:  # a folder of its own, never inside the run's (which the run may write)
+            built, holder = private_build(pkg, limits=build_limits)
+        process = functools.partial(Ros1Process, package=pkg, options=opts, built=built)
+        note = "cached" if built.cached else f"catkin_make {built.seconds:.1f} s"
+    except MissionEnded as failed:
+        process = functools.partial(_failed_build, failed)
+        note = "failed"
+    try:
+        result = record(
+            scenario,
+            out,
+            settings,
+            progress,
+            limits=limits,
+            target=ros1_target(pkg, opts),
+            process=process,
+        )
+    finally:
+        if holder is not None and not opts.keep_workspace:
+            remove_tree(holder)
+    return dataclasses.replace(result, build=note)
+
+
+def _failed_build(failed: MissionEnded, *_args: Any, **_kwargs: Any) -> Any:
+    """The mission process of a package that did not build: the run ends as its verdict."""
+    raise failed

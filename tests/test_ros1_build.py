@@ -1,0 +1,144 @@
+"""The build as a student meets it (issue 28, point 1 and 2): a package written for a course
+machine (Debian's ROS 1 plus an installed ``fiducial_msgs``) builds under usar as it is, a build
+error points into the student's folder with a hint, and ``usar record`` prints the build's time
+apart from the run's.
+
+Real catkin builds of a one-file C++ node (Debian 12's ROS 1 and bubblewrap: CI installs both).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from conftest import one_room
+
+from usar_replay.cli.main import main
+from usar_replay.log.run import open_run
+from usar_replay.ros1 import buildmsg
+from usar_replay.world.scenario_toml import save
+
+NODE = """
+#include <ros/ros.h>
+#include <fiducial_msgs/FiducialTransformArray.h>
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "plain");
+  ros::NodeHandle nh;
+  int seen = 0;
+  ros::Subscriber sub = nh.subscribe<fiducial_msgs::FiducialTransformArray>(
+      "/fiducial_transforms", 10,
+      [&seen](const fiducial_msgs::FiducialTransformArray::ConstPtr&) {
+        if (++seen >= 3) ros::shutdown();
+      });
+  ros::spin();
+  return 0;
+}
+"""
+
+# as on a course machine: no add_dependencies(... ${catkin_EXPORTED_TARGETS}) for fiducial_msgs
+CMAKE = """cmake_minimum_required(VERSION 3.0.2)
+project(plain)
+find_package(catkin REQUIRED COMPONENTS {components})
+catkin_package()
+include_directories(${{catkin_INCLUDE_DIRS}})
+add_executable(plain_node src/main.cpp)
+target_link_libraries(plain_node ${{catkin_LIBRARIES}})
+"""
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))
+    yield
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
+
+
+def plain(folder: Path, components: str) -> Path:
+    (folder / "src").mkdir(parents=True)
+    (folder / "launch").mkdir()
+    (folder / "package.xml").write_text(
+        '<?xml version="1.0"?>\n<package format="2"><name>plain</name><version>0.0.1</version>'
+        "<description>plain</description><maintainer email='p@p.invalid'>p</maintainer>"
+        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend>"
+        "<depend>roscpp</depend><depend>fiducial_msgs</depend></package>\n",
+        encoding="utf-8",
+    )
+    (folder / "CMakeLists.txt").write_text(CMAKE.format(components=components), encoding="utf-8")
+    (folder / "src" / "main.cpp").write_text(NODE, encoding="utf-8")
+    (folder / "launch" / "plain.launch").write_text(
+        '<launch><node pkg="plain" type="plain_node" name="plain" required="true"/></launch>\n',
+        encoding="utf-8",
+    )
+    return folder
+
+
+def _record(
+    tmp_path: Path, pkg: Path, name: str, capsys: pytest.CaptureFixture[str]
+) -> tuple[int, str, Path]:
+    world = tmp_path / "room.toml"
+    if not world.exists():
+        save(one_room(), world)
+    out = tmp_path / f"{name}.mcap"
+    args = ["record", "--ros1", str(pkg), "--scenario", str(world), "--out", str(out), "--quiet"]
+    code = main([*args, "--max-sim-time", "5"])
+    return code, capsys.readouterr().out, out
+
+
+def test_a_package_without_add_dependencies_builds_and_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """fiducial_msgs is an underlay, as installed on a course machine: the package needs no
+    add_dependencies. The build's time is printed apart from the run's; a second run says
+    ``cached``."""
+    pkg = plain(tmp_path / "plain", "roscpp fiducial_msgs")
+    code, text, out = _record(tmp_path, pkg, "first", capsys)
+    run = open_run(out)
+    assert code == 0 and run.outcome == "done", (text, run.outcome_reason)
+    assert re.search(r"^Build: catkin_make \d+\.\d s \(not counted", text, re.M), text
+    code, text, _ = _record(tmp_path, pkg, "second", capsys)
+    assert code == 0, text
+    assert "Build: cached (not counted in the run's wall time)" in text
+
+
+def test_a_missing_find_package_component_says_what_to_change(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """fiducial_msgs left out of find_package: the compiler's error names the student's own
+    file, and one line says what to add."""
+    pkg = plain(tmp_path / "plain", "roscpp")
+    code, text, out = _record(tmp_path, pkg, "broken", capsys)
+    assert code == 4, text
+    mine = str((pkg / "src" / "main.cpp").resolve())
+    assert f"{mine}:3:" in text and "fiducial_msgs/FiducialTransformArray.h" in text, text
+    assert ".cache" not in text and "/ws/src/" not in text, text
+    hint = "hint: add fiducial_msgs to find_package(catkin REQUIRED COMPONENTS ...) and package.xml"
+    assert hint in text.splitlines(), text
+    assert open_run(out).outcome == "build_failed"
+
+
+def test_hints_and_paths_for_a_missing_dependency_and_an_own_message() -> None:
+    missing = 'Could not find a package configuration file provided by "tf3_ros" with any'
+    assert "'tf3_ros' is not installed here" in buildmsg.hint(missing, "pkg")
+    own = "src/a.cpp:2:10: fatal error: pkg/Thing.h: No such file or directory"
+    assert "add_dependencies(TARGET ${${PROJECT_NAME}_EXPORTED_TARGETS})" in buildmsg.hint(
+        own, "pkg"
+    )
+    unlinked = "a.cpp:(.text+0x1): undefined reference to `tf2_ros::TransformBroadcaster::X()'"
+    assert "link tf2_ros: add it to find_package" in buildmsg.hint(unlinked, "pkg")
+    said = "CMake Error at pkg/CMakeLists.txt:6 (message):\n/ws/src/pkg/a.cpp:1: error"
+    mapped = buildmsg.student_paths(said, Path("/ws/src/pkg"), Path("/home/me/pkg"))
+    assert (
+        mapped
+        == "CMake Error at /home/me/pkg/CMakeLists.txt:6 (message):\n/home/me/pkg/a.cpp:1: error"
+    )
+    assert buildmsg.hint("all fine", "pkg") == ""
+    for said in (missing, own, unlinked):
+        assert len(buildmsg.hint(said, "a_package_name")) <= 100

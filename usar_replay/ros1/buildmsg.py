@@ -1,0 +1,69 @@
+"""What a failed build says to the student: the compiler's lines, in their folder, and a hint.
+
+Why: usar builds a private copy of the package, so the compiler's and CMake's paths point into
+a workspace the student never made. Those paths are mapped back to the folder they gave
+(``--ros1 DIR``), and the mistakes a course package commonly makes (a ``find_package``
+component missing, a dependency that is not installed, a message header not generated yet) get
+one line saying what to change.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+__all__ = ["errors", "hint", "student_paths"]
+
+# the namespace of an undefined C++ symbol -> the catkin package that defines it
+_NAMESPACES = {
+    "ros": "roscpp",
+    "tf2_ros": "tf2_ros",
+    "tf2": "tf2",
+    "actionlib": "actionlib",
+    "tf": "tf",
+    "image_transport": "image_transport",
+    "cv_bridge": "cv_bridge",
+}
+
+
+def student_paths(output: str, src: Path, user: Path) -> str:
+    """``output`` with the private copy's folder ``src`` written as the student's ``user``."""
+    mine = str(user.resolve())
+    out = output.replace(str(src) + "/", mine + "/").replace(str(src), mine)
+    # CMake names a package's files relative to the workspace's src/: "CMake Error at PKG/..."
+    return re.sub(
+        rf"(CMake (?:Error|Warning)[^\n]*? at ){re.escape(src.name)}/", rf"\1{mine}/", out
+    )
+
+
+def errors(output: str, limit: int = 60) -> str:
+    """The compiler's and CMake's errors from catkin_make's output (the lines that say what is
+    wrong and the two after), or its last lines when none is marked."""
+    lines = output.splitlines()
+    keep: list[str] = []
+    for i, line in enumerate(lines):
+        if re.search(r"error|Error|ERROR|undefined reference", line):
+            keep += lines[i : i + 3]
+    picked = list(dict.fromkeys(keep)) or lines[-limit:]
+    return "\n".join(picked[:limit])
+
+
+def hint(output: str, package: str) -> str:
+    """One line (within 100 columns for usual names) saying what to change, or ''."""
+    m = re.search(r'Could not find a package configuration file provided by\s+"([^"]+)"', output)
+    if m:
+        return f"hint: {m.group(1)!r} is not installed here: check its name in find_package(...)"
+    m = re.search(r"fatal error: ([A-Za-z0-9_]+)/[A-Za-z0-9_]+\.h: No such file", output)
+    if m and m.group(1) == package:
+        return (
+            "hint: generate the messages first: add_dependencies(TARGET "
+            "${${PROJECT_NAME}_EXPORTED_TARGETS})"
+        )
+    if m:
+        dep = m.group(1)
+        return f"hint: add {dep} to find_package(catkin REQUIRED COMPONENTS ...) and package.xml"
+    m = re.search(r"undefined reference to `(?:[a-z]+ )?([A-Za-z0-9_]+)::", output)
+    if m:
+        dep = _NAMESPACES.get(m.group(1), m.group(1))
+        return f"hint: link {dep}: add it to find_package(catkin REQUIRED COMPONENTS ...)"
+    return ""
