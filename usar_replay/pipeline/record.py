@@ -30,6 +30,7 @@ from typing import Any, TextIO
 
 from usar_replay import __version__
 from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.ros1msg import Ros1Message
 from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.assignment import Assignment
@@ -430,6 +431,9 @@ def _take_outputs(
     if detector is not None:
         detector.note_outputs((topic, value) for topic, _, _, value in outputs)
     for topic, msgtype, raw, value in outputs:
+        if isinstance(value, Ros1Message):  # a ROS 1 package's own type, in its own bytes
+            writer.write_ros1(topic, value, t, publisher="mission")
+            continue
         writer.write_raw(topic, msgtype, raw, t, publisher="mission")
         robot = contract.robot_of_topic(topic)
         if robot is not None and topic == contract.cmd_vel(robot):

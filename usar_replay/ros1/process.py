@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import Package, build, cached_build, package_sha256
 from usar_replay.ros1.isolation import isolated_command
 
@@ -119,6 +120,8 @@ class Ros1Process(MissionProcess):
             super().__init__(
                 target, parameters, sim_topics=sim_topics, sim_frames=sim_frames, limits=limits
             )
+            # the package's own topics come back too (PoseArrays, types of its own)
+            self.boundary = Ros1BoundaryCheck(self.policy)
         except BaseException:
             self._remove_run_dir()
             raise
