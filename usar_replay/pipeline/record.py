@@ -35,6 +35,7 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.assignment import Assignment
 from usar_replay.grading.assignment import of as assignment_of
+from usar_replay.grading.stored_markers import StoredMarkers
 from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
@@ -47,6 +48,7 @@ from usar_replay.node.worker import (
     resolve_target,
 )
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.pipeline.status_line import NodeLines
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.detect import image_codecs
@@ -111,6 +113,8 @@ class RecordResult:
     found: tuple[FoundMarker, ...] = ()
     """The markers found as the rubric counts them (``usar grade`` agrees), for any mission."""
     markers_total: int = 0
+    stored_on: str = contract.MARKER_POSES
+    """The topics the stored markers were read from; where they were looked for, when none."""
 
     @property
     def mission_done(self) -> bool:
@@ -231,6 +235,9 @@ class _Run:
     frames: int = 0
     markers: dict[int, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
     last_log: str = ""
+    stored: StoredMarkers | None = None
+    """Where the mission's stored markers are read from (:mod:`..grading.stored_markers`)."""
+    node_lines: NodeLines = dataclasses.field(default_factory=NodeLines)
 
 
 def record(
@@ -272,6 +279,7 @@ def record(
             last_t=sim.now_ns,
             outcome="max_sim_time" if rs.max_sim_time_s else "time_limit",
             reason=f"stopped at {limit_s:g} s of sim time",
+            stored=StoredMarkers((m.id, (m.x, m.y, m.z)) for m in scenario.markers),
         )
         try:
             _tick_loop(
@@ -302,6 +310,7 @@ def record(
         mission=target.spec,
         found=found,
         markers_total=len(scenario.markers),
+        stored_on=run.stored.where if run.stored is not None else contract.MARKER_POSES,
     )
 
 
@@ -439,17 +448,11 @@ def _take_outputs(
         if robot is not None and topic == contract.cmd_vel(robot):
             assert isinstance(value, msgs.Twist)
             commands.append((robot, value))
-        elif topic == contract.MARKER_POSES and isinstance(value, msgs.FiducialTransformArray):
-            run.markers = {
-                f.fiducial_id: (
-                    f.transform.translation.x,
-                    f.transform.translation.y,
-                    f.transform.translation.z,
-                )
-                for f in value.transforms
-            }
+        elif run.stored is not None and run.stored.note(topic, value):
+            run.markers = dict(run.stored.by_id)
         elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
-            run.last_log = value.msg
+            run.node_lines.note(value)
+            run.last_log = run.node_lines.status()
     return commands
 
 
@@ -529,9 +532,11 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
             err = result.marker_errors_m.get(mid)
             err_s = f", error {err * 100:.1f} cm" if err is not None else ""
             lines.append(
-                f"    stored on {contract.MARKER_POSES} at "
+                f"    stored on {result.stored_on} at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
             )
+    if not result.markers_found:
+        lines.append(f"  no stored markers; looked on {result.stored_on}")
     out = file or sys.stdout
     print("\n".join(w for line in lines for w in _fit(line)), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):
