@@ -3,6 +3,7 @@
  * @brief The explorer node: finds the markers, then publishes them (latched) for the follower.
  */
 #include <geometry_msgs/PoseArray.h>
+#include <std_msgs/Int32.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
@@ -16,6 +17,7 @@ int main(int argc, char** argv) {
   tf2_ros::Buffer buffer(ros::Duration(60.0));
   tf2_ros::TransformListener listener(buffer);
   ros::Publisher stored = nh.advertise<geometry_msgs::PoseArray>("/explorer/marker_poses", 1, true);
+  ros::Publisher count = nh.advertise<std_msgs::Int32>("/explorer/stored_count", 1, true);
   usar_two_nodes::Explorer explorer(&nh, &buffer);
   std::printf("explorer node: started\n");
   std::fflush(stdout);
@@ -39,6 +41,9 @@ int main(int argc, char** argv) {
         msg.poses.push_back(pose);
       }
       stored.publish(msg);
+      std_msgs::Int32 n;
+      n.data = static_cast<int>(msg.poses.size());
+      count.publish(n);
       published = true;
       ROS_INFO("explorer: home, %zu markers on /explorer/marker_poses", msg.poses.size());
     }
