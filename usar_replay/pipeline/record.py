@@ -17,13 +17,14 @@ ended (``usar.status``: the file's state and the mission's outcome).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
 import platform
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
@@ -388,8 +389,10 @@ def _tick_loop(
     hidden = hide_from_mission(limits, str(writer.part_path))
     detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
     inputs = mission_inputs(asg, detector is not None)
-    with process(
-        target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden
+    with _attached(
+        writer,
+        run,
+        process(target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden),
     ) as proc:
         latency = rs.actuation_latency_ticks
         tick: _Observed | None = _observe(sim, scenario, asg, first)
@@ -413,6 +416,18 @@ def _tick_loop(
                 _step(sim, commands, steps_per_tick)
                 nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
             tick = nxt
+
+
+@contextlib.contextmanager
+def _attached(writer: bag.BagWriter, run: _Run, proc: MissionProcess) -> Iterator[MissionProcess]:
+    """``proc`` as a context; once it is closed (however the run ended), what it leaves for
+    the log (:meth:`MissionProcess.attachments`) is attached at the last tick's time."""
+    try:
+        with proc:
+            yield proc
+    finally:
+        for name, media_type, data in proc.attachments():
+            writer.add_attachment(name, media_type, data, run.last_t)
 
 
 def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:

@@ -23,7 +23,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core import contract
+from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
 from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import Package, build, cached_build, package_sha256
 from usar_replay.ros1.isolation import isolated_command
@@ -76,6 +79,13 @@ def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
     )
 
 
+def _text(value: Any) -> str:
+    """A parameter's value as ``usar info`` shows it (``[1.0, 2.0]``, ``0.1``, ``true``)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(list(value)) if isinstance(value, tuple) else str(value)
+
+
 class Ros1Process(MissionProcess):
     """Build ``package``, then run the bridge as the mission process (see the module doc)."""
 
@@ -91,6 +101,9 @@ class Ros1Process(MissionProcess):
         options: Ros1Options,
     ) -> None:
         self.options = options
+        self.package = package
+        self.parameters = dict(parameters)
+        self._kept: list[tuple[str, str, bytes]] = []
         self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
         try:
             if options.cache:
@@ -143,7 +156,46 @@ class Ros1Process(MissionProcess):
             # the bridge leads its own process group: whatever of the graph outlived it goes too
             with contextlib.suppress(OSError):
                 os.killpg(self._proc.pid, signal.SIGKILL)
-            self._remove_run_dir()
+            try:
+                self._kept = self._collect()
+            finally:
+                self._remove_run_dir()
+
+    def attachments(self) -> list[tuple[str, str, bytes]]:
+        """``ros1.toml`` (the package, how it was started, its nodes, the build time, the
+        parameters its nodes read, the settings that applied) and each node's stdout and
+        stderr, taken from the run's folder on close (:mod:`.run_files`)."""
+        return list(self._kept)
+
+    def _collect(self) -> list[tuple[str, str, bytes]]:
+        outputs = run_files.node_outputs(self.run_dir)
+        nodes = run_files.launch_nodes(self.run_dir)
+        if not nodes and self.options.node:
+            nodes = [
+                (f"/{label.replace('+', '/')}", self.package.name, self.options.node)
+                for label, _ in outputs
+            ]
+        given = {"/" + key.replace(".", "/"): value for key, value in self.parameters.items()}
+        read = [
+            ParameterRead(name, _text(given[name]) if name in given else "", tuple(by))
+            for name, by in run_files.parameters_read(self.run_dir).items()
+        ]
+        info = Ros1Run(
+            package=self.package.name,
+            path=self.target.path,
+            sha256=self.target.sha256,
+            launch=self.options.launch,
+            node=self.options.node,
+            build_seconds=self.built.seconds,
+            build_cached=self.built.cached,
+            nodes=tuple(Ros1Node(*row) for row in nodes),
+            parameters=tuple(read),
+            applied_settings=run_files.APPLIED_SETTINGS,
+        )
+        kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
+        prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX
+        kept += [(f"{prefix}{label}.txt", "text/plain", data) for label, data in outputs]
+        return kept
 
     def _remove_run_dir(self) -> None:
         if not self.options.keep_workspace:
