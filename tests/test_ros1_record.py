@@ -4,12 +4,15 @@ A two-node package (``examples/ros1/usar_two_nodes``: the explorer node publishe
 markers latched as a ``geometry_msgs/PoseArray`` on ``/explorer/marker_poses`` and a
 ``std_msgs/Int32`` count usar has no type for; the follower node waits for them) is built and
 recorded on the one-room world, once for the module; then the log is read as a student would:
-``usar echo``, ``usar log --node``, the summary, the report's picture.
+``usar echo``, ``usar log --node``, ``usar log --output`` (each node's stdout and stderr),
+``usar info`` (the package, its nodes, the build), the summary, the report's picture and the
+viewer's scene. The run's private files are read as untrusted (no symlink followed, bounded).
 """
 
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,6 +23,9 @@ from conftest import one_room
 from usar_replay.core import msgs, ros1msg
 from usar_replay.grading.htmlreport import collect
 from usar_replay.log.run import open_run
+from usar_replay.ros1 import run_files
+from usar_replay.ros1.build import find_package, package_sha256
+from usar_replay.viewer.scene import Scene
 from usar_replay.world.scenario_toml import save
 
 PACKAGE = Path(__file__).resolve().parents[1] / "examples" / "ros1" / "usar_two_nodes"
@@ -113,3 +119,82 @@ def test_a_repeated_line_does_not_take_the_status_line() -> None:
     assert lines.status() == "[explorer] explorer: at target_1"
     lines.note(msgs.Log(name="follower", msg="follower: to marker 0"))
     assert lines.status() == "[follower] follower: to marker 0"
+
+
+def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    got = usar("info", str(out))
+    assert got.returncode == 0, got.stderr
+    text = got.stdout
+    assert f"ROS 1 package: usar_two_nodes ({PACKAGE})" in text
+    assert f"sha256:        {package_sha256(find_package(PACKAGE))}" in text
+    assert "Started with:  roslaunch usar_two_nodes usar_two_nodes.launch" in text
+    nodes = "/explorer (usar_two_nodes/explorer_node), /follower (usar_two_nodes/follower_node)"
+    assert f"Nodes:         {nodes}" in text
+    assert re.search(r"^Build: +\d+\.\d s \(catkin_make, wall time\)$", text, re.M), text
+    # settings: only those usar applied (not the Python mission's own, such as settle_frames)
+    settings = text.split("Settings (those that applied to the ROS 1 run):\n")[1]
+    settings = settings.split("Parameters the package's nodes read:\n")[0]
+    assert "  record.control_hz = 20 Hz" in settings
+    assert "  mission.xy_tolerance = 0.05 m" in settings
+    assert "settle_frames" not in settings and "mission.spin_speed" not in settings
+    # what the nodes read: usar's values, a parameter usar did not set, no ROS internals
+    assert "  /mission/settle_frames = 5  (/explorer)" in text  # the explorer reads it
+    assert "  /usar_two_nodes/standoff = not set (the node's default)  (/follower)" in text
+    assert "/tcp_keepalive" not in text and "/use_sim_time" not in text
+    assert all(len(line) <= 100 for line in text.splitlines())
+
+
+def test_log_output_shows_each_nodes_stdout_and_stderr(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    got = usar("log", str(out), "--output", "--node", "explorer")
+    assert got.returncode == 0, got.stderr
+    lines = got.stdout.splitlines()
+    assert lines[0] == "--- /explorer: stdout and stderr ---"
+    assert "explorer node: started" in lines  # printf on stdout
+    assert "explorer node: a line on stderr" in lines  # fprintf on stderr
+    assert any(
+        line.endswith("explorer: home, 1 markers on /explorer/marker_poses") for line in lines
+    )
+    assert "\x1b" not in got.stdout and "follower" not in got.stdout.replace("/explorer", "")
+    both = usar("log", str(out), "--output").stdout
+    assert "--- /follower: stdout and stderr ---" in both
+    assert "follower: mission complete" in both
+    missing = usar("log", str(out), "--output", "--node", "nobody")
+    assert missing.returncode == 2
+    assert "no output of node /nobody kept; the nodes': /explorer, /follower" in missing.stderr
+
+
+def test_view_shows_the_stored_pose_array(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    run = open_run(out)
+    scene = Scene(run.scenario)
+    for m in run.messages():
+        scene.feed(m.topic, m.msg, m.log_time_ns)
+    rows = scene.stored_markers
+    assert rows.lengths == [1] and rows.labels == ["stored 0"]
+    assert abs(rows.items[0][0] - 1.994) < 0.01 and abs(rows.items[0][1] - 0.401) < 0.01
+
+
+def test_the_run_folder_is_read_as_untrusted(tmp_path: Path) -> None:
+    """A node's output is bounded (its start and end kept, the cut said); a symlink or a hard
+    link planted in the run's folder is not followed, a bad name not taken."""
+    secret = tmp_path / "secret"
+    secret.write_text("not the node's\n")
+    output = tmp_path / "run" / run_files.OUTPUT_DIR
+    output.mkdir(parents=True)
+    big = b"first line\n" + b"x" * 1_000_000 + b"\nlast\n"
+    (output / "explorer.out").write_bytes(big)
+    (output / "planted.out").symlink_to(secret)
+    os.link(secret, output / "linked.out")
+    (output / "bad name.out").write_text("x")
+    kept = dict(run_files.node_outputs(tmp_path / "run"))
+    assert list(kept) == ["explorer"]
+    text = kept["explorer"]
+    assert text.startswith(b"first line\n") and text.endswith(b"\nlast\n")
+    assert len(text) < run_files.OUTPUT_HEAD + run_files.OUTPUT_TAIL + 200
+    assert b"[usar: 934481 bytes of this node's output left out here" in text
+    # the whole output folder replaced by a symlink: nothing is read through it
+    os.rename(output, tmp_path / "elsewhere")
+    output.symlink_to(tmp_path / "elsewhere")
+    assert run_files.node_outputs(tmp_path / "run") == []
