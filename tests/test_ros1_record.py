@@ -198,3 +198,22 @@ def test_the_run_folder_is_read_as_untrusted(tmp_path: Path) -> None:
     os.rename(output, tmp_path / "elsewhere")
     output.symlink_to(tmp_path / "elsewhere")
     assert run_files.node_outputs(tmp_path / "run") == []
+
+
+def test_a_crash_reason_shows_the_nodes_lines_without_usars_prefix(tmp_path: Path) -> None:
+    """roslaunch reports a dead node with its command, usar's prefix included: the reason
+    shows the student's command, and each node's last lines from its own file."""
+    from usar_replay.ros1.launch_output import _prefix, without_prefix
+
+    out = tmp_path / run_files.OUTPUT_DIR
+    out.mkdir()
+    (out / "follower.out").write_text("follower: starting\nfollower: cannot go on\n")
+    cmd = " ".join([*_prefix(str(out / "follower.out")), "/ws/follower_node", "__name:=follower"])
+    died = f"process has died [pid 46, exit code 3, cmd {cmd}]."
+    assert without_prefix(died) == (
+        "process has died [pid 46, exit code 3, cmd /ws/follower_node __name:=follower]."
+    )
+    assert (
+        run_files.node_tails(out)
+        == "[follower] follower: starting\n[follower] follower: cannot go on\n"
+    )

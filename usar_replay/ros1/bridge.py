@@ -55,7 +55,7 @@ from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
-from usar_replay.ros1.launch_output import launch_command, rosrun_command
+from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
 
@@ -125,14 +125,14 @@ class Graph:
         for line in _tail(self.log_path, 400).splitlines():  # roslaunch's own lines
             died = _DIED.search(line)
             if died and int(died.group(1)) != 0:
-                return code, line.strip()
+                return code, without_prefix(line.strip())
         return code, ""
 
     def tail(self, lines: int = 40) -> str:
         """The nodes' last output lines (``[node] line``), then roslaunch's (terminal colours
         removed)."""
         text = run_files.node_tails(self.output_dir, lines) + _tail(self.log_path, lines)
-        return _ANSI.sub("", text)
+        return without_prefix(_ANSI.sub("", text))
 
     def stop(self) -> None:
         if self.proc.poll() is None:

@@ -19,18 +19,30 @@ recorder reads them as untrusted (:mod:`usar_replay.ros1.run_files`).
 from __future__ import annotations
 
 import os
+import re
 import shlex
 import sys
 from pathlib import Path
 from typing import Any
 
-__all__ = ["OUTPUT_SUFFIX", "file_label", "launch_command", "rosrun_command"]
+__all__ = ["OUTPUT_SUFFIX", "file_label", "launch_command", "rosrun_command", "without_prefix"]
 
 OUTPUT_SUFFIX = ".out"
 STDBUF = "/usr/bin/stdbuf"
 _REDIRECT = 'exec "$@" >>"$0" 2>&1'
 """``sh -c`` body: ``$0`` is the output file, the rest the node's command (exec: same pid, so
 roslaunch sees the node's own exit code)."""
+
+
+_SHOWN_PREFIX = re.compile(
+    r"(?:" + re.escape(STDBUF) + r" -oL )?/bin/sh -c " + re.escape(_REDIRECT) + r" \S+ "
+)
+
+
+def without_prefix(text: str) -> str:
+    """roslaunch's lines (``process has died [..., cmd ...]``) without usar's prefix: the
+    node's command as the student wrote it."""
+    return _SHOWN_PREFIX.sub("", text)
 
 
 def file_label(node_name: str) -> str:
