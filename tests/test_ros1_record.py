@@ -217,3 +217,25 @@ def test_a_crash_reason_shows_the_nodes_lines_without_usars_prefix(tmp_path: Pat
         run_files.node_tails(out)
         == "[follower] follower: starting\n[follower] follower: cannot go on\n"
     )
+
+
+def test_the_masters_log_gives_the_parameters_read_and_the_nodes(tmp_path: Path) -> None:
+    """From the master's API log: the parameters the package's nodes read (not usar's own
+    node's, not those every roscpp node reads) and the nodes that registered (for rosrun)."""
+    head = "[rosmaster.master][DEBUG] 2026-11-24 05:40:00,123: "
+    calls = [
+        "setParam('/usar_sim', '/mission/spin_speed', 0.1)",
+        "getParam('/usar_sim', '/mission/xy_tolerance')",
+        "getParam('/explorer', '/use_sim_time')",
+        "getParam('/explorer', '/mission/spin_speed')",
+        "hasParam('/follower', '/mission/spin_speed')",
+        "getParam('/follower', '/follower/move_base/actionlib_client_sub_queue_size')",
+        "registerPublisher('/explorer', '/explorer/cmd_vel', 'geometry_msgs/Twist', 'http://x/')",
+        "registerSubscriber('/usar_sim', '/tf', 'tf2_msgs/TFMessage', 'http://y/')",
+        "getSystemState('/usar_sim',)",
+    ]
+    (tmp_path / run_files.MASTER_LOG).write_text("".join(head + c + "\n" for c in calls))
+    assert run_files.parameters_read(tmp_path) == {
+        "/mission/spin_speed": ["/explorer", "/follower"]
+    }
+    assert run_files.registered_nodes(tmp_path) == ["/explorer"]

@@ -30,6 +30,7 @@ from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import Package, build, cached_build, package_sha256
 from usar_replay.ros1.isolation import isolated_command
+from usar_replay.ros1.launch_output import file_label
 
 __all__ = ["Ros1Options", "Ros1Process", "ros1_target"]
 
@@ -170,11 +171,11 @@ class Ros1Process(MissionProcess):
     def _collect(self) -> list[tuple[str, str, bytes]]:
         outputs = run_files.node_outputs(self.run_dir)
         nodes = run_files.launch_nodes(self.run_dir)
-        if not nodes and self.options.node:
-            nodes = [
-                (f"/{label.replace('+', '/')}", self.package.name, self.options.node)
-                for label, _ in outputs
-            ]
+        if self.options.node:  # rosrun: the nodes as they registered with the master
+            names = run_files.registered_nodes(self.run_dir)
+            nodes = [(name, self.package.name, self.options.node) for name in names]
+            if len(names) == 1:  # the executable's output is that node's
+                outputs = [(file_label(names[0]), data) for _, data in outputs[:1]]
         given = {"/" + key.replace(".", "/"): value for key, value in self.parameters.items()}
         read = [
             ParameterRead(name, _text(given[name]) if name in given else "", tuple(by))

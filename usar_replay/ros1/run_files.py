@@ -16,7 +16,8 @@ The files:
   (:mod:`.launch_output`);
 * :data:`NODES_FILE`: the launch file's nodes, one ``name TAB package TAB type`` per line;
 * :data:`MASTER_LOG`: the ROS master's log of every API call, from which the parameters each
-  node read (``getParam``, ``hasParam``, ``searchParam``, ``subscribeParam``) are taken.
+  node read (``getParam``, ``hasParam``, ``searchParam``, ``subscribeParam``) and the nodes that
+  registered (for ``rosrun``, which has no launch file to list them) are taken.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ __all__ = [
     "node_outputs",
     "node_tails",
     "parameters_read",
+    "registered_nodes",
 ]
 
 OUTPUT_DIR = "output"
@@ -62,8 +64,9 @@ offered them as ``/mission/*`` parameters, and ``usar info`` lists those its nod
 
 _LABEL = re.compile(r"[A-Za-z0-9_.+-]{1,200}")
 _NODE_NAME = re.compile(r"/[A-Za-z0-9_/~]{0,200}")
-_PARAM_CALL = re.compile(
-    r"\b(?:getParam|hasParam|searchParam|subscribeParam)\('([^'\s]{1,200})', '([^'\s]{1,200})'"
+_MASTER_CALL = re.compile(
+    r"\b(getParam|hasParam|searchParam|subscribeParam|registerPublisher|registerSubscriber"
+    r"|registerService)\('([^'\s]{1,200})', '([^'\s]{1,200})'"
 )
 _ROS_INTERNAL = re.compile(
     r"/(use_sim_time|enable_statistics|tcp_keepalive|rosout_disable_topics_generation"
@@ -170,20 +173,36 @@ def launch_nodes(run_dir: Path) -> list[tuple[str, str, str]]:
     return rows[:MAX_NODES]
 
 
-def parameters_read(run_dir: Path) -> dict[str, list[str]]:
-    """The parameters the package's nodes asked the master for: name -> the nodes, sorted
-    (not those every ROS node reads by itself, such as ``/use_sim_time``)."""
+def _master_calls(run_dir: Path) -> list[tuple[str, str, str]]:
+    """(method, caller, first argument) of each parameter read and registration the master
+    logged, by a caller that is one of the package's nodes."""
     half = _MASTER_LOG_CAP // 2
     with _dir(run_dir) as fd:
         got = None if fd is None else _read(fd, MASTER_LOG, half, half)
     if got is None:
-        return {}
+        return []
     text = (got[0] + b"\n" + got[1]).decode("utf-8", errors="replace")
+    return [
+        (method, caller, key)
+        for method, caller, key in _MASTER_CALL.findall(text)
+        if not caller.startswith(_NOT_NODES) and _NODE_NAME.fullmatch(caller)
+    ]
+
+
+def parameters_read(run_dir: Path) -> dict[str, list[str]]:
+    """The parameters the package's nodes asked the master for: name -> the nodes, sorted
+    (not those every ROS node reads by itself, such as ``/use_sim_time``)."""
     read: dict[str, set[str]] = {}
-    for caller, key in _PARAM_CALL.findall(text):
-        if caller.startswith(_NOT_NODES) or not _NODE_NAME.fullmatch(key):
+    for method, caller, key in _master_calls(run_dir):
+        if method.startswith("register") or not _NODE_NAME.fullmatch(key):
             continue
-        if _ROS_INTERNAL.fullmatch(key):
-            continue
-        read.setdefault(key, set()).add(caller)
+        if not _ROS_INTERNAL.fullmatch(key):
+            read.setdefault(key, set()).add(caller)
     return {key: sorted(nodes) for key, nodes in sorted(read.items())}
+
+
+def registered_nodes(run_dir: Path) -> list[str]:
+    """The package's nodes as they registered with the master (a publisher, a subscriber or a
+    service), sorted."""
+    names = {caller for method, caller, _ in _master_calls(run_dir) if method.startswith("reg")}
+    return sorted(names)[:MAX_NODES]
