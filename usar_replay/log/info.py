@@ -92,7 +92,10 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
         # a run that ended before its package ran (build_failed): mission.toml only
         lines = _field("ROS 1 package", run.mission.module.removeprefix("ros1:"))
         lines += _field("sha256", run.mission.sha256 or "(not recorded)")
-        return lines + _field("Started with", run.mission.target)
+        lines += _field("Started with", run.mission.target)
+        if run.outcome == "build_failed":
+            lines += _field("Build", "failed: none of the package's nodes ran")
+        return lines
     lines = _field("ROS 1 package", f"{ros1.package} ({ros1.path})" if ros1.path else ros1.package)
     lines += _field("sha256", ros1.sha256 or "(not recorded)")
     lines += _field("Started with", ros1.started_with)
