@@ -35,6 +35,7 @@ __all__ = [
     "MARKER_FRAME",
     "MARKER_POSES",
     "MISSION_ATTACHMENT",
+    "NODE_OUTPUT_ATTACHMENT_PREFIX",
     "OPTICAL_FRAME",
     "ARUCO_MARKERS",
     "MISSION_ARUCO_MARKERS",
@@ -42,6 +43,7 @@ __all__ = [
     "FINAL_DESTINATION_FRAME",
     "ORIGIN_FRAMES",
     "ROBOTS",
+    "ROS1_ATTACHMENT",
     "ROS2_BASE_FRAME",
     "ROS2_CAMERA_FRAME",
     "ROS2_CAMERA_INFO",
@@ -269,6 +271,11 @@ SETTINGS_ATTACHMENT = "settings.toml"
 it."""
 MISSION_ATTACHMENT = "mission.toml"
 """MCAP attachment: which mission code ran (target, module, sha256 of its source)."""
+ROS1_ATTACHMENT = "ros1.toml"
+"""MCAP attachment of a ROS 1 run: the package, how it was started, its nodes, the build time,
+the parameters its nodes read, the settings that applied (:mod:`usar_replay.log.ros1_run`)."""
+NODE_OUTPUT_ATTACHMENT_PREFIX = "ros1/output/"
+"""MCAP attachments of a ROS 1 run: each node's stdout and stderr (``ros1/output/<node>.txt``)."""
 RUN_METADATA = "usar.run"
 """MCAP metadata: software and library versions, renderer: facts about the machine."""
 STATUS_METADATA = "usar.status"

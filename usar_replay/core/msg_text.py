@@ -16,6 +16,7 @@ blank output. Pure: message values in, lines out.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ __all__ = [
     "field_path",
     "message_lines",
     "path_lines",
+    "value_lines",
 ]
 
 WIDTH = 100
@@ -110,6 +112,12 @@ def message_lines(value: Message, *, width: int = WIDTH, full: bool = False) -> 
     return _Printer(width, full).fields(value, 0)
 
 
+def value_lines(value: Any, *, width: int = WIDTH, full: bool = False) -> list[str]:
+    """:func:`message_lines` of a message usar has no type for (rosbags' dataclass value of a
+    ROS 1 message kept as its own bytes): each field's kind is read off its value."""
+    return _ValuePrinter(width, full).fields(value, 0)
+
+
 def path_lines(
     path: FieldPath, value: Message, *, width: int = WIDTH, full: bool = False
 ) -> list[str]:
@@ -178,6 +186,38 @@ class _Printer:
                 line += ("" if line.endswith("[") else " ") + piece
         lines.append(line)
         return lines
+
+
+class _ValuePrinter(_Printer):
+    """The same layout for a value whose class is not a :class:`Message` (rosbags')."""
+
+    def fields(self, value: Any, indent: int) -> list[str]:
+        out: list[str] = []
+        for f in dataclasses.fields(value):
+            if not f.name.startswith("_"):
+                item = getattr(value, f.name)
+                out += self.keyed(f.name, _kind_of(item), item, indent)
+        return out or [" " * indent + "{}"]
+
+
+def _kind_of(value: Any) -> FieldKind:
+    """A rosbags field's kind, from its value (numpy arrays of numbers, lists of messages)."""
+    if dataclasses.is_dataclass(value):
+        return "msg"
+    dtype = getattr(value, "dtype", None)
+    if dtype is not None:
+        if dtype.kind in "ui" and dtype.itemsize == 1:
+            return "bytes"
+        return "floats" if dtype.kind == "f" else "ints"
+    if isinstance(value, list | tuple):
+        if value and dataclasses.is_dataclass(value[0]):
+            return "msgs"
+        return "floats" if any(isinstance(v, float) for v in value) else "ints"
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, str):
+        return "str"
+    return "float" if isinstance(value, float) else "int"
 
 
 def _scalar(value: Any) -> str:

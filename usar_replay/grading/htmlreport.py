@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 from usar_replay import __version__
 from usar_replay.core import contract, msgs
 from usar_replay.grading.labels import Label, diameter_pt, place
+from usar_replay.grading.stored_markers import StoredMarkers, is_marker_topic
 from usar_replay.grading.verdict import Check, GradeReport
 from usar_replay.log.run import Run
 from usar_replay.world.assignment import Assignment
@@ -92,7 +93,10 @@ class RunPicture:
     paths: dict[str, list[tuple[int, float, float]]] = field(default_factory=dict)
     """robot -> [(log time, x, y)] from ground truth."""
     stored: dict[int, tuple[float, float]] = field(default_factory=dict)
-    """Marker ID -> stored (x, y) in ``map``, the mission's last ``marker_poses``."""
+    """Marker ID -> stored (x, y) in ``map``, the mission's last stored markers
+    (:mod:`usar_replay.grading.stored_markers`: its ``marker_poses``, or a pose topic)."""
+    stored_on: str = ""
+    """The topics they came from; where they were looked for, when none."""
     detections: list[Detection] = field(default_factory=list)
 
     def position(self, robot: str, t_ns: int) -> tuple[float, float] | None:
@@ -135,7 +139,10 @@ def collect(run: Run) -> RunPicture:
     info: msgs.CameraInfo | None = None
     marker_size = run.settings.detector.marker_size
     detectors = [contract.FIDUCIALS, contract.ARUCO_MARKERS]
-    topics = [*truth, contract.MARKER_POSES, asg.image_topic, *detectors, asg.camera_info_topic]
+    scenario = run.require_scenario()
+    stored = StoredMarkers((m.id, (m.x, m.y, m.z)) for m in scenario.markers)
+    marker_topics = [t for t, info in run.topics.items() if is_marker_topic(t, info.msgtype)]
+    topics = [*truth, *marker_topics, asg.image_topic, *detectors, asg.camera_info_topic]
     for m in run.messages(topics):
         msg = m.msg
         if isinstance(msg, msgs.CameraInfo):
@@ -164,10 +171,10 @@ def collect(run: Run) -> RunPicture:
                             (0, 0) if info is None else (info.width, info.height),
                         )
                     )
-        elif m.topic == contract.MARKER_POSES and isinstance(msg, msgs.FiducialTransformArray):
-            for f in msg.transforms:
-                pic.stored[f.fiducial_id] = (f.transform.translation.x, f.transform.translation.y)
+        elif msg is not None and m.publisher != "sim" and stored.note(m.topic, msg):
+            pic.stored = {mid: (p[0], p[1]) for mid, p in stored.by_id.items()}
     pic.detections.sort(key=lambda d: d.marker_id)
+    pic.stored_on = stored.where
     return pic
 
 
@@ -398,6 +405,11 @@ def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
         "<p class='muted'>Walls grey, obstacles brown, true markers green, stored markers "
         "orange; squares are the robots' starts. Numbered circles: where the robot was at each "
         "rubric line's evidence time (green passed, red failed).</p>"
+        + (
+            f"<p class='muted'>Stored markers from {e(pic.stored_on)}.</p>"
+            if pic.stored
+            else f"<p class='muted'>No stored markers; looked on {e(pic.stored_on)}.</p>"
+        )
     )
     rows = [
         "<tr><th>#</th><th></th><th>rubric line</th><th>measured</th><th>needed</th>"

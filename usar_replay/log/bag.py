@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from usar_replay import __version__
-from usar_replay.core import contract, msgs
+from usar_replay.core import contract, msgs, ros1msg
 from usar_replay.core.cdr import decode, encode, schema_text, typestore
 from usar_replay.core.errors import LogError, NotAnMcapFile, UsageError
 from usar_replay.log import mcapfile
@@ -256,6 +256,33 @@ class BagWriter:
         for w in self._watchers:
             if topic in w.topics and publisher in w.only_from.get(topic, (publisher,)):
                 w.callback(topic, _decoded(topic, msgtype, log_time_ns, data), log_time_ns)
+
+    def write_ros1(
+        self, topic: str, message: ros1msg.Ros1Message, log_time_ns: int, *, publisher: str
+    ) -> None:
+        """Append a ROS 1 message as it was on the wire: a channel in MCAP's ``ros1`` message
+        encoding with a ``ros1msg`` schema named ``pkg/Type`` (:mod:`usar_replay.core.ros1msg`;
+        Foxglove reads it), for a type usar has no ROS 2 value for."""
+        key = (topic, publisher)
+        if key not in self._channels:
+            schema_key = f"{message.msgtype}\n{message.definition}"
+            schema_id = self._schemas.get(schema_key)
+            if schema_id is None:
+                schema_id = self._writer.register_schema(
+                    name=message.msgtype,
+                    encoding=ros1msg.SCHEMA_ENCODING,
+                    data=message.definition.encode(),
+                )
+                self._schemas[schema_key] = schema_id
+            channel_id = self._writer.register_channel(
+                topic=topic,
+                message_encoding=ros1msg.MESSAGE_ENCODING,
+                schema_id=schema_id,
+                metadata={PUBLISHER_KEY: publisher},
+            )
+            self._channels[key] = (channel_id, message.msgtype)
+            self._sequence[key] = 0
+        self.write_raw(topic, message.msgtype, message.data, log_time_ns, publisher=publisher)
 
     def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
         """A metadata record (string map), e.g. the run's settings."""
@@ -697,6 +724,14 @@ class BagReader:
                     _decoded(info.topic, info.msgtype, t, data) if decode_messages else None,
                     info.publisher,
                 )
+
+    def ros1_definition(self, topic: str) -> tuple[str, str] | None:
+        """(``pkg/Type``, full definition) of a topic kept in ROS 1's own encoding
+        (:meth:`BagWriter.write_ros1`); None for any other topic."""
+        for ch in self._layout.channels.values():
+            if ch.topic == topic and ch.msgtype in self._layout.ros1_definitions:
+                return ch.msgtype, self._layout.ros1_definitions[ch.msgtype]
+        return None
 
     def publishers(self, topic: str) -> frozenset[str]:
         """Who published ``topic`` in this log (its channels' ``usar.publisher``s)."""

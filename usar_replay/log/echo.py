@@ -22,8 +22,8 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from usar_replay.core import msg_text, msgs
-from usar_replay.core.errors import IncompleteLog, UsageError
+from usar_replay.core import msg_text, msgs, ros1msg
+from usar_replay.core.errors import IncompleteLog, LogError, UsageError
 from usar_replay.log.run import Run
 
 __all__ = ["EchoRequest", "blocks", "find_topic"]
@@ -73,6 +73,8 @@ def _paths(run: Run, topic: str, fields: Sequence[str]) -> list[msg_text.FieldPa
     if not fields:
         return []
     msgtype = run.topics[topic].msgtype
+    if run.reader.ros1_definition(topic) is not None:
+        raise UsageError(f"--fields: {topic} is a ROS 1 {msgtype}; echo it without --fields")
     try:
         cls = msgs.message_class(msgtype)
     except KeyError:
@@ -95,9 +97,12 @@ def blocks(run: Run, request: EchoRequest) -> Iterator[list[str]]:
     paths = _paths(run, topic, request.fields)
     end = None if request.until_ns is None else request.until_ns + 1
     width, full = request.width, request.full
+    ros1 = run.reader.ros1_definition(topic)
     for m in run.messages([topic], request.since_ns, end):
         lines = [f"# {m.log_time_ns / 1e9:.3f} s"]
-        if m.msg is None:
+        if m.msg is None and ros1 is not None:
+            lines += _ros1_lines(topic, m.log_time_ns, ros1, m.data, width, full)
+        elif m.msg is None:
             lines.append(f"# {m.msgtype}: a type usar-replay cannot decode ({len(m.data):,} bytes)")
         elif paths:
             for path in paths:
@@ -106,3 +111,17 @@ def blocks(run: Run, request: EchoRequest) -> Iterator[list[str]]:
             lines += msg_text.message_lines(m.msg, width=width, full=full)
         lines.append("---")
         yield lines
+
+
+def _ros1_lines(
+    topic: str, t_ns: int, ros1: tuple[str, str], data: bytes, width: int, full: bool
+) -> list[str]:
+    """A message a ROS 1 package published in a type of its own, read with its recorded
+    definition (:mod:`usar_replay.core.ros1msg`)."""
+    try:
+        value = ros1msg.decode(*ros1, data)
+    except Exception as err:  # noqa: BLE001 - any decoding failure is the log's
+        raise LogError(
+            f"message on {topic} at {t_ns / 1e9:.3f} s cannot be decoded as {ros1[0]}: {err}"
+        ) from None
+    return msg_text.value_lines(value, width=width, full=full)

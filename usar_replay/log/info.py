@@ -20,6 +20,7 @@ from usar_replay.core.contract import SCENARIO_ATTACHMENT
 
 # Re-exported for record.py, which still imports it from here (contract.py is its home).
 from usar_replay.core.safe_text import safe_line
+from usar_replay.log import ros1_run
 from usar_replay.log.run import Run, open_run
 
 __all__ = ["SCENARIO_ATTACHMENT", "describe", "is_whole", "open_checked"]
@@ -84,6 +85,31 @@ def _advice(run: Run) -> str:
     return ""
 
 
+def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
+    """What a ROS 1 run's package was: name, sha256, how started, nodes, build, output kept."""
+    if ros1 is None:
+        if not run.mission.module.startswith("ros1:"):
+            return []
+        # a run that ended before its package ran (build_failed): mission.toml only
+        lines = _field("ROS 1 package", run.mission.module.removeprefix("ros1:"))
+        lines += _field("sha256", run.mission.sha256 or "(not recorded)")
+        lines += _field("Started with", run.mission.target)
+        if run.outcome == "build_failed":
+            lines += _field("Build", "failed: none of the package's nodes ran")
+        return lines
+    lines = _field("ROS 1 package", f"{ros1.package} ({ros1.path})" if ros1.path else ros1.package)
+    lines += _field("sha256", ros1.sha256 or "(not recorded)")
+    lines += _field("Started with", ros1.started_with)
+    nodes = [f"{n.name} ({n.package}/{n.type})" if n.type else n.name for n in ros1.nodes]
+    lines += _field("Nodes", ", ".join(nodes) or "(none started)")
+    lines += _field("Build", ros1.build)
+    kept = ros1_run.node_outputs(run)
+    if kept:
+        text = f"{', '.join(kept)}: `usar log {run.path} --output [--node NAME]`"
+        lines += _field("Node output", text)
+    return lines
+
+
 def describe(run: Run, *, quick: bool = False) -> str:
     """The human-readable report printed by ``usar info`` (every line within 100 columns)."""
     reader = run.reader
@@ -123,8 +149,22 @@ def describe(run: Run, *, quick: bool = False) -> str:
         lines += [f"  {line}"[:WIDTH] for line in run.scenario.summary().splitlines()]
     else:
         lines.append("  (no scenario attached)")
-    lines.append("Settings:" if run.settings_recorded else "Settings (not recorded; defaults):")
-    lines += [f"  {k} = {v}"[:WIDTH] for k, v in settings.describe(run.settings)]
+    ros1 = ros1_run.of(run)
+    lines += _ros1_lines(run, ros1)
+    rows = settings.describe(run.settings)
+    if ros1 is not None and ros1.applied_settings:
+        lines.append("Settings (those that applied to the ROS 1 run):")
+        rows = [(k, v) for k, v in rows if ros1.applies(k)]
+    else:
+        lines.append("Settings:" if run.settings_recorded else "Settings (not recorded; defaults):")
+    lines += [f"  {k} = {v}"[:WIDTH] for k, v in rows]
+    if ros1 is not None:
+        lines.append("Parameters the package's nodes read:")
+        for p in ros1.parameters:
+            value = p.value or "not set (the node's default)"
+            lines.append(f"  {p.name} = {value}  ({', '.join(p.read_by)})"[:WIDTH])
+        if not ros1.parameters:
+            lines.append("  (none)")
     if run.run_metadata:
         lines.append("Recorded with:")
         meta = sorted((k, v) for k, v in run.run_metadata.items() if k != "mission_settings")

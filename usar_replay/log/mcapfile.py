@@ -117,6 +117,9 @@ class Layout:
     chunks: list[ChunkRef] = field(default_factory=list)
     channels: dict[int, ChannelInfo] = field(default_factory=dict)
     schemas: dict[int, str] = field(default_factory=dict)
+    ros1_definitions: dict[str, str] = field(default_factory=dict)
+    """``pkg/Type`` -> full definition, for the ``ros1msg`` schemas (a ROS 1 package's own
+    types, kept in their own encoding)."""
     channel_counts: dict[int, int] = field(default_factory=dict)
     message_count: int | None = None
     start_ns: int = 0
@@ -232,6 +235,13 @@ def read_summary(f: IO[bytes], size: int) -> Layout | None:
     return layout
 
 
+def _note_schema(layout: Layout, rec: Schema) -> None:
+    """A schema record: its name, and a ``ros1msg`` schema's definition."""
+    layout.schemas[rec.id] = rec.name
+    if rec.encoding == "ros1msg":
+        layout.ros1_definitions[rec.name] = bytes(rec.data).decode("utf-8", errors="replace")
+
+
 def _fill_from_summary(f: IO[bytes], size: int, section: bytes, base: int, layout: Layout) -> None:
     channels: list[Channel] = []
     pos = 0
@@ -244,7 +254,7 @@ def _fill_from_summary(f: IO[bytes], size: int, section: bytes, base: int, layou
             raise Broken(base + pos, "the summary is damaged")
         rec = _parse(opcode, body, base + pos)
         if isinstance(rec, Schema):
-            layout.schemas[rec.id] = rec.name
+            _note_schema(layout, rec)
         elif isinstance(rec, Channel):
             channels.append(rec)
         elif isinstance(rec, Statistics):
@@ -397,7 +407,7 @@ def chunk_messages(
         elif opcode == Opcode.SCHEMA:
             rec = _parse(opcode, data[pos + 9 : end], ref.offset)
             assert isinstance(rec, Schema)
-            schemas[rec.id] = rec.name
+            _note_schema(layout, rec)
         elif opcode == Opcode.CHANNEL:
             rec = _parse(opcode, data[pos + 9 : end], ref.offset)
             assert isinstance(rec, Channel)
@@ -484,7 +494,7 @@ def scan(f: IO[bytes], size: int) -> Layout:
                 layout.stopped_at = pos
                 break
             if isinstance(rec, Schema):
-                schemas[rec.id] = rec.name
+                _note_schema(layout, rec)
             elif isinstance(rec, Channel):
                 layout.channels.setdefault(
                     rec.id,

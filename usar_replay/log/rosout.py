@@ -91,7 +91,7 @@ def lines(run: Run, request: LogRequest) -> Iterator[str]:
             raise UsageError(f"{run.path}: no node logged anything (no {contract.ROSOUT})")
         return
     seen: set[str] = set()
-    wanted = set(request.nodes)
+    wanted = {n.lstrip("/") for n in request.nodes}  # a ROS 1 name (/explorer) finds it too
     since, until = request.since_ns, request.until_ns
     for _topic, entry, t in run.reader.decoded([contract.ROSOUT]):
         if not isinstance(entry, msgs.Log):
@@ -99,10 +99,11 @@ def lines(run: Run, request: LogRequest) -> Iterator[str]:
         seen.add(entry.name)
         if (since is not None and t < since) or (until is not None and t > until):
             continue
-        if entry.level < request.level or (wanted and entry.name not in wanted):
+        if entry.level < request.level or (wanted and entry.name.lstrip("/") not in wanted):
             continue
         yield from entry_lines(t, entry, request.width)
-    missing = [n for n in request.nodes if n not in seen]
+    seen_names = {n.lstrip("/") for n in seen}
+    missing = [n for n in request.nodes if n.lstrip("/") not in seen_names]
     if missing:
         raise UsageError(
             f"{run.path}: no node {missing[0]} in {contract.ROSOUT}; the nodes that logged: "

@@ -532,6 +532,11 @@ class MissionProcess:
     def __enter__(self) -> MissionProcess:
         return self
 
+    def attachments(self) -> list[tuple[str, str, bytes]]:
+        """Files the process leaves for the log, as (name, media type, bytes), asked once it
+        is closed (none for a Python mission; the ROS 1 bridge's: its nodes' output)."""
+        return []
+
     def __exit__(self, *exc: object) -> None:
         self.close()
 

@@ -21,23 +21,26 @@ watches the writer): the status line and the summary count markers as ``usar gra
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
 import platform
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
 from usar_replay import __version__
 from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.ros1msg import Ros1Message
 from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings, Thresholds
 from usar_replay.core.settings import to_toml as settings_to_toml
 from usar_replay.grading.grade import LiveGrade
+from usar_replay.grading.stored_markers import StoredMarkers
 from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
@@ -50,6 +53,7 @@ from usar_replay.node.worker import (
     resolve_target,
 )
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.pipeline.status_line import NodeLines
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.assignment import Assignment
@@ -121,6 +125,8 @@ class RecordResult:
     build: str = ""
     """A ROS 1 package's build, apart from the run's wall time (``catkin_make 14.2 s``,
     ``cached``, ``failed``); '' for a Python mission."""
+    stored_on: str = contract.MARKER_POSES
+    """The topics the stored markers were read from; where they were looked for, when none."""
 
     @property
     def mission_done(self) -> bool:
@@ -243,6 +249,9 @@ class _Run:
     last_log: str = ""
     live: LiveGrade | None = None
     """The rubric fed as the log is written: the status line's marker count."""
+    stored: StoredMarkers | None = None
+    """Where the mission's stored markers are read from (:mod:`..grading.stored_markers`)."""
+    node_lines: NodeLines = dataclasses.field(default_factory=NodeLines)
 
 
 def record(
@@ -290,6 +299,7 @@ def record(
             outcome="max_sim_time" if rs.max_sim_time_s else "time_limit",
             reason=f"stopped at {limit_s:g} s of sim time",
             live=live,
+            stored=StoredMarkers((m.id, (m.x, m.y, m.z)) for m in scenario.markers),
         )
         try:
             _tick_loop(
@@ -320,6 +330,7 @@ def record(
         found=live.found_markers(),
         markers_total=len(scenario.markers),
         grade=live,
+        stored_on=run.stored.where if run.stored is not None else contract.MARKER_POSES,
     )
 
 
@@ -397,8 +408,10 @@ def _tick_loop(
     hidden = hide_from_mission(limits, str(writer.part_path))
     detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
     inputs = mission_inputs(asg, detector is not None)
-    with process(
-        target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden
+    with _attached(
+        writer,
+        run,
+        process(target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden),
     ) as proc:
         latency = rs.actuation_latency_ticks
         tick: _Observed | None = _observe(sim, scenario, asg, first)
@@ -422,6 +435,18 @@ def _tick_loop(
                 _step(sim, commands, steps_per_tick)
                 nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
             tick = nxt
+
+
+@contextlib.contextmanager
+def _attached(writer: bag.BagWriter, run: _Run, proc: MissionProcess) -> Iterator[MissionProcess]:
+    """``proc`` as a context; once it is closed (however the run ended), what it leaves for
+    the log (:meth:`MissionProcess.attachments`) is attached at the last tick's time."""
+    try:
+        with proc:
+            yield proc
+    finally:
+        for name, media_type, data in proc.attachments():
+            writer.add_attachment(name, media_type, data, run.last_t)
 
 
 def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:
@@ -451,21 +476,18 @@ def _take_outputs(
     if detector is not None:
         detector.note_outputs((topic, value) for topic, _, _, value in outputs)
     for topic, msgtype, raw, value in outputs:
+        if isinstance(value, Ros1Message):  # a ROS 1 package's own type, in its own bytes
+            writer.write_ros1(topic, value, t, publisher="mission")
+            continue
         writer.write_raw(topic, msgtype, raw, t, publisher="mission")
         robot = drives.get(topic)
         if robot is not None and isinstance(value, msgs.Twist):
             commands.append((robot, value))
-        elif topic == contract.MARKER_POSES and isinstance(value, msgs.FiducialTransformArray):
-            run.markers = {
-                f.fiducial_id: (
-                    f.transform.translation.x,
-                    f.transform.translation.y,
-                    f.transform.translation.z,
-                )
-                for f in value.transforms
-            }
+        elif run.stored is not None and run.stored.note(topic, value):
+            run.markers = dict(run.stored.by_id)
         elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
-            run.last_log = value.msg
+            run.node_lines.note(value)
+            run.last_log = run.node_lines.status()
     return commands
 
 
@@ -537,9 +559,11 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
             err = result.marker_errors_m.get(mid)
             err_s = f", error {err * 100:.1f} cm" if err is not None else ""
             lines.append(
-                f"    stored on {contract.MARKER_POSES} at "
+                f"    stored on {result.stored_on} at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}){err_s}"
             )
+    if not result.markers_found:
+        lines.append(f"  no stored markers; looked on {result.stored_on}")
     out = file or sys.stdout
     print("\n".join(w for line in lines for w in _fit(line)), file=out)
     if result.outcome in ("crashed", "hung", "out_of_memory", "refused", "build_failed"):

@@ -53,8 +53,11 @@ from usar_replay.core.tf_tree import Buffer, TransformException
 from usar_replay.node import jail
 from usar_replay.node.wire_io import send_within
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
+from usar_replay.ros1 import run_files
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
+from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
+from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
 
 __all__ = ["main"]
@@ -86,18 +89,24 @@ def _xmlrpc_value(value: Any) -> Any:
 
 class Graph:
     """The student's processes: ``roslaunch PKG FILE`` or ``rosrun PKG NODE``, in the built
-    workspace's environment, output to a file (shown when it crashes)."""
+    workspace's environment; roslaunch's own output to a file, each node's stdout and stderr to
+    a file of its own (:mod:`.launch_output`); their last lines are shown when it crashes."""
 
     def __init__(self, config: dict[str, Any], env: dict[str, str]) -> None:
         ws = Path(config["workspace"])
         run = Path(config["run_dir"])
+        self.output_dir = run / run_files.OUTPUT_DIR
+        self.output_dir.mkdir(exist_ok=True)
         if config.get("launch"):
             what = f"roslaunch {config['package']} {config['launch']}"
+            nodes = run / run_files.NODES_FILE
+            cmd = launch_command(self.output_dir, nodes, config["package"], config["launch"])
         else:
             what = f"rosrun {config['package']} {config['node']}"
+            cmd = rosrun_command(self.output_dir, config["package"], config["node"])
         self.what = what
         self.log_path = run / "graph.log"
-        script = f'source "{ws}/devel/setup.bash" && exec {what}'
+        script = f'source "{ws}/devel/setup.bash" && exec {cmd}'
         with self.log_path.open("wb") as log:
             self.proc = subprocess.Popen(
                 ["bash", "-c", script],
@@ -114,18 +123,17 @@ class Graph:
         code = self.proc.poll()
         if code is None:
             return None
-        for line in self.tail(400).splitlines():
+        for line in _tail(self.log_path, 400).splitlines():  # roslaunch's own lines
             died = _DIED.search(line)
             if died and int(died.group(1)) != 0:
-                return code, line.strip()
+                return code, without_prefix(line.strip())
         return code, ""
 
     def tail(self, lines: int = 40) -> str:
-        """The graph's last output lines (terminal colours removed)."""
-        with contextlib.suppress(OSError):
-            text = _ANSI.sub("", self.log_path.read_text(encoding="utf-8", errors="replace"))
-            return "\n".join(text.splitlines()[-lines:])
-        return ""
+        """The nodes' last output lines (``[node] line``), then roslaunch's (terminal colours
+        removed)."""
+        text = run_files.node_tails(self.output_dir, lines) + _tail(self.log_path, lines)
+        return without_prefix(_ANSI.sub("", text))
 
     def stop(self) -> None:
         if self.proc.poll() is None:
@@ -184,6 +192,7 @@ class Bridge:
         self.move_base: dict[str, Any] = {}
         self.last_t: int | None = None
         self.robots = [r for r in contract.ROBOTS if contract.odom(r) in setup["sim_topics"]]
+        self.topics = TopicRecorder(NODE, self.uri)  # the graph's own topics, recorded
 
     # -- start-up -------------------------------------------------------------------------------
 
@@ -191,9 +200,12 @@ class Bridge:
         """The master, the parameters, the bridge's node, then the student's graph; returns
         once the graph has registered a node with the master (or raises with its output)."""
         ws = Path(self.config["run_dir"])
+        # every call logged (getParam included): ``usar info`` lists the parameters the
+        # package's nodes read (:func:`.run_files.parameters_read`)
+        logged = ["--master-logger-level", "debug", f"__log:={ws / run_files.MASTER_LOG}"]
         with (ws / "master.log").open("wb") as log:
             self.master = subprocess.Popen(
-                ["rosmaster", "--core", "-p", str(self.port)],
+                ["rosmaster", "--core", "-p", str(self.port), *logged],
                 env=self.env,
                 stdin=subprocess.DEVNULL,
                 stdout=log,
@@ -361,6 +373,7 @@ class Bridge:
         from rosgraph_msgs.msg import Clock
 
         wall0 = time.perf_counter()  # pacing only: never reaches a message
+        self.topics.discover()
         for topic, msgtype, data in items:
             value = cdr.decode(data, msgtype)
             if topic == contract.TF_STATIC and isinstance(value, msgs.TFMessage):
@@ -394,6 +407,7 @@ class Bridge:
             time.sleep(remaining)
         with self._lock:
             got, self._inbox = self._inbox, []
+        got += self.topics.take()
         # move_base's commands last: when the package also commands a robot move_base drives,
         # move_base's command is the one the robot follows (what team 002 saw) and the rubric's
         # cmd_vel_one_publisher line reports the fight
@@ -426,7 +440,7 @@ class Bridge:
                     )
                     return
                 done = 1
-            wire = [(topic, type(m).__msgtype__, cdr.encode(m)) for topic, m in outputs]
+            wire = [wire_item(topic, m) for topic, m in outputs]
             if not send_within(self.conn, _pack(_OUT, t_ns, wire, done), self.write_timeout_s):
                 return
 

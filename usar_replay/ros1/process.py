@@ -24,10 +24,15 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core import contract
+from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
 from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.ros1 import run_files
+from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.buildjail import BUILD_WALL_S
 from usar_replay.ros1.isolation import isolated_command
+from usar_replay.ros1.launch_output import file_label
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 
@@ -94,6 +99,13 @@ def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
     )
 
 
+def _text(value: Any) -> str:
+    """A parameter's value as ``usar info`` shows it (``[1.0, 2.0]``, ``0.1``, ``true``)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(list(value)) if isinstance(value, tuple) else str(value)
+
+
 class Ros1Process(MissionProcess):
     """Run the bridge as the mission process on ``built`` (see the module doc)."""
 
@@ -110,6 +122,9 @@ class Ros1Process(MissionProcess):
         built: Built,
     ) -> None:
         self.options = options
+        self.package = package
+        self.parameters = dict(parameters)
+        self._kept: list[tuple[str, str, bytes]] = []
         self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
         self.built = built
         try:
@@ -141,6 +156,8 @@ class Ros1Process(MissionProcess):
             super().__init__(
                 target, parameters, sim_topics=sim_topics, sim_frames=sim_frames, limits=limits
             )
+            # the package's own topics come back too (PoseArrays, types of its own)
+            self.boundary = Ros1BoundaryCheck(self.policy)
         except BaseException:
             self._remove_run_dir()
             raise
@@ -162,7 +179,46 @@ class Ros1Process(MissionProcess):
             # the bridge leads its own process group: whatever of the graph outlived it goes too
             with contextlib.suppress(OSError):
                 os.killpg(self._proc.pid, signal.SIGKILL)
-            self._remove_run_dir()
+            try:
+                self._kept = self._collect()
+            finally:
+                self._remove_run_dir()
+
+    def attachments(self) -> list[tuple[str, str, bytes]]:
+        """``ros1.toml`` (the package, how it was started, its nodes, the build time, the
+        parameters its nodes read, the settings that applied) and each node's stdout and
+        stderr, taken from the run's folder on close (:mod:`.run_files`)."""
+        return list(self._kept)
+
+    def _collect(self) -> list[tuple[str, str, bytes]]:
+        outputs = run_files.node_outputs(self.run_dir)
+        nodes = run_files.launch_nodes(self.run_dir)
+        if self.options.node:  # rosrun: the nodes as they registered with the master
+            names = run_files.registered_nodes(self.run_dir)
+            nodes = [(name, self.package.name, self.options.node) for name in names]
+            if len(names) == 1:  # the executable's output is that node's
+                outputs = [(file_label(names[0]), data) for _, data in outputs[:1]]
+        given = {"/" + key.replace(".", "/"): value for key, value in self.parameters.items()}
+        read = [
+            ParameterRead(name, _text(given[name]) if name in given else "", tuple(by))
+            for name, by in run_files.parameters_read(self.run_dir).items()
+        ]
+        info = Ros1Run(
+            package=self.package.name,
+            path=self.target.path,
+            sha256=self.target.sha256,
+            launch=self.options.launch,
+            node=self.options.node,
+            build_seconds=self.built.seconds,
+            build_cached=self.built.cached,
+            nodes=tuple(Ros1Node(*row) for row in nodes),
+            parameters=tuple(read),
+            applied_settings=run_files.APPLIED_SETTINGS,
+        )
+        kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
+        prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX
+        kept += [(f"{prefix}{label}.txt", "text/plain", data) for label, data in outputs]
+        return kept
 
     def _remove_run_dir(self) -> None:
         if not self.options.keep_workspace:

@@ -12,8 +12,9 @@ The scene, on one time axis (the log's sim time in nanoseconds):
   ones as a column per child frame; each robot's body under its ``base_footprint``, the camera
   under the optical frame;
 * each robot's true pose, its true path so far (one row per sim second), its goals and plans;
-* the true markers, the markers the explorer stored, and every broadcast ``marker_frame`` looked
-  up in ``map`` at its own stamp with :class:`usar_replay.core.tf_tree.Buffer`, labelled with the
+* the true markers, the markers the mission stored (wherever it put them:
+  :mod:`usar_replay.grading.stored_markers`), and every broadcast ``marker_frame`` looked up in
+  ``map`` at its own stamp with :class:`usar_replay.core.tf_tree.Buffer`, labelled with the
   nearest true marker and the distance to it;
 * the camera images (the recorded bytes, never decoded here) with each detection's outline
   (``aruco_detect``'s ``/fiducial_transforms`` or ``ros2_aruco``'s ``/aruco_markers``);
@@ -43,6 +44,7 @@ from scipy.spatial.transform import Rotation
 
 from usar_replay.core import contract, msgs, rotations
 from usar_replay.core.tf_tree import Buffer, TransformException
+from usar_replay.grading.stored_markers import StoredMarkers, is_marker_topic
 from usar_replay.world.assignment import USAR, Assignment
 from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.scenario import Scenario
@@ -366,6 +368,7 @@ class Scene:
         self.true_markers = Strips()
         self.true_marker_xyz: dict[int, XYZ] = {}
         self.stored_markers = Strips()
+        self._stored: StoredMarkers | None = None
         self._marker_frame_points: list[XYZ] = []
         self._marker_frame_labels: list[str] = []
         self.marker_frame_rows = Strips()
@@ -404,8 +407,8 @@ class Scene:
             self._on_detections(_aruco_poses(msg), t_ns)
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.TRUTH_MARKERS:
             self._on_true_markers(msg, t_ns)
-        elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.MARKER_POSES:
-            self._on_stored_markers(msg, t_ns)
+        elif is_marker_topic(topic, type(msg).__msgtype__):
+            self._on_stored_markers(topic, msg, t_ns)
         elif isinstance(msg, msgs.Log) and topic == contract.ROSOUT:
             text = f"[{msg.name}] {msg.msg}" if msg.name else msg.msg
             self._text(ROSOUT_ENTITY, t_ns, text, _ROS_LEVELS.get(msg.level, "INFO"))
@@ -537,14 +540,19 @@ class Scene:
             rows.labels.append(f"true {f.fiducial_id}")
         rows.lengths.append(len(msg.transforms))
 
-    def _on_stored_markers(self, msg: msgs.FiducialTransformArray, t_ns: int) -> None:
+    def _on_stored_markers(self, topic: str, msg: msgs.Message, t_ns: int) -> None:
+        """The markers the mission stored, wherever it put them (a ``FiducialTransformArray``
+        on ``/explorer/marker_poses``, a ``PoseArray``, a ``*marker*`` pose topic: see
+        :mod:`usar_replay.grading.stored_markers`), all of them as one row each time."""
+        if self._stored is None:  # the true markers are known by now (scenario or log, at t0)
+            self._stored = StoredMarkers(sorted(self.true_marker_xyz.items()))
+        self._stored.note(topic, msg)
         rows = self.stored_markers
         rows.times.append(t_ns)
-        for f in msg.transforms:
-            tr = f.transform.translation
-            rows.items.append((tr.x, tr.y, tr.z))
-            rows.labels.append(f"stored {f.fiducial_id}")
-        rows.lengths.append(len(msg.transforms))
+        for mid, xyz in self._stored.by_id.items():
+            rows.items.append(xyz)
+            rows.labels.append(f"stored {mid}")
+        rows.lengths.append(len(self._stored.by_id))
 
     def _on_truth(self, robot: str, msg: msgs.PoseStamped, t_ns: int) -> None:
         p, q = msg.pose.position, msg.pose.orientation

@@ -1,0 +1,44 @@
+/**
+ * @file follower_node.cpp
+ * @brief The follower node: waits for the explorer's markers, visits them, returns home.
+ */
+#include <geometry_msgs/PoseArray.h>
+
+#include <cmath>
+#include <map>
+
+#include "usar_two_nodes/robots.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "follower");
+  ros::NodeHandle nh;
+  std::map<int, usar_two_nodes::MarkerPose> markers;
+  bool got = false;
+  boost::function<void(const geometry_msgs::PoseArray::ConstPtr&)> on_markers =
+      [&](const geometry_msgs::PoseArray::ConstPtr& msg) {
+        markers.clear();
+        for (std::size_t i = 0; i < msg->poses.size(); ++i) {
+          const geometry_msgs::Pose& p = msg->poses[i];
+          const double yaw = 2.0 * std::atan2(p.orientation.z, p.orientation.w);
+          markers[static_cast<int>(i)] = {p.position.x, p.position.y, std::cos(yaw), std::sin(yaw)};
+        }
+        got = true;
+      };
+  ros::Subscriber sub = nh.subscribe<geometry_msgs::PoseArray>("/explorer/marker_poses", 1, on_markers);
+  usar_two_nodes::Follower follower(&nh);
+  ros::Rate rate(20.0);
+  while (ros::ok()) {
+    ros::spinOnce();
+    if (!got) {
+      ROS_INFO_THROTTLE(1.0, "follower: waiting for the explorer's markers");
+    } else if (!follower.started()) {
+      follower.start(markers);
+    } else if (follower.step()) {
+      break;
+    }
+    rate.sleep();
+  }
+  ROS_INFO("follower: mission complete");
+  ros::shutdown();
+  return 0;
+}

@@ -1,0 +1,176 @@
+"""What a log says about the ROS 1 package that made it: ``ros1.toml`` and each node's output.
+
+Why: a ROS 1 run's mission is a catkin package, not a Python file, and what a reader of the log
+wants to know about it is different: which package (path and sha256), how it was started (the
+launch file or the node), which nodes it ran, how long it took to build (or that the build was
+cached), which of usar's settings applied and which ``/mission/*``-style parameters its nodes
+read. The recorder writes this once, at the end of the run (:mod:`usar_replay.ros1.process`),
+as :data:`usar_replay.core.contract.ROS1_ATTACHMENT`; each node's stdout and stderr is an
+attachment of its own under :data:`usar_replay.core.contract.NODE_OUTPUT_ATTACHMENT_PREFIX`.
+``usar info`` and ``usar log --output`` read them here.
+"""
+
+from __future__ import annotations
+
+import re
+import textwrap
+import tomllib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+from usar_replay.core import contract
+from usar_replay.core.errors import UsageError
+from usar_replay.core.msg_text import WIDTH
+from usar_replay.log.run import Run
+
+__all__ = ["ParameterRead", "Ros1Node", "Ros1Run", "node_output_lines", "node_outputs", "of"]
+
+
+@dataclass(frozen=True, slots=True)
+class Ros1Node:
+    """A node of the package: its resolved name, package and executable (type)."""
+
+    name: str
+    package: str = ""
+    type: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class ParameterRead:
+    """A parameter the package's nodes asked the master for."""
+
+    name: str
+    value: str
+    """What usar set it to, as text; empty when usar did not set it (the node's default)."""
+    read_by: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class Ros1Run:
+    """The contents of ``ros1.toml`` (see the module doc)."""
+
+    package: str
+    path: str = ""
+    sha256: str = ""
+    launch: str = ""
+    node: str = ""
+    build_seconds: float = 0.0
+    build_cached: bool = False
+    nodes: tuple[Ros1Node, ...] = ()
+    parameters: tuple[ParameterRead, ...] = ()
+    applied_settings: tuple[str, ...] = ()
+    """Prefixes of the settings that applied (``record``, ``mission.xy_tolerance``, ...)."""
+
+    @property
+    def started_with(self) -> str:
+        if self.launch:
+            return f"roslaunch {self.package} {self.launch}"
+        return f"rosrun {self.package} {self.node}"
+
+    @property
+    def build(self) -> str:
+        if self.build_cached:
+            return "cached (built before; catkin_make did not run)"
+        return f"{self.build_seconds:.1f} s (catkin_make, wall time)"
+
+    def applies(self, setting: str) -> bool:
+        """Whether ``setting`` (``mission.spin_speed``) applied to this run."""
+        return any(setting == p or setting.startswith(p + ".") for p in self.applied_settings)
+
+    def to_toml(self) -> str:
+        import tomli_w  # deferred: reading a log never writes TOML
+
+        data: dict[str, Any] = {
+            "package": self.package,
+            "path": self.path,
+            "sha256": self.sha256,
+            "launch": self.launch,
+            "node": self.node,
+            "build_seconds": round(self.build_seconds, 3),
+            "build_cached": self.build_cached,
+            "applied_settings": list(self.applied_settings),
+            "nodes": [{"name": n.name, "package": n.package, "type": n.type} for n in self.nodes],
+            "parameters": [
+                {"name": p.name, "value": p.value, "read_by": list(p.read_by)}
+                for p in self.parameters
+            ],
+        }
+        return tomli_w.dumps(data)
+
+    @classmethod
+    def from_toml(cls, text: str) -> Ros1Run:
+        data = tomllib.loads(text)
+        return cls(
+            package=str(data.get("package", "")),
+            path=str(data.get("path", "")),
+            sha256=str(data.get("sha256", "")),
+            launch=str(data.get("launch", "")),
+            node=str(data.get("node", "")),
+            build_seconds=float(data.get("build_seconds", 0.0)),
+            build_cached=bool(data.get("build_cached", False)),
+            applied_settings=tuple(str(s) for s in data.get("applied_settings", [])),
+            nodes=tuple(
+                Ros1Node(str(n.get("name", "")), str(n.get("package", "")), str(n.get("type", "")))
+                for n in data.get("nodes", [])
+            ),
+            parameters=tuple(
+                ParameterRead(
+                    str(p.get("name", "")),
+                    str(p.get("value", "")),
+                    tuple(str(r) for r in p.get("read_by", [])),
+                )
+                for p in data.get("parameters", [])
+            ),
+        )
+
+
+_ANSI = re.compile(r"\x1b\[[0-9;?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)?")
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+
+
+def _shown(text: str) -> str:
+    """A node's output as it may go to a terminal: colours (rosconsole's) and every other
+    control sequence removed (the output is the student's: it must not drive the terminal)."""
+    return _CONTROL.sub("", _ANSI.sub("", text.expandtabs(4)))
+
+
+def of(run: Run) -> Ros1Run | None:
+    """The log's ``ros1.toml``; None for a log of a Python mission (or one that has none)."""
+    text = run.reader.attachments.get(contract.ROS1_ATTACHMENT)
+    if text is None:
+        return None
+    try:
+        return Ros1Run.from_toml(text.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError):
+        run.problems.append(f"the attached {contract.ROS1_ATTACHMENT} is invalid")
+        return None
+
+
+def node_outputs(run: Run) -> dict[str, str]:
+    """Each node's stdout and stderr, by node name (``/explorer``), as text."""
+    prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX
+    out: dict[str, str] = {}
+    for name, data in sorted(run.reader.attachments.items()):
+        if name.startswith(prefix) and name.endswith(".txt"):
+            label = name.removeprefix(prefix).removesuffix(".txt")
+            out["/" + label.replace("+", "/")] = data.decode("utf-8", errors="replace")
+    return out
+
+
+def node_output_lines(run: Run, nodes: tuple[str, ...] = ()) -> Iterator[str]:
+    """``usar log --output``: each node's output under a ``--- /node: stdout and stderr ---``
+    line (``nodes``: only these, ``explorer`` or ``/explorer``). A node with no output kept is a
+    :class:`UsageError` naming those with one."""
+    outputs = node_outputs(run)
+    wanted = ["/" + n.strip("/") for n in nodes] or list(outputs)
+    missing = [n for n in wanted if n not in outputs]
+    if missing:
+        kept = ", ".join(outputs) or "none (not a ROS 1 log, or one recorded before usar kept it)"
+        raise UsageError(f"{run.path}: no output of node {missing[0]} kept; the nodes': {kept}")
+    for name in wanted:
+        yield f"--- {name}: stdout and stderr ---"
+        for line in _shown(outputs[name]).splitlines():
+            yield from textwrap.wrap(
+                line, WIDTH, subsequent_indent="    ", break_on_hyphens=False
+            ) or [""]
