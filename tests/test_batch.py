@@ -418,8 +418,8 @@ def test_sandbox_refuses_other_files_and_processes(tmp_path: Path) -> None:
     (own / "mine.txt").write_text("mine")
     (other / "theirs.txt").write_text("theirs")
     script = f"""
-from usar_replay.node.sandbox import SandboxPolicy
-SandboxPolicy(read_roots=({str(own)!r},), write_roots=({str(work)!r},),
+from usar_replay.node.audit_guard import GuardPolicy
+GuardPolicy(read_roots=({str(own)!r},), write_roots=({str(work)!r},),
               deny_roots=({str(tmp_path)!r},), own_roots=({str(own)!r},)).install()
 import os, subprocess
 print(open({str(own / "mine.txt")!r}).read())

@@ -27,7 +27,9 @@ NOT_USAR_ERRORS = {
         "TimeoutException": "tf2's",
     },
     "node/node.py": {"ParameterNotDeclared": "rclpy's exception, raised in mission code"},
-    "node/sandbox.py": {"SandboxViolation": "raised in the mission's own code (a PermissionError)"},
+    "node/audit_guard.py": {
+        "GuardViolation": "raised in the mission's own code (a PermissionError)"
+    },
     "node/boundary_check.py": {
         "OutputRefused": "turned into the verdict `refused` (MissionEnded) by the worker",
         "PublishRefused": "raised in the mission's own code (a PermissionError)",

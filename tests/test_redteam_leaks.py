@@ -33,7 +33,7 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import GradeReport, grade_file
 from usar_replay.log.run import open_run
-from usar_replay.node.jail import bwrap_available
+from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import replay
 from usar_replay.ros1 import debian

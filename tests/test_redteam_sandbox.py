@@ -1,11 +1,12 @@
 """Red team: missions that attack the recorder, the batch and other teams, against the sandbox.
 
-Each attack of issue #21 that the kernel sandbox (usar_replay/node/jail.py) and the guard
-(usar_replay/node/sandbox.py) answer is a tiny mission here. The ``record`` tests run the mission
-with the kernel sandbox alone (``usar record`` has no guard), so they show what bwrap contains
-even when Python-level checks are bypassed; the batch test grades a class of attackers between
-two identical honest teams with both layers on, and shows that every attacker gets a verdict and
-neither honest grade moves. Every attack prints ``ATTACK name: result`` lines that the tests read.
+Each attack of issue #21 that the kernel sandbox (usar_replay/node/kernel_sandbox.py) and the guard
+(usar_replay/node/audit_guard.py) answer is a tiny mission here. The ``record`` tests run the
+mission with the kernel sandbox alone (``usar record`` has no guard), so they show what bwrap
+contains even when Python-level checks are bypassed; the batch test grades a class of attackers
+between two identical honest teams with both layers on, and shows that every attacker gets a verdict
+and neither honest grade moves. Every attack prints ``ATTACK name: result`` lines that the tests
+read.
 
 Needs bubblewrap (``apt-get install bubblewrap``; CI installs it): skipped only where it is
 missing or cannot create namespaces. About a minute of wall time on 2 cores.
@@ -27,7 +28,7 @@ from conftest import one_room
 
 from usar_replay.cli import main as cli
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.jail import bwrap_available
+from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.node.worker import MissionLimits
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.world.scenario_toml import to_toml
@@ -360,7 +361,7 @@ def _batch_attacks(out: Path, subs: Path, room: Path) -> dict[str, str]:
                 dir_fd=os.open({str(room.parent)!r}, os.O_RDONLY)))
         attempt("subs", lambda: os.listdir({str(subs)!r}))
         attempt("proc", lambda: open("/proc/1/environ", "rb").read())
-        attempt("tamper", lambda: setattr(sys.modules["usar_replay.node.sandbox"],
+        attempt("tamper", lambda: setattr(sys.modules["usar_replay.node.audit_guard"],
                 "_PROCESS_EVENTS", frozenset()) or os.fork())
         """,
     }
@@ -437,8 +438,8 @@ def test_forging_another_grade_is_refused(attacked_class: tuple[Path, int, str])
 def test_signalling_the_batch_is_refused(attacked_class: tuple[Path, int, str]) -> None:
     out, _, _ = attacked_class
     said = _said(out, "killer")
-    assert said["kill_ppid"].startswith("failed SandboxViolation"), said  # the guard first
-    assert said["pidfd"].startswith("failed SandboxViolation"), said
+    assert said["kill_ppid"].startswith("failed GuardViolation"), said  # the guard first
+    assert said["pidfd"].startswith("failed GuardViolation"), said
     assert said["fork_exec"].startswith("ALLOWED <function"), said  # the guard's refusal
 
 
@@ -446,7 +447,7 @@ def test_snooping_is_refused(attacked_class: tuple[Path, int, str]) -> None:
     out, _, _ = attacked_class
     said = _said(out, "snooper")
     for name in ("dir_fd", "subs", "proc", "tamper"):
-        assert said[name].startswith("failed SandboxViolation"), said
+        assert said[name].startswith("failed GuardViolation"), said
 
 
 # -- the sandbox changes nothing an honest mission does ------------------------------------------

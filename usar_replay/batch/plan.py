@@ -113,7 +113,7 @@ class Limits:
     wall_s: float = 3600.0
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
-    """Keep the mission to its own files (usar_replay.node.sandbox)."""
+    """Keep the mission to its own files (usar_replay.node.audit_guard)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -136,7 +136,7 @@ def grade_run(
 
 
 def _mission_limits(job: RunJob) -> Any:
-    from usar_replay.node.sandbox import SandboxPolicy
+    from usar_replay.node.audit_guard import GuardPolicy
     from usar_replay.node.worker import MissionLimits
 
     lim = job.limits
@@ -144,7 +144,7 @@ def _mission_limits(job: RunJob) -> Any:
     if lim.get("sandbox", True):
         own = str(Path(job.submission_path).resolve())
         work = str(job.work_dir.resolve())
-        sandbox = SandboxPolicy(
+        sandbox = GuardPolicy(
             read_roots=(own,),
             write_roots=(work,),
             deny_roots=(job.out_root, job.submissions_root),

@@ -13,8 +13,8 @@ extension, a bug in the interpreter or code that rebuilds a module the guard pat
 from ``sys.modules`` and loading the shared library again by hand, or walking memory with
 ctypes objects it already holds) does not pass through them, and nothing inside one process can
 stop code in that process from undoing what was done to it. The boundary is the kernel sandbox
-(:mod:`usar_replay.node.jail`), which every mission runs in by default; this guard is the second
-layer: it turns honest mistakes and casual snooping into a clear ``PermissionError``.
+(:mod:`usar_replay.node.kernel_sandbox`), which every mission runs in by default; this guard is
+the second layer: it turns honest mistakes and casual snooping into a clear ``PermissionError``.
 
 What it closes besides plain ``open``: paths relative to a directory descriptor (``dir_fd=``:
 the audit event carries no descriptor, so the guard cannot tell where such a path points and
@@ -34,7 +34,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["SandboxPolicy", "SandboxViolation"]
+__all__ = ["GuardPolicy", "GuardViolation"]
 
 _WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_TRUNC | os.O_APPEND
 _DEVICES = ("/dev/null", "/dev/zero", "/dev/urandom", "/dev/random")
@@ -105,12 +105,12 @@ _WRITE_EVENTS = {
 _LIST_EVENTS = frozenset({"os.listdir", "os.scandir", "glob.glob", "os.chdir"})
 
 
-class SandboxViolation(PermissionError):
+class GuardViolation(PermissionError):
     """A mission did something its batch run does not allow (raised in the user's code)."""
 
 
 @dataclass(frozen=True, slots=True)
-class SandboxPolicy:
+class GuardPolicy:
     """What one mission process may touch. Paths are absolute; the guard resolves symlinks.
 
     Reading is allowed under ``read_roots`` (plus the interpreter's own prefixes and import
@@ -143,7 +143,7 @@ def _under(path: str, roots: Sequence[str]) -> bool:
     return any(path == r or path.startswith(r.rstrip(os.sep) + os.sep) for r in roots)
 
 
-def install(policy: SandboxPolicy) -> None:
+def install(policy: GuardPolicy) -> None:
     """Install an audit hook enforcing ``policy`` in this process (see the module's docstring)."""
     sys.dont_write_bytecode = True  # never write __pycache__ into a submission or the venv
     prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
@@ -158,7 +158,7 @@ def install(policy: SandboxPolicy) -> None:
     own_roots = tuple(os.path.realpath(p) for p in (*policy.own_roots, *policy.write_roots))
 
     # the hook's own copies: a mission that rebinds this module's globals changes nothing
-    devices, write_flags, violation = _DEVICES, _WRITE_FLAGS, SandboxViolation
+    devices, write_flags, violation = _DEVICES, _WRITE_FLAGS, GuardViolation
     process_events, network_events = _PROCESS_EVENTS, _NETWORK_EVENTS
     native_events, write_events, list_events = _NATIVE_EVENTS, dict(_WRITE_EVENTS), _LIST_EVENTS
     no_reimport, under, real = _NO_REIMPORT, _under, _real

@@ -50,7 +50,7 @@ from typing import Any
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.core.tf_tree import Buffer, TransformException
-from usar_replay.node import jail
+from usar_replay.node import kernel_sandbox
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
@@ -466,7 +466,7 @@ def main(argv: list[str]) -> None:
     setup = pickle.loads(conn.recv_bytes())  # from the recorder, which is trusted
     # the run's limits (memory, CPU, file size, open files) before the graph starts: every
     # process of it inherits them (in the kernel sandbox; empty without one)
-    jail.apply_rlimits(setup.get("rlimits", {}))
+    kernel_sandbox.apply_rlimits(setup.get("rlimits", {}))
     config = json.loads(Path(argv[2]).read_text(encoding="utf-8"))
     # rospy's and the master's chatter go to the run's folder, not the user's terminal
     log = os.open(Path(config["run_dir"]) / "bridge.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND)

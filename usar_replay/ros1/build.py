@@ -130,15 +130,15 @@ def _sandboxed(cmd: list[str], workspace: Path) -> tuple[list[str], dict[str, st
     too. It reads the system and Debian's ROS configuration, writes only the workspace, and has
     no network. Without bubblewrap (or with ``USAR_SANDBOX=off``) it runs as it is, as a
     mission does then."""
-    from usar_replay.node import jail
+    from usar_replay.node import kernel_sandbox
 
-    ok, _ = jail.bwrap_available()
+    ok, _ = kernel_sandbox.bwrap_available()
     if not ok or os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
         return cmd, catkin_env()
     env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
     # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version
     etc = [p for p in ("/etc/catkin", "/etc/ros", "/etc/debian_version") if Path(p).exists()]
-    argv = jail.jail_argv(cmd, ro_binds=etc, work_dir=str(workspace), env=env)
+    argv = kernel_sandbox.jail_argv(cmd, ro_binds=etc, work_dir=str(workspace), env=env)
     return argv, env
 
 

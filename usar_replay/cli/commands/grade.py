@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from usar_replay.cli import arguments, options
+from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_OK, EXIT_USAGE
 from usar_replay.core.errors import UsageError, UsarError
 
@@ -27,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--details", action="store_true", help="the full table of every recording of a batch"
     )
-    arguments.grade_outputs(p)
+    parser_parts.grade_outputs(p)
     p.set_defaults(func=run)
 
 

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from usar_replay.cli import arguments, options
+from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
 from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
@@ -35,12 +35,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument(
         "--max-sim-time",
-        type=arguments.positive_seconds,
+        type=parser_parts.positive_seconds,
         metavar="S",
         help="hard stop in sim seconds (>0)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line")
-    arguments.mission_options(p, replay=False)
+    parser_parts.mission_options(p, replay=False)
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     ros1 = p.add_argument_group("a ROS 1 catkin package as the mission (docs/ros1.md)")
     ros1.add_argument("--ros1", metavar="PKG", help="catkin package folder: build it and run it")

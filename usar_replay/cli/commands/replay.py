@@ -7,7 +7,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
-from usar_replay.cli import arguments, options
+from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_MISSION, EXIT_OK
 from usar_replay.cli.textout import incomplete_note
 from usar_replay.core.errors import UsageError
@@ -31,8 +31,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         action="store_true",
         help="report differences without failing (regression runs of changed code or settings)",
     )
-    arguments.mission_options(p, replay=True)
-    arguments.grade_outputs(p)
+    parser_parts.mission_options(p, replay=True)
+    parser_parts.grade_outputs(p)
     p.set_defaults(func=run)
 
 

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from usar_replay.cli import arguments
+from usar_replay.cli import parser_parts
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK
 
 if TYPE_CHECKING:
@@ -26,18 +26,18 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--web", action="store_true", help="serve the web viewer until Ctrl-C")
     p.add_argument("--grade", action="store_true", help="add the rubric lines to the log view")
     p.add_argument(
-        "--web-port", type=arguments.port, default=9090, metavar="N", help="web viewer port"
+        "--web-port", type=parser_parts.port, default=9090, metavar="N", help="web viewer port"
     )
     p.add_argument(
         "--grpc-port",
-        type=arguments.port,
+        type=parser_parts.port,
         default=9876,
         metavar="N",
         help="viewer data (gRPC) port",
     )
     p.add_argument(
         "--bind",
-        type=arguments.address,
+        type=parser_parts.address,
         default="127.0.0.1",
         metavar="ADDR",
         help="address both viewer ports listen on (0.0.0.0: every interface; default 127.0.0.1)",
