@@ -27,7 +27,7 @@ from logtools import digest
 
 from usar_replay.batch.classreport import ClassGrades, collect, to_table
 from usar_replay.batch.plan import (
-    Limits,
+    JobLimits,
     RunResult,
     discover,
     make_plan,
@@ -240,7 +240,7 @@ def test_changed_inputs_are_run_again(graded_class: tuple[Path, Path, Path, str]
 
     worlds = make_worlds((), [str(room)])
     toml = settings_toml(RunSettings())
-    lim = Limits(tick_timeout_s=5.0, memory_mb=1000)
+    lim = JobLimits(tick_timeout_s=5.0, memory_mb=1000)
     plan = make_plan(
         discover(subs), worlds, out, settings_toml=toml, limits=lim, submissions_root=subs
     )
@@ -251,7 +251,7 @@ def test_changed_inputs_are_run_again(graded_class: tuple[Path, Path, Path, str]
         worlds,
         out,
         settings_toml=toml,
-        limits=Limits(tick_timeout_s=6.0, memory_mb=1000),
+        limits=JobLimits(tick_timeout_s=6.0, memory_mb=1000),
         submissions_root=subs,
     )
     assert len(plan.jobs) == 5

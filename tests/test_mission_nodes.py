@@ -18,7 +18,7 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.missions import usar
 from usar_replay.node.executor import Executor, PublishPolicy
 from usar_replay.pipeline.record import mission_parameters
-from usar_replay.world.nav import OccupancyGrid, grid_to_msg
+from usar_replay.world.nav import PlanningGrid, grid_to_msg
 
 T0 = contract.START_TIME_NS
 TICK = 50_000_000
@@ -91,7 +91,7 @@ def _topics(out: list[tuple[str, msgs.Message]]) -> list[str]:
 
 
 def test_the_first_tick_sends_the_explorer_to_target_1(mission: Executor) -> None:
-    grid = OccupancyGrid.from_scenario(SCENARIO)
+    grid = PlanningGrid.from_scenario(SCENARIO)
     first = [
         (contract.TF_STATIC, _static(T0)),
         (contract.MAP_TOPIC, grid_to_msg(grid, msgs.Time.from_ns(T0))),
@@ -112,7 +112,7 @@ def test_the_first_tick_sends_the_explorer_to_target_1(mission: Executor) -> Non
 
 def _spinning(mission: Executor) -> int:
     """Run the explorer to target_1 by teleporting it there; return the sim time."""
-    grid = OccupancyGrid.from_scenario(SCENARIO)
+    grid = PlanningGrid.from_scenario(SCENARIO)
     ex = SCENARIO.explorer
     tx, ty = SCENARIO.targets[0]
     here = {r: (0.0, 0.0, 0.0) for r in contract.ROBOTS}

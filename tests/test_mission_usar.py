@@ -18,11 +18,11 @@ from usar_replay.log.run import open_run
 from usar_replay.missions.usar import approach_point
 from usar_replay.pipeline.record import record
 from usar_replay.pipeline.replay import replay
-from usar_replay.world.nav import OccupancyGrid, robot_disc
+from usar_replay.world.nav import PlanningGrid, robot_disc
 from usar_replay.world.scenario import Marker, course_world
 
 COURSE = course_world()
-GRID = OccupancyGrid.from_scenario(COURSE)
+GRID = PlanningGrid.from_scenario(COURSE)
 
 
 def _optical_quat(m: Marker) -> msgs.Quaternion:
@@ -56,7 +56,7 @@ def test_approach_point_beside_a_blocking_obstacle() -> None:
     box = dataclasses.replace(
         COURSE.boxes[0], name="blocker", x=m.x - 0.45, y=m.y, size_x=0.1, size_y=0.1
     )
-    grid = OccupancyGrid.from_scenario(dataclasses.replace(COURSE, boxes=(*COURSE.boxes, box)))
+    grid = PlanningGrid.from_scenario(dataclasses.replace(COURSE, boxes=(*COURSE.boxes, box)))
     assert not any(grid.is_free(m.x - d, m.y) for d in np.arange(0.25, 0.7, 0.05))
     settings = MissionSettings(follower_tolerance=0.8)
     goal = approach_point(grid, (m.x, m.y), _optical_quat(m), settings)
@@ -70,7 +70,7 @@ def test_approach_point_beside_a_blocking_obstacle() -> None:
 def test_no_free_point_gives_none() -> None:
     m = COURSE.marker_by_id(1)
     buried = np.ones_like(GRID.occupied)
-    grid = OccupancyGrid(buried, GRID.origin, GRID.resolution)
+    grid = PlanningGrid(buried, GRID.origin, GRID.resolution)
     assert approach_point(grid, (m.x, m.y), _optical_quat(m), MissionSettings()) is None
 
 

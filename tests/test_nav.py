@@ -8,7 +8,7 @@ import math
 import pytest
 
 from usar_replay.core import msgs
-from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
+from usar_replay.world.nav import DriveLimits, Navigator, NavStatus, PlanningGrid, plan, robot_disc
 from usar_replay.world.scenario import course_world
 
 COURSE = course_world()
@@ -16,11 +16,11 @@ HOME = (-4.0, 2.5)
 
 
 @pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_scenario(COURSE)
+def grid() -> PlanningGrid:
+    return PlanningGrid.from_scenario(COURSE)
 
 
-def test_grid_has_the_walls_and_the_free_space(grid: OccupancyGrid) -> None:
+def test_grid_has_the_walls_and_the_free_space(grid: PlanningGrid) -> None:
     for w in COURSE.walls:
         r, c = grid.world_to_cell(w.x, w.y)
         assert grid.occupied[r, c], w.name
@@ -33,7 +33,7 @@ def test_grid_has_the_walls_and_the_free_space(grid: OccupancyGrid) -> None:
     assert grid.resolution == 0.05
 
 
-def test_course_route_plans_keep_off_the_walls(grid: OccupancyGrid) -> None:
+def test_course_route_plans_keep_off_the_walls(grid: PlanningGrid) -> None:
     route = [HOME, *COURSE.targets, HOME]
     for a, b in itertools.pairwise(route):
         result = plan(grid, a, b)
@@ -43,7 +43,7 @@ def test_course_route_plans_keep_off_the_walls(grid: OccupancyGrid) -> None:
         assert result.length_m >= math.dist(a, b)
 
 
-def test_unreachable_goals_fail_with_a_reason(grid: OccupancyGrid) -> None:
+def test_unreachable_goals_fail_with_a_reason(grid: PlanningGrid) -> None:
     inside_wall = (COURSE.walls[6].x, COURSE.walls[6].y)
     result = plan(grid, HOME, inside_wall)
     assert not result.ok and "in collision" in result.reason
@@ -58,7 +58,7 @@ def test_unreachable_goals_fail_with_a_reason(grid: OccupancyGrid) -> None:
 
 
 def _drive(
-    grid: OccupancyGrid, goals: list[tuple[float, float, float | None]], blocked: bool = False
+    grid: PlanningGrid, goals: list[tuple[float, float, float | None]], blocked: bool = False
 ) -> tuple[list[msgs.Twist], list[Navigator], tuple[float, float, float]]:
     x, y, yaw = HOME[0], HOME[1], 0.0
     t = 1_000_000_000
@@ -83,19 +83,19 @@ def _drive(
     return twists, navs, (x, y, yaw)
 
 
-def test_controller_reaches_every_course_target_within_limits(grid: OccupancyGrid) -> None:
+def test_controller_reaches_every_course_target_within_limits(grid: PlanningGrid) -> None:
     goals = [(tx, ty, None) for tx, ty in COURSE.targets] + [(*HOME, 0.0)]
     twists, navs, (x, y, yaw) = _drive(grid, goals)
     assert [n.status for n in navs] == [NavStatus.SUCCEEDED] * len(goals)
     assert math.dist((x, y), HOME) <= 0.05 and abs(yaw) <= 0.17
-    lim = Limits()
+    lim = DriveLimits()
     assert max(abs(t.linear.x) for t in twists) <= lim.max_linear + 1e-12
     assert max(abs(t.angular.z) for t in twists) <= lim.max_angular + 1e-12
     for a, b in itertools.pairwise(twists):
         assert abs(b.linear.x - a.linear.x) <= lim.max_linear_accel * 0.05 + 1e-9
 
 
-def test_a_long_detour_is_progress_not_a_stuck_robot(grid: OccupancyGrid) -> None:
+def test_a_long_detour_is_progress_not_a_stuck_robot(grid: PlanningGrid) -> None:
     """Either side of the start-strip wall: the path runs ~3 m east, away from the goal, and
     back. Progress is measured along the path, so no recovery fires and both goals succeed."""
     goals = [(-3.5, 1.2, None), (-3.5, 2.6, None)]
@@ -106,18 +106,18 @@ def test_a_long_detour_is_progress_not_a_stuck_robot(grid: OccupancyGrid) -> Non
     assert math.dist((x, y), goals[1][:2]) <= 0.05
 
 
-def test_a_blocked_robot_fails_after_recovery(grid: OccupancyGrid) -> None:
+def test_a_blocked_robot_fails_after_recovery(grid: PlanningGrid) -> None:
     _, navs, _ = _drive(grid, [(COURSE.targets[0][0], COURSE.targets[0][1], None)], blocked=True)
     assert navs[0].status is NavStatus.FAILED
     assert "stuck" in navs[0].reason and "2 recoveries" in navs[0].reason
 
 
-def test_navigation_is_deterministic(grid: OccupancyGrid) -> None:
+def test_navigation_is_deterministic(grid: PlanningGrid) -> None:
     goals = [(COURSE.targets[1][0], COURSE.targets[1][1], 1.0)]
-    assert _drive(grid, goals)[0] == _drive(OccupancyGrid.from_scenario(COURSE), goals)[0]
+    assert _drive(grid, goals)[0] == _drive(PlanningGrid.from_scenario(COURSE), goals)[0]
 
 
-def test_a_parked_robot_is_an_obstacle_in_another_robots_map(grid: OccupancyGrid) -> None:
+def test_a_parked_robot_is_an_obstacle_in_another_robots_map(grid: PlanningGrid) -> None:
     x, y, yaw = HOME[0], HOME[1], 0.0
     cx, cy, r = robot_disc(x, y, yaw)
     assert (cx, cy) == pytest.approx((x - 0.064, y)) and r == pytest.approx(0.21)

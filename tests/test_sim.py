@@ -13,7 +13,7 @@ import pytest
 
 from usar_replay.core import msgs
 from usar_replay.sim.simulator import FOOTPRINT, Simulator
-from usar_replay.world.nav import Navigator, NavStatus, OccupancyGrid
+from usar_replay.world.nav import Navigator, NavStatus, PlanningGrid
 from usar_replay.world.scenario import course_world
 
 # the marker each course target sees, in target order (course-world.md)
@@ -168,7 +168,7 @@ def test_egl_renderer_is_deterministic_when_it_loads() -> None:
 def test_explorer_drives_to_every_course_target_in_the_simulator() -> None:
     """The navigator closes the loop through the simulator: every target, no wall touched."""
     scn = course_world()
-    grid = OccupancyGrid.from_scenario(scn)
+    grid = PlanningGrid.from_scenario(scn)
     nav = Navigator(grid)
     with Simulator(scn, renderer="tiny") as sim:
         for tx, ty in scn.targets:

@@ -14,7 +14,7 @@ import pytest
 
 from usar_replay.core import msgs
 from usar_replay.core.tf_tree import (
-    Buffer,
+    BufferCore,
     ConnectivityException,
     ExtrapolationException,
     InvalidArgumentException,
@@ -47,10 +47,10 @@ def is_identity(t: msgs.TransformStamped) -> bool:
 ZERO, OLD, VALID, FUTURE = 0, 5 * S, 15 * S, 25 * S
 
 
-def two_link_tree() -> Buffer:
+def two_link_tree() -> BufferCore:
     """test_tf2 buffer_core_test.cpp, TEST(tf, canTransform) / TEST(tf, lookupTransform): a
     two-link tree between 10 s and 20 s."""
-    b = Buffer()
+    b = BufferCore()
     for i in range(10, 20):
         assert b.set_transform(ts("parent", "child", 1.0, i * S))
         assert b.set_transform(ts("parent", "other_child", 2.0, i * S))
@@ -200,7 +200,7 @@ def test_basic_api_cases(target: str, source: str, time: int, ok: bool) -> None:
 def test_invalid_arguments() -> None:
     """buffer_core_test.cpp TEST(BufferCore_lookupTransform, invalid_arguments) and
     TEST(BufferCore_canTransform, invalid_arguments), with validateFrameId's texts."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("b", "a", 1.0, S))
     b.lookup_transform("b", "a", 0)
     assert b.can_transform("b", "a", 0)
@@ -232,7 +232,7 @@ def test_invalid_arguments() -> None:
 def test_lookup_exceptions_of_unknown_frames() -> None:
     """simple_tf2_core.cpp TEST(tf2_lookupTransform, LookupException_Nothing_Exists),
     LookupException_One_Exists, TEST(tf2_canTransform, Nothing_Exists) and One_Exists."""
-    b = Buffer()
+    b = BufferCore()
     with pytest.raises(LookupException):
         b.lookup_transform("a", "b", S)
     assert not b.can_transform("a", "b", S)
@@ -244,7 +244,7 @@ def test_lookup_exceptions_of_unknown_frames() -> None:
 
 def test_backward_forward_and_no_data() -> None:
     """simple_tf2_core.cpp TEST(tf2_lookupTransform, TransformException_Backward_Forward)."""
-    b = Buffer()
+    b = BufferCore()
     assert b.set_transform(ts("foo", "bar", 0.0, 2 * S))
     b.lookup_transform("foo", "bar", 2 * S)
     with pytest.raises(ExtrapolationException, match=r"but only time 2\.000000 is in the buffer"):
@@ -258,11 +258,11 @@ def test_backward_forward_and_no_data() -> None:
 
 def test_can_transform_core_texts() -> None:
     """tf2_py test_buffer_core.py test_can_transform_core_pass / _fail (the debug tuple)."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("bar", "foo", 2.0, 0))
     b.set_transform(ts("bar", "foo", 2.0, S))
     assert b.can_transform("foo", "bar", S // 2, return_debug_tuple=True) == (True, "")
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("bar", "foo", 2.0, S))
     b.set_transform(ts("bar", "foo", 2.0, 2 * S))
     ok, why = b.can_transform("foo", "bar", int(2.5 * S), return_debug_tuple=True)
@@ -277,7 +277,7 @@ def test_can_transform_core_texts() -> None:
 def test_get_latest_common_time() -> None:
     """tf2_py test_buffer_core.py test_get_latest_common_time, and tf2_py.cpp's wrapper:
     frames validated as "get_latest_common_time", a failed walk a plain TransformException."""
-    b = Buffer()
+    b = BufferCore()
     for stamp in (0, S, S // 2):
         b.set_transform(ts("bar", "foo", 2.0, stamp))
     assert b.get_latest_common_time("bar", "foo") == S
@@ -294,7 +294,7 @@ def test_get_latest_common_time() -> None:
 
 def test_get_latest_common_time_chains() -> None:
     """buffer_core_test.cpp TEST(tf, getLatestCommonTime) (stamps in ns)."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("parent", "a", 0.0, 1000))
     b.set_transform(ts("parent's parent", "parent", 0.0, 2000))
     assert b.get_latest_common_time("a", "parent's parent") == 1000
@@ -315,7 +315,7 @@ def test_clear_keeps_frames_and_static_transforms() -> None:
     """tf2_py test_buffer_core.py test_clear; simple_tf2_core.cpp TEST(tf2_clear,
     LookUp_Static_Transfrom_Succeed / _Fail); BufferCore::clear only empties TimeCaches
     (StaticCache::clearList does nothing) and keeps frame ids."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("bar", "foo", 2.0, 0))
     assert b.can_transform("foo", "bar", 0)
     b.clear()
@@ -339,7 +339,7 @@ def test_static_and_dynamic_replace_each_other() -> None:
     """buffer_core.cpp setTransformImpl: "Overwrite TimeCacheInterface type with a current
     input": a static insert on a dynamic frame, or a dynamic one on a static frame, starts a
     new cache of the new kind (its history goes)."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("a", "b", 1.0, S))
     b.set_transform_static(ts("a", "b", 2.0, S))
     assert x_of(b.lookup_transform("a", "b", 99 * S)) == 2.0  # static: any time
@@ -351,7 +351,7 @@ def test_static_and_dynamic_replace_each_other() -> None:
 def test_set_transform_checks() -> None:
     """simple_tf2_core.cpp TEST(tf2, setTransformFail / setTransformValid /
     setTransformInvalidQuaternion); buffer_core_test.cpp BufferCore_setTransform.*."""
-    b = Buffer()
+    b = BufferCore()
     assert not b.set_transform(msgs.TransformStamped())
     assert b.set_transform(ts("foo", "child", 0.0, S))
     good = ts("foo", "child", 0.0, 2 * S)
@@ -369,7 +369,7 @@ def test_set_transform_checks() -> None:
 def test_refused_old_data_still_names_its_frames() -> None:
     """setTransformImpl numbers child and parent (lookupOrInsertFrameNumber) before
     ``insertData`` can refuse old data, so the parent becomes a known frame."""
-    b = Buffer(cache_time=10.0)
+    b = BufferCore(cache_time=10.0)
     b.set_transform(ts("b", "a", 0.0, 20 * S))
     assert not b.set_transform(ts("c", "a", 0.0, 1 * S))  # TF_OLD_DATA
     with pytest.raises(ConnectivityException):  # known, unconnected: not a LookupException
@@ -381,7 +381,7 @@ def test_repeated_stamps_and_pruning_as_time_cache() -> None:
     (newest inserted answers in the middle and at the newest stamp, oldest inserted at the
     oldest stamp), exact repeats are dropped, pruning uses the newest stamp before an insert.
     Stamps are the test's plus 100 ns (time 0 means "latest" to a lookup); storage 10 ns."""
-    b = Buffer(cache_time=10e-9)
+    b = BufferCore(cache_time=10e-9)
     items = [(100, 0), (110, 1), (105, 2), (103, 3), (108, 4), (108, 5), (108, 6)]
     for stamp, ident in items:
         assert b.set_transform(ts("p", "c", float(ident), stamp))
@@ -403,7 +403,7 @@ def test_repeated_stamps_and_pruning_as_time_cache() -> None:
 def test_a_loop_is_a_lookup_exception() -> None:
     """walkToTopParent: past MAX_GRAPH_DEPTH it answers TF2_LOOKUP_ERROR with "The tf tree is
     invalid because it contains a loop." and allFramesAsString (frames in first-seen order)."""
-    b = Buffer()
+    b = BufferCore()
     b.set_transform(ts("b", "a", 0.0, S))
     b.set_transform(ts("a", "b", 0.0, S))
     b.set_transform(ts("z", "c", 0.0, S))

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from usar_replay.core.errors import InvalidScenario
-from usar_replay.world.nav import OccupancyGrid
+from usar_replay.world.nav import PlanningGrid
 from usar_replay.world.scenario import course_world
 from usar_replay.world.scenario_toml import from_toml, to_toml
 from usar_replay.world.variants import (
@@ -20,7 +20,7 @@ from usar_replay.world.variants import (
 )
 
 BASE = course_world()
-GRID = OccupancyGrid.from_scenario(BASE)
+GRID = PlanningGrid.from_scenario(BASE)
 
 
 @pytest.mark.parametrize("seed", range(10))

@@ -30,7 +30,7 @@ from usar_replay.batch.classreport import (
 )
 from usar_replay.batch.engines import Engine
 from usar_replay.batch.plan import (
-    Limits,
+    JobLimits,
     Plan,
     RunResult,
     discover,
@@ -101,7 +101,7 @@ def plan_class(
     scenarios: Sequence[str] = (),
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: Limits | None = None,
+    limits: JobLimits | None = None,
     world_key: WorldKey | None = None,
 ) -> Plan:
     """The plan of a batch: teams, worlds (seeded ones keyed by ``world_key``: hidden worlds),
@@ -112,7 +112,7 @@ def plan_class(
             f"-o {out_dir}: the output folder and {submissions_dir} must not contain each other; "
             "choose an output folder elsewhere"
         )
-    if (limits or Limits()).sandbox:
+    if (limits or JobLimits()).sandbox:
         require_sandbox()
     subs = discover(submissions_dir)
     worlds = make_worlds(seeds, scenarios, world_key)

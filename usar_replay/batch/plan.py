@@ -44,7 +44,7 @@ from usar_replay.world.world_key import WorldKey
 __all__ = [
     "GRADE_FORMAT",
     "RUN_FORMAT",
-    "Limits",
+    "JobLimits",
     "Plan",
     "RunJob",
     "RunResult",
@@ -99,7 +99,7 @@ class World:
 
 
 @dataclass(frozen=True, slots=True)
-class Limits:
+class JobLimits:
     """What one run may use. Wall-clock limits decide verdicts only, never a logged byte."""
 
     tick_timeout_s: float = 10.0
@@ -397,11 +397,11 @@ def make_plan(
     *,
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: Limits | None = None,
+    limits: JobLimits | None = None,
     submissions_root: str | os.PathLike[str],
 ) -> Plan:
     """Every (team, world) run and what it needs, judged from the files already in ``out_root``."""
-    limits = limits or Limits()
+    limits = limits or JobLimits()
     out = Path(out_root).resolve()
     plan = Plan(out, list(submissions), list(worlds))
     limits_dict = asdict(limits)

@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
     from usar_replay.grading.grade import LiveGrade
 
-__all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
+__all__ = ["grade_job", "main", "max_points", "record_run", "rubric"]
 
 
 class WallLimit(KeyboardInterrupt):
@@ -113,7 +113,7 @@ def rubric(
     }
 
 
-def grade_run(
+def grade_job(
     job: RunJob, record: dict[str, Any], graded: LiveGrade | None = None
 ) -> dict[str, Any]:
     """Grade the run's log (``graded``: as :func:`rubric` takes it) and write
@@ -253,11 +253,11 @@ def run(job: RunJob) -> dict[str, Any]:
         record, graded = record_run(job)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the grade is quick: let it finish
         job.path(".run.json").unlink(missing_ok=True)
-        grade = grade_run(job, record, graded)
+        grade = grade_job(job, record, graded)
         _write_record(job, record)
     else:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
-        grade = grade_run(job, record)
+        grade = grade_job(job, record)
     return {
         "outcome": grade["outcome"],
         "points": grade["points"],

@@ -49,7 +49,7 @@ from typing import Any
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
-from usar_replay.core.tf_tree import Buffer, TransformException
+from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1.build import catkin_env
@@ -175,7 +175,7 @@ class Bridge:
         self._inbox: list[tuple[str, msgs.Message]] = []
         self._pubs: dict[str, Any] = {}
         self._static: dict[str, msgs.TransformStamped] = {}
-        self.buffer = Buffer(cache_time=30.0)
+        self.buffer = BufferCore(cache_time=30.0)
         self.info: msgs.CameraInfo | None = None
         self.move_base: dict[str, Any] = {}
         self.last_t: int | None = None

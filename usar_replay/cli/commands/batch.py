@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
     from usar_replay.batch.driver import grade_class, plan_class
     from usar_replay.batch.engines import make_engine
-    from usar_replay.batch.plan import Limits, parse_seeds
+    from usar_replay.batch.plan import JobLimits, parse_seeds
     from usar_replay.core.settings import RunSettings
     from usar_replay.core.settings import to_toml as settings_to_toml
 
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     if args.thresholds:
         options.thresholds(args)  # a bad file is a usage error before any run
         thresholds = Path(args.thresholds).read_text(encoding="utf-8")
-    limits = Limits(
+    limits = JobLimits(
         tick_timeout_s=args.tick_timeout,
         memory_mb=args.mission_memory,
         cpu_s=args.cpu_limit,
