@@ -113,7 +113,8 @@ class JobLimits:
     wall_s: float = 3600.0
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
-    """Keep the mission to its own files (usar_replay.node.audit_guard)."""
+    """Run the mission in the kernel sandbox (usar_replay.node.kernel_sandbox) with the audit
+    guard (usar_replay.node.audit_guard) on; ``usar batch --no-sandbox`` turns both off."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -140,11 +140,11 @@ def _mission_limits(job: RunJob) -> Any:
     from usar_replay.node.worker import MissionLimits
 
     lim = job.limits
-    sandbox = None
+    guard = None
     if lim.get("sandbox", True):
         own = str(Path(job.submission_path).resolve())
         work = str(job.work_dir.resolve())
-        sandbox = GuardPolicy(
+        guard = GuardPolicy(
             read_roots=(own,),
             write_roots=(work,),
             deny_roots=(job.out_root, job.submissions_root),
@@ -155,7 +155,7 @@ def _mission_limits(job: RunJob) -> Any:
         startup_timeout_s=float(lim["startup_timeout_s"]),
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
-        sandbox=sandbox,
+        sandbox=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident
         jail="required" if lim.get("sandbox", True) else "off",
@@ -166,7 +166,7 @@ def _mission_limits(job: RunJob) -> Any:
 
 def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog: Any) -> Any:
     """A catkin package: built and run by the ROS 1 bridge, in its own network namespace (its
-    master and ports are its own, so teams run in parallel). The Python sandbox does not apply
+    master and ports are its own, so teams run in parallel). The audit guard does not apply
     to native code; the time and memory limits do."""
     import dataclasses
 
