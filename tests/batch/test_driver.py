@@ -39,7 +39,7 @@ from usar_replay.cli import main as cli
 from usar_replay.core.errors import UsageError
 from usar_replay.world.scenario_toml import to_toml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MINIMAL = (ROOT / "examples" / "minimal_mission.py").read_text(encoding="utf-8")
 ARRIVED = "    def arrived(self, _result: object) -> None:\n        self.spinning = True\n"
 FIRST_TIMER = "    def on_timer(self) -> None:\n"

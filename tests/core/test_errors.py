@@ -15,7 +15,7 @@ import pytest
 
 from usar_replay.core import errors
 
-PACKAGE = Path(__file__).resolve().parent.parent / "usar_replay"
+PACKAGE = Path(__file__).resolve().parents[2] / "usar_replay"
 
 NOT_USAR_ERRORS = {
     "core/tf_tree.py": {

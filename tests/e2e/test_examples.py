@@ -34,7 +34,7 @@ from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import ReplayReport, replay
 from usar_replay.world.scenario_toml import save
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 FAULTY = EXAMPLES / "faulty"
 
 Message = tuple[str, msgs.Message | None, int]

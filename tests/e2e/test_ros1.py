@@ -27,7 +27,7 @@ from usar_replay.ros1.build import find_package, package_sha256
 from usar_replay.world.scenario import course_world
 from usar_replay.world.scenario_toml import save
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ros1" / "usar_course"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
 
 
 @pytest.fixture(autouse=True, scope="module")

@@ -13,7 +13,7 @@ from conftest import one_room
 
 from usar_replay.world.scenario_toml import to_toml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MISSION = "from usar_replay.api import Node\n\n\ndef main() -> None:\n    Node('idle')\n"
 
 

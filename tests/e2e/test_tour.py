@@ -37,7 +37,7 @@ from example_worlds import quick_room
 from usar_replay.cli.parser import build_parser
 from usar_replay.world.scenario_toml import to_toml
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 LEFT_OUT = {
     "batch": "it needs a folder of submissions; the section 'Grading a class' shows it",

@@ -14,7 +14,7 @@ import pytest
 
 from usar_replay.cli.parser import build_parser as _parser
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:

@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 PACKAGE = "usar_replay"
-ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 
 # Each layer and the layers it may import (the package root, for __version__, is open to all).
 # The order is the layers' order: a layer may import only layers listed before it.

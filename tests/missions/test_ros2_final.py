@@ -29,7 +29,7 @@ from usar_replay.pipeline.replay import outputs_digest, replay
 from usar_replay.world import assignment, scenario, scenario_toml
 from usar_replay.world.ros2_world import check_ros2, make_ros2_variant, ros2_final_world, task_of
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "ros2_final"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "ros2_final"
 ALL_LINES = {
     "tf.odom_to_base",
     "aruco_target.reached",

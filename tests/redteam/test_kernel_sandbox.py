@@ -33,7 +33,7 @@ from usar_replay.node.worker import MissionLimits
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.world.scenario_toml import to_toml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 _OK, _WHY = bwrap_available()
 pytestmark = pytest.mark.skipif(not _OK, reason=f"no kernel sandbox here: {_WHY}")
 

@@ -355,7 +355,7 @@ SMUGGLER = (
 
 
 def _ros2_world() -> Scenario:
-    """The built-in world with a 320x240 camera, as tests/test_ros2_final.py records it."""
+    """The built-in world with a 320x240 camera, as tests/missions/test_ros2_final.py records it."""
     world = ros2_final_world()
     return dataclasses.replace(
         world, camera=dataclasses.replace(world.camera, width=320, height=240)
@@ -411,7 +411,7 @@ def test_an_old_mission_with_its_own_aruco_node_grades_as_before(
 ) -> None:
     """Point 12: a mission that still starts its own detector on /aruco_markers runs, its
     detections are recorded as /mission/aruco_markers, and it grades as the built-in mission
-    does (which is what it graded before: tests/test_ros2_final.py), line for line."""
+    does (which is what it graded before: tests/missions/test_ros2_final.py), line for line."""
     out, result = _ros2_record(tmp_path, "old", OLD_DETECTOR)
     assert result.outcome == "done", result.outcome_reason
     run = open_run(out)

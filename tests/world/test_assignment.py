@@ -146,7 +146,7 @@ def plugin(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _usar(plugin: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    checkout = str(Path(__file__).resolve().parents[1])
+    checkout = str(Path(__file__).resolve().parents[2])
     path = [str(plugin), checkout, os.environ.get("PYTHONPATH", "")]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in path if p)}
     return subprocess.run(
@@ -217,7 +217,7 @@ def test_registry_refuses_a_second_assignment_under_a_taken_name() -> None:
 
 
 def test_the_docs_show_the_entry_point() -> None:
-    doc = Path(__file__).resolve().parents[1] / "docs" / "assignments.md"
+    doc = Path(__file__).resolve().parents[2] / "docs" / "assignments.md"
     text = doc.read_text(encoding="utf-8")
     assert '[project.entry-points."usar_replay.assignments"]' in text
     assert "register_rubric" in text
@@ -235,7 +235,7 @@ def test_an_assignment_and_the_rubric_registry_have_one_home_each() -> None:
     registry once (grading); nothing else keeps a list of assignment names."""
     import ast
 
-    package = Path(__file__).resolve().parents[1] / "usar_replay"
+    package = Path(__file__).resolve().parents[2] / "usar_replay"
     homes: dict[str, list[str]] = {}
     for path in sorted(package.rglob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"))

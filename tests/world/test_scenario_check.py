@@ -69,7 +69,7 @@ def test_a_huge_file_is_refused_unread(tmp_path: Path) -> None:
 
 
 def test_every_range_is_documented() -> None:
-    doc = (Path(__file__).parent.parent / "docs" / "scenario.md").read_text()
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "scenario.md").read_text()
     for key, (lo, hi, _unit) in scn.RANGES.items():
         assert f"`{key}`" in doc, key
         assert f"{lo:g}" in doc and f"{hi:g}" in doc

@@ -13,7 +13,7 @@ from usar_replay.cli.main import main
 from usar_replay.log.run import open_run
 from usar_replay.world.scenario_toml import save
 
-STARTER = Path(__file__).resolve().parent.parent / "examples" / "starter_mission.py"
+STARTER = Path(__file__).resolve().parents[3] / "examples" / "starter_mission.py"
 
 
 def test_max_sim_time_exits_1_and_says_why(
