@@ -9,12 +9,22 @@ accident of import order.
 
 Imports are read with :mod:`ast`, not by importing, so the graph covers every module, and
 :func:`violations` takes any tree, so a deliberately misplaced module can be checked in a copy.
+A string that names one of usar's modules (``"usar_replay.api"``,
+``"usar_replay.missions.usar:main"``: what ``importlib`` or a ``module:function`` path loads) is a
+tie like an import: an upward one fails unless :data:`STRING_TIES` lists it with the reason it
+is not a dependency.
+
+Tests mirror the package: ``usar_replay/<layer>/<module>.py`` is tested by
+``tests/<layer>/test_<module>.py`` (or ``test_<module>_<aspect>.py``); a module without one is
+listed in :data:`UNTESTED` with where it is tested instead (``tests/e2e/`` runs the CLI and whole
+recordings, ``tests/redteam/`` attacks, ``tests/meta/`` checks the project itself).
 """
 
 from __future__ import annotations
 
 import ast
 import graphlib
+import re
 import shutil
 import subprocess
 import sys
@@ -22,6 +32,7 @@ from pathlib import Path
 
 PACKAGE = "usar_replay"
 ROOT = Path(__file__).resolve().parents[2] / PACKAGE
+TESTS = ROOT.parent / "tests"
 
 # Each layer and the layers it may import (the package root, for __version__, is open to all).
 # The order is the layers' order: a layer may import only layers listed before it.
@@ -122,6 +133,50 @@ def _targets(node: ast.Import | ast.ImportFrom, mods: dict[str, Path], here: str
     return out - {here}
 
 
+STRING_NAME = re.compile(rf"{PACKAGE}(\.\w+)+(:\w+)?")
+"""A string literal naming a module of ours (``importlib``'s argument, a ``module:function``)."""
+
+# Upward ties through a string that are not dependencies, each with why.
+STRING_TIES: dict[tuple[str, str], str] = {
+    ("usar_replay.node.worker", "usar_replay.api"): (
+        "preloaded in the mission process before the audit guard is on (numpy's import needs "
+        "ctypes); the mission's own code is what imports the api"
+    ),
+    ("usar_replay.world.assignment", "usar_replay.missions.usar"): (
+        "an assignment's default mission as a module:function path (data): the node layer's "
+        "loader imports it inside the mission process"
+    ),
+    ("usar_replay.world.assignment", "usar_replay.missions.ros2_final"): (
+        "an assignment's default mission as a module:function path (data): the node layer's "
+        "loader imports it inside the mission process"
+    ),
+    ("usar_replay.log.run", "usar_replay.missions.usar"): (
+        "a label: the module a log's mission info names when the log does not say; never imported"
+    ),
+}
+
+
+def string_ties(root: Path = ROOT) -> dict[str, set[str]]:
+    """Each module's ties through string literals that name a module of ours (the longest
+    dotted prefix that is one), itself left out."""
+    mods = modules(root)
+    out: dict[str, set[str]] = {m: set() for m in mods}
+    for name, path in mods.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            if not (isinstance(node, ast.Constant) and isinstance(node.value, str)):
+                continue
+            if not STRING_NAME.fullmatch(node.value):
+                continue
+            parts = node.value.split(":")[0].split(".")
+            for n in range(len(parts), 1, -1):
+                cand = ".".join(parts[:n])
+                if cand in mods:
+                    out[name].add(cand)
+                    break
+        out[name].discard(name)
+    return out
+
+
 def import_graph(root: Path = ROOT) -> tuple[dict[str, set[str]], dict[str, set[str]]]:
     """(module-level edges, deferred edges): module-level imports run when the module is
     imported (class bodies and try blocks included); deferred ones are inside functions or
@@ -162,6 +217,7 @@ def _homes_for(needs: str) -> str:
 def violations(root: Path = ROOT) -> list[str]:
     """Every broken layer rule, one line each, saying where the module belongs."""
     top, deferred = import_graph(root)
+    strings = string_ties(root)
     out: list[str] = []
     for mod in sorted(top):
         layer = _layer_of(mod)
@@ -190,6 +246,16 @@ def violations(root: Path = ROOT) -> list[str]:
                 out.append(
                     f"{rel} imports {dep}: the {layer} layer may import only {_allowed_for(layer)};"
                     f" a module that needs {dep_layer} belongs in {_homes_for(dep_layer)}"
+                )
+        for dep in sorted(strings[mod]):
+            dep_layer = _layer_of(dep)
+            if dep_layer in (layer, "") or dep_layer in LAYERS[layer]:
+                continue
+            if (mod, dep) not in STRING_TIES:
+                out.append(
+                    f"{rel} names {dep} in a string (an import by name): the {layer} layer may "
+                    f"import only {_allowed_for(layer)}; move the code that loads it into "
+                    f"{_homes_for(dep_layer)}, or list the tie in STRING_TIES with why"
                 )
     return out
 
@@ -243,6 +309,37 @@ def test_a_misplaced_module_fails_with_where_it_belongs(tmp_path: Path) -> None:
     assert "belongs in log, grading, pipeline, ros1, viewer, batch, cli" in world
     assert "only sim/ may import it" in heavy
     assert "is in no layer" in stray and "world/" in stray
+
+
+def test_a_string_that_names_a_module_is_an_import(tmp_path: Path) -> None:
+    """``importlib.import_module("usar_replay.cli.main")`` in core, or a ``module:function``
+    path naming grading in world, breaks the layers like an import would."""
+    copy = tmp_path / PACKAGE
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "core" / "loader.py").write_text(
+        "import importlib\n\n\ndef f() -> object:\n"
+        "    return importlib.import_module('usar_replay.cli.main')\n",
+        encoding="utf-8",
+    )
+    (copy / "world" / "plugin.py").write_text(
+        "GRADER = 'usar_replay.grading.grade:grade_file'\nNOT_A_MODULE = 'usar_replay is great'\n",
+        encoding="utf-8",
+    )
+    problems = violations(copy)
+    assert len(problems) == 2, problems
+    core, world = sorted(problems)
+    assert core.startswith(f"{PACKAGE}/core/loader.py names usar_replay.cli.main in a string")
+    assert "the core layer may import only nothing of usar's" in core
+    assert world.startswith(f"{PACKAGE}/world/plugin.py names usar_replay.grading.grade")
+    # the listed ties are seen too: unlisted, each is a violation
+    assert all(dep in string_ties(copy)[mod] for mod, dep in STRING_TIES)
+
+
+def test_every_listed_string_tie_is_still_there() -> None:
+    """STRING_TIES cannot rot: each entry names a tie the tree still has."""
+    ties = string_ties()
+    stale = [f"{m} -> {d}" for m, d in STRING_TIES if d not in ties[m]]
+    assert stale == [], f"STRING_TIES lists ties that are gone: {stale}"
 
 
 def test_no_cycles_among_module_level_imports() -> None:
