@@ -357,6 +357,132 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
     assert cyc == [], f"import cycle (with deferred imports): {' -> '.join(cyc)}"
 
 
+# Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
+UNTESTED: dict[str, str] = {
+    "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
+    "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
+    "batch/plan.py": "tests/batch/test_driver.py (discovery, digests, seeds, resume)",
+    "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
+    "cli/__main__.py": "`python -m usar_replay.cli`: two lines that call cli/main",
+    "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
+    "cli/commands/info.py": "tests/cli/test_main.py runs `usar info`",
+    "cli/commands/log.py": "tests/cli/commands/test_echo.py runs `usar log`",
+    "cli/commands/recover.py": "tests/e2e/test_reliability.py runs `usar recover`",
+    "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
+    "cli/commands/report.py": "tests/grading/test_htmlreport.py runs `usar report`",
+    "cli/commands/scenario.py": "tests/cli/test_main.py runs `usar scenario`",
+    "cli/commands/view.py": "tests/viewer/test_view.py runs `usar view`",
+    "cli/exits.py": "constants; every CLI test checks an exit code (tests/cli/test_main.py)",
+    "cli/options.py": "every command reads it: tests/e2e/test_tour.py",
+    "cli/parser.py": "tests/meta/test_readme.py checks every command's --help against the README",
+    "cli/parser_parts.py": "bad command lines: tests/e2e/test_reliability.py",
+    "cli/textout.py": "tests/e2e/test_widths.py: every line a command prints fits 100 columns",
+    "cli/window.py": "--since/--until: tests/cli/commands/test_echo.py",
+    "core/cdr.py": "tests/core/test_cdrdecode.py and tests/core/test_msgs.py round-trip through it",
+    "core/contract.py": "names only; tests/pipeline/test_record.py checks the log contract",
+    "core/finite.py": "NaN and infinity refused: tests/redteam/test_grade.py",
+    "core/msg_text.py": "`usar echo`'s text: tests/cli/commands/test_echo.py",
+    "core/outfiles.py": "--overwrite and inputs kept: tests/cli/commands/test_grade.py",
+    "core/safe_text.py": "control characters shown, not obeyed: tests/redteam/test_leaks.py",
+    "core/settings.py": "the log's settings read back: tests/pipeline/test_record.py",
+    "core/signals.py": "SIGINT/SIGTERM/SIGHUP: tests/e2e/test_reliability.py",
+    "grading/rubric_ros2.py": "tests/missions/test_ros2_final.py grades the final project",
+    "grading/rubrics.py": "the registry: tests/world/test_assignment.py adds a rubric",
+    "grading/verdict.py": "data classes; tests/grading/test_delta.py, tests/grading/test_grade.py",
+    "log/echo.py": "tests/cli/commands/test_echo.py",
+    "log/info.py": "tests/cli/test_main.py (`usar info`)",
+    "log/mcapfile.py": "the MCAP records under log/bag: tests/log/test_bag.py",
+    "log/recover.py": "tests/e2e/test_reliability.py (`usar recover`)",
+    "log/rosout.py": "tests/cli/commands/test_echo.py (`usar log`)",
+    "log/run.py": "the opened run every grade and replay uses: tests/grading/test_grade.py",
+    "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
+    "node/boundary_check.py": "refused outputs: tests/node/test_node.py",
+    "node/executor.py": "the callback order: tests/node/test_node.py",
+    "node/hide.py": "the grader's files hidden: tests/redteam/test_leaks.py",
+    "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
+    "node/navigation.py": "the built-in missions drive with it: tests/e2e/test_examples.py",
+    "node/tf2.py": "tests/node/test_node.py (listeners, static broadcasts)",
+    "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
+    "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
+    "pipeline/replay_report.py": "`usar replay --json/--junit`: tests/pipeline/test_replay.py",
+    "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
+    "ros1/build.py": "covered end to end by tests/e2e/test_ros1.py",
+    "ros1/convert.py": "tests/e2e/test_ros1.py (messages both ways)",
+    "ros1/debian.py": "tests/e2e/test_ros1.py (installed, missing packages)",
+    "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
+    "ros1/netns.py": "covered end to end by tests/e2e/test_ros1.py",
+    "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
+    "ros1/record.py": "covered end to end by tests/e2e/test_ros1.py",
+    "sim/camera.py": "tests/world/test_detect.py, tests/pipeline/test_replay.py",
+    "sim/eglshadow.py": "tests/sim/test_simulator.py",
+    "viewer/viewer_process.py": "tests/viewer/test_view.py",
+    "world/ros2_world.py": "tests/missions/test_ros2_final.py (the world, its checks)",
+    "world/scenario_toml.py": "TOML round trips: tests/world/test_scenario.py",
+    "world/world_key.py": "tests/redteam/test_grade.py (a key that hides the world)",
+}
+
+
+def missing_tests(root: Path = ROOT, tests: Path = TESTS) -> list[str]:
+    """Each module with no ``tests/<layer>/test_<module>.py`` (or ``test_<module>_*.py``) that
+    :data:`UNTESTED` does not list, one line each, saying what to add."""
+    out: list[str] = []
+    for path in sorted(root.rglob("*.py")):
+        if path.name == "__init__.py":
+            continue
+        rel = path.relative_to(root)
+        folder = tests / rel.parent
+        if (folder / f"test_{path.stem}.py").is_file() or any(
+            folder.glob(f"test_{path.stem}_*.py")
+        ):
+            continue
+        if rel.as_posix() not in UNTESTED:
+            want = (Path("tests") / rel.parent / f"test_{path.stem}.py").as_posix()
+            out.append(
+                f"{PACKAGE}/{rel.as_posix()} has no test file: add {want}, or list the module "
+                "in UNTESTED with where it is tested"
+            )
+    return out
+
+
+def test_every_module_has_a_test_file_or_a_reason() -> None:
+    problems = missing_tests()
+    assert problems == [], "\n".join(problems)
+
+
+def test_untested_lists_only_modules_without_a_test_file() -> None:
+    """A module that gains its test file, or is gone, leaves UNTESTED; every reason names the
+    test that covers the module, and that test exists."""
+    for key, reason in UNTESTED.items():
+        path = ROOT / key
+        assert path.is_file(), f"UNTESTED lists {key}, which is gone"
+        folder = TESTS / Path(key).parent
+        assert not (folder / f"test_{path.stem}.py").is_file(), f"{key} has a test file now"
+        for named in re.findall(r"tests/[\w/]+\.py", reason):
+            assert (ROOT.parent / named).is_file(), f"UNTESTED[{key!r}] names {named}: none"
+
+
+def test_a_module_without_a_test_file_is_named(tmp_path: Path) -> None:
+    copy = tmp_path / PACKAGE
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "world" / "orphan.py").write_text("X = 1\n", encoding="utf-8")
+    problems = missing_tests(copy, TESTS)
+    assert problems == [
+        f"{PACKAGE}/world/orphan.py has no test file: add tests/world/test_orphan.py, or list "
+        "the module in UNTESTED with where it is tested"
+    ]
+    (tmp_path / "tests" / "world").mkdir(parents=True)
+    (tmp_path / "tests" / "world" / "test_orphan_edges.py").write_text("", encoding="utf-8")
+    assert "world/orphan.py" not in " ".join(missing_tests(copy, tmp_path / "tests"))
+
+
+def test_every_init_only_says_and_re_exports() -> None:
+    """An ``__init__.py`` needs no test file of its own because it defines nothing."""
+    for path in sorted(ROOT.rglob("__init__.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defs = [n for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)]
+        assert defs == [], f"{path} defines {[d.name for d in defs]}: give them a module"
+
+
 LIGHT_MODULES = sorted(m for m in modules() if _layer_of(m) in LIGHT_LAYERS)
 
 
