@@ -8,14 +8,14 @@ from __future__ import annotations
 import itertools
 import time
 
-from usar_replay.world.nav import Navigator, OccupancyGrid, plan
+from usar_replay.world.nav import Navigator, PlanningGrid, plan
 from usar_replay.world.scenario import course_world
 
 
 def main() -> None:
     scn = course_world()
     t0 = time.perf_counter()
-    grid = OccupancyGrid.from_scenario(scn)
+    grid = PlanningGrid.from_scenario(scn)
     build = time.perf_counter() - t0
     t0 = time.perf_counter()
     _ = grid._graph

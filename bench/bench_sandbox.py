@@ -1,4 +1,4 @@
-"""What the kernel sandbox (usar_replay/node/jail.py) costs: per run (starting the mission
+"""What the kernel sandbox (usar_replay/node/kernel_sandbox.py) costs: per run (starting the mission
 process) and per tick (the process boundary, and a short one-room recording), with and without
 bwrap. Printed, never asserted.
 
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
 from usar_replay.core import cdr, contract, msgs  # noqa: E402
-from usar_replay.node.jail import bwrap_available  # noqa: E402
+from usar_replay.node.kernel_sandbox import bwrap_available  # noqa: E402
 from usar_replay.node.worker import MissionLimits, MissionProcess, resolve_target  # noqa: E402
 
 MODES = {"bare": "off", "bwrap": "required"}

@@ -12,7 +12,7 @@ import math
 import time
 
 from usar_replay.core import msgs
-from usar_replay.core.tf_tree import Buffer
+from usar_replay.core.tf_tree import BufferCore
 
 S = 1_000_000_000
 
@@ -29,7 +29,7 @@ def _tf(parent: str, child: str, stamp: int, k: float) -> msgs.TransformStamped:
 
 
 def main(n: int = 20000) -> None:
-    b = Buffer(cache_time=10.0)
+    b = BufferCore(cache_time=10.0)
     names = ["f0", "f1", "f2", "f3", "f4", "f5"]
     for i in range(100):  # 10 s of history at 10 Hz per link
         for p, c in itertools.pairwise(names):

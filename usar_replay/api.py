@@ -49,7 +49,7 @@ from usar_replay.node.tf2 import (
     TransformException,
     TransformListener,
 )
-from usar_replay.world.nav import grid_from_msg
+from usar_replay.world.nav import PlanningGrid, grid_from_msg
 
 __all__ = [
     "ArucoMarkers",
@@ -78,6 +78,7 @@ __all__ = [
     "Path",
     "Point",
     "Pose",
+    "PlanningGrid",
     "PoseStamped",
     "Quaternion",
     "StaticTransformBroadcaster",

@@ -30,7 +30,7 @@ from usar_replay.batch.classreport import (
 )
 from usar_replay.batch.engines import Engine
 from usar_replay.batch.plan import (
-    Limits,
+    JobLimits,
     Plan,
     RunResult,
     discover,
@@ -101,7 +101,7 @@ def plan_class(
     scenarios: Sequence[str] = (),
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: Limits | None = None,
+    limits: JobLimits | None = None,
     world_key: WorldKey | None = None,
 ) -> Plan:
     """The plan of a batch: teams, worlds (seeded ones keyed by ``world_key``: hidden worlds),
@@ -112,7 +112,7 @@ def plan_class(
             f"-o {out_dir}: the output folder and {submissions_dir} must not contain each other; "
             "choose an output folder elsewhere"
         )
-    if (limits or Limits()).sandbox:
+    if (limits or JobLimits()).sandbox:
         require_sandbox()
     subs = discover(submissions_dir)
     worlds = make_worlds(seeds, scenarios, world_key)
@@ -128,9 +128,10 @@ def plan_class(
 
 
 def require_sandbox() -> None:
-    """Refuse to grade untrusted code without the kernel sandbox (usar_replay.node.jail): a
-    :class:`UsageError` (exit 2) that says how to get it, or to go without on purpose."""
-    from usar_replay.node.jail import INSTALL_HINT, bwrap_available
+    """Refuse to grade untrusted code without the kernel sandbox
+    (usar_replay.node.kernel_sandbox): a :class:`UsageError` (exit 2) that says how to get it, or to
+    go without on purpose."""
+    from usar_replay.node.kernel_sandbox import INSTALL_HINT, bwrap_available
 
     ok, why = bwrap_available()
     if not ok:

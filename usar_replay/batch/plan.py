@@ -46,7 +46,7 @@ from usar_replay.world.world_key import WorldKey
 __all__ = [
     "GRADE_FORMAT",
     "RUN_FORMAT",
-    "Limits",
+    "JobLimits",
     "Plan",
     "RunJob",
     "RunResult",
@@ -103,7 +103,7 @@ class World:
 
 
 @dataclass(frozen=True, slots=True)
-class Limits:
+class JobLimits:
     """What one run may use. Wall-clock limits decide verdicts only, never a logged byte."""
 
     tick_timeout_s: float = 10.0
@@ -117,7 +117,8 @@ class Limits:
     wall_s: float = 3600.0
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
-    """Keep the mission to its own files (usar_replay.node.sandbox)."""
+    """Run the mission in the kernel sandbox (usar_replay.node.kernel_sandbox) with the audit
+    guard (usar_replay.node.audit_guard) on; ``usar batch --no-sandbox`` turns both off."""
     max_log_mib: int = 2048
     """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
     grade_s: float = 600.0
@@ -401,11 +402,11 @@ def make_plan(
     *,
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: Limits | None = None,
+    limits: JobLimits | None = None,
     submissions_root: str | os.PathLike[str],
 ) -> Plan:
     """Every (team, world) run and what it needs, judged from the files already in ``out_root``."""
-    limits = limits or Limits()
+    limits = limits or JobLimits()
     out = Path(out_root).resolve()
     plan = Plan(out, list(submissions), list(worlds))
     limits_dict = asdict(limits)

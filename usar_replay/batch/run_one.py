@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
     from usar_replay.grading.grade import LiveGrade
 
-__all__ = ["grade_run", "main", "max_points", "record_run", "rubric"]
+__all__ = ["grade_job", "main", "max_points", "record_run", "rubric"]
 
 
 class WallLimit(KeyboardInterrupt):
@@ -162,7 +162,7 @@ def rubric(
     }
 
 
-def grade_run(
+def grade_job(
     job: RunJob, record: dict[str, Any], graded: LiveGrade | None = None
 ) -> dict[str, Any]:
     """Grade the run's log (``graded``: as :func:`rubric` takes it) and write
@@ -199,15 +199,15 @@ def grade_run(
 
 
 def _mission_limits(job: RunJob) -> Any:
-    from usar_replay.node.sandbox import SandboxPolicy
+    from usar_replay.node.audit_guard import GuardPolicy
     from usar_replay.node.worker import MissionLimits
 
     lim = job.limits
-    sandbox = None
+    guard = None
     if lim.get("sandbox", True):
         own = str(Path(job.submission_path).resolve())
         work = str(job.work_dir.resolve())
-        sandbox = SandboxPolicy(
+        guard = GuardPolicy(
             read_roots=(own,),
             write_roots=(work,),
             deny_roots=(job.out_root, job.submissions_root),
@@ -219,7 +219,7 @@ def _mission_limits(job: RunJob) -> Any:
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
         max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
-        sandbox=sandbox,
+        sandbox=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident
         jail="required" if lim.get("sandbox", True) else "off",
@@ -230,7 +230,7 @@ def _mission_limits(job: RunJob) -> Any:
 
 def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog: Any) -> Any:
     """A catkin package: built and run by the ROS 1 bridge, in its own network namespace (its
-    master and ports are its own, so teams run in parallel). The Python sandbox does not apply
+    master and ports are its own, so teams run in parallel). The audit guard does not apply
     to native code; the time and memory limits do."""
     import dataclasses
 
@@ -317,11 +317,11 @@ def run(job: RunJob) -> dict[str, Any]:
         record, graded = record_run(job)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # until grading, which honours it again
         job.path(".run.json").unlink(missing_ok=True)
-        grade = grade_run(job, record, graded)
+        grade = grade_job(job, record, graded)
         _write_record(job, record)
     else:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
-        grade = grade_run(job, record)
+        grade = grade_job(job, record)
     return {
         "outcome": grade["outcome"],
         "points": grade["points"],

@@ -11,7 +11,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from usar_replay import __version__
-from usar_replay.cli import (
+from usar_replay.cli.commands import (
     batch,
     echo,
     grade,
@@ -24,7 +24,7 @@ from usar_replay.cli import (
     scenario,
     view,
 )
-from usar_replay.cli.arguments import UsageParser
+from usar_replay.cli.parser_parts import UsageParser
 
 if TYPE_CHECKING:
     pass

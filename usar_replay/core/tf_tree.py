@@ -47,16 +47,16 @@ from typing import Any, Literal, overload
 from usar_replay.core import contract, msgs
 
 __all__ = [
-    "Buffer",
+    "BufferCore",
     "ConnectivityException",
     "ExtrapolationException",
     "InvalidArgumentException",
     "LookupException",
-    "StaticTransformBroadcaster",
+    "StaticTfMessageBuilder",
     "TimeoutException",
-    "TransformBroadcaster",
+    "TfMessageBuilder",
     "TransformException",
-    "TransformListener",
+    "BufferFeeder",
 ]
 
 
@@ -328,7 +328,7 @@ class _TimeCache:
 # --- the buffer ----------------------------------------------------------------------------------
 
 
-class Buffer:
+class BufferCore:
     """tf2's ``BufferCore`` with tf2_ros' Python ``Buffer`` API (no waiting: data is the log)."""
 
     def __init__(self, cache_time: float = 10.0) -> None:
@@ -868,7 +868,7 @@ def _connectivity_text(target: str, source: str) -> str:
 # --- broadcaster and listener -------------------------------------------------------------------
 
 
-class TransformBroadcaster:
+class TfMessageBuilder:
     """Turns transforms into the ``TFMessage`` to publish on ``/tf`` (the caller publishes)."""
 
     topic = contract.TF
@@ -880,16 +880,17 @@ class TransformBroadcaster:
         return msgs.TFMessage(transforms=items)
 
 
-class StaticTransformBroadcaster(TransformBroadcaster):
+class StaticTfMessageBuilder(TfMessageBuilder):
     """The same for ``/tf_static`` (latched: transient-local QoS in the log)."""
 
     topic = contract.TF_STATIC
 
 
-class TransformListener:
-    """Feeds a :class:`Buffer` from ``/tf`` and ``/tf_static`` messages, like tf2_ros' listener."""
+class BufferFeeder:
+    """Feeds a :class:`BufferCore` from ``/tf`` and ``/tf_static`` messages (tf2_ros' listener
+    without a node)."""
 
-    def __init__(self, buffer: Buffer, authority: str = "listener") -> None:
+    def __init__(self, buffer: BufferCore, authority: str = "listener") -> None:
         self.buffer = buffer
         self.authority = authority
 

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import wrap_angle, yaw_from_quat
 from usar_replay.core.settings import Thresholds
-from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
+from usar_replay.core.tf_tree import BufferCore, BufferFeeder, TransformException
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.ros2_world import task_of
 from usar_replay.world.scenario import Scenario
@@ -140,8 +140,8 @@ class Grader:
         self.th = thresholds or Thresholds()
         self.task = task_of(scenario)
         self.truth_destination = self.task.destination
-        self.buffer = Buffer(cache_time=30.0)
-        self.listener = TransformListener(self.buffer)
+        self.buffer = BufferCore(cache_time=30.0)
+        self.listener = BufferFeeder(self.buffer)
         self._odom: dict[int, tuple[float, float, float]] = {}
         self.odom_tf = _Worst()
         self.target_ns: int | None = None

@@ -65,7 +65,7 @@ from dataclasses import dataclass, field, replace
 from usar_replay.core import contract, msgs
 from usar_replay.core.finite import nonfinite_field
 from usar_replay.core.settings import Thresholds
-from usar_replay.core.tf_tree import Buffer, TransformException, TransformListener
+from usar_replay.core.tf_tree import BufferCore, BufferFeeder, TransformException
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 from usar_replay.world.scenario import Scenario
 
@@ -205,8 +205,8 @@ class Grader:
         self.markers = {m.id: (m.x, m.y, m.z) for m in sorted(scenario.markers, key=lambda m: m.id)}
         self.explorer_home = (scenario.explorer.x, scenario.explorer.y)
         self.follower_home = (scenario.follower.x, scenario.follower.y)
-        self.buffer = Buffer(cache_time=DETECTION_MEMORY_NS / 1e9)
-        self.listener = TransformListener(self.buffer)
+        self.buffer = BufferCore(cache_time=DETECTION_MEMORY_NS / 1e9)
+        self.listener = BufferFeeder(self.buffer)
 
         def disc(c: tuple[float, float], r: float, count_start: bool) -> Disc:
             return Disc(c, r, r + th.reentry_m, count_start)

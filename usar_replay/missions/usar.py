@@ -42,7 +42,7 @@ from usar_replay.node.navigation import NavigateClient, NavResult
 from usar_replay.node.node import Node, Time, current_executor
 from usar_replay.node.tf2 import Buffer, TransformBroadcaster, TransformException, TransformListener
 from usar_replay.world.detect import detect
-from usar_replay.world.nav import OccupancyGrid, grid_from_msg, robot_disc
+from usar_replay.world.nav import PlanningGrid, grid_from_msg, robot_disc
 
 __all__ = ["ArucoDetect", "Explorer", "Follower", "approach_point", "main"]
 
@@ -329,7 +329,7 @@ class Follower(Node):
         self.markers: dict[int, tuple[float, float, msgs.Quaternion]] = {}
         self.queue: list[int] = []
         self.started = False
-        self.map: OccupancyGrid | None = None
+        self.map: PlanningGrid | None = None
         self.create_subscription(msgs.OccupancyGrid, contract.MAP_TOPIC, self._on_map)
         self.create_subscription(
             msgs.FiducialTransformArray, contract.MARKER_POSES, self._on_markers
@@ -393,7 +393,7 @@ def _target_index(name: str) -> int:
 
 
 def approach_point(
-    grid: OccupancyGrid,
+    grid: PlanningGrid,
     marker_xy: tuple[float, float],
     rotation: msgs.Quaternion,
     settings: MissionSettings,

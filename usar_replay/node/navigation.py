@@ -30,10 +30,10 @@ from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
 from usar_replay.node.node import Node, Time
 from usar_replay.node.tf2 import Buffer, TransformException, TransformListener
 from usar_replay.world.nav import (
-    Limits,
+    DriveLimits,
     Navigator,
     NavStatus,
-    OccupancyGrid,
+    PlanningGrid,
     goal_status,
     grid_from_msg,
 )
@@ -68,7 +68,7 @@ class NavigateClient:
         robot: str,
         *,
         buffer: Buffer | None = None,
-        limits: Limits | None = None,
+        limits: DriveLimits | None = None,
         xy_tolerance: float = 0.05,
         yaw_tolerance: float = 0.17,
         base_frame: str | None = None,
@@ -79,15 +79,15 @@ class NavigateClient:
         self.node = node
         self.robot = robot
         self.base_frame = base_frame or contract.base_frame(robot)
-        self.limits = limits or Limits()
+        self.limits = limits or DriveLimits()
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
         if buffer is None:
             buffer = Buffer(cache_time=30.0)
             TransformListener(buffer, node)
         self.buffer = buffer
-        self.grid: OccupancyGrid | None = None
-        self._base_grid: OccupancyGrid | None = None
+        self.grid: PlanningGrid | None = None
+        self._base_grid: PlanningGrid | None = None
         self._discs: list[tuple[float, float, float]] = []
         self._nav: Navigator | None = None
         self.pose: tuple[float, float, float] | None = None

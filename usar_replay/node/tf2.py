@@ -48,7 +48,7 @@ def _ns(time: TimeLike) -> int:
     return int(time)
 
 
-class Buffer(tf_tree.Buffer):
+class Buffer(tf_tree.BufferCore):
     """tf2_ros.Buffer: ``lookup_transform(target, source, time)`` with ``Time()`` meaning the
     latest common time, as in tf2."""
 
@@ -85,10 +85,10 @@ class TransformListener:
     buffer filled before its own ``/tf`` callbacks run (the executor's creation order).
     """
 
-    def __init__(self, buffer: tf_tree.Buffer, node: Node, *, spin_thread: bool = False):
+    def __init__(self, buffer: tf_tree.BufferCore, node: Node, *, spin_thread: bool = False):
         self.buffer = buffer
         self.node = node
-        self._core = tf_tree.TransformListener(buffer, authority=node.get_name())
+        self._core = tf_tree.BufferFeeder(buffer, authority=node.get_name())
         node.create_subscription(msgs.TFMessage, contract.TF, self._core.on_tf)
         node.create_subscription(msgs.TFMessage, contract.TF_STATIC, self._core.on_tf_static)
 

@@ -49,7 +49,9 @@ from usar_replay import __version__
 from usar_replay.core import cdr, msgs
 from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.core.finite import NonFiniteValue
-from usar_replay.node import hide, jail
+from usar_replay.node import hide
+from usar_replay.node import kernel_sandbox as jail  # the worker split renames its uses
+from usar_replay.node.audit_guard import GuardPolicy as SandboxPolicy
 from usar_replay.node.boundary_check import (
     MAX_FRAME_BYTES,
     MAX_MESSAGE_BYTES,
@@ -59,7 +61,6 @@ from usar_replay.node.boundary_check import (
 )
 from usar_replay.node.executor import Executor, PublishPolicy
 from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
-from usar_replay.node.sandbox import SandboxPolicy
 from usar_replay.node.wire_io import send_within
 
 __all__ = [

@@ -59,7 +59,7 @@ from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.assignment import Assignment
 from usar_replay.world.assignment import of as assignment_of
 from usar_replay.world.detect import image_codecs
-from usar_replay.world.nav import OccupancyGrid, grid_to_msg
+from usar_replay.world.nav import PlanningGrid, grid_to_msg
 from usar_replay.world.scenario import Scenario
 from usar_replay.world.scenario_toml import to_toml
 
@@ -399,7 +399,7 @@ def _tick_loop(
     rs = settings.record
     first: list[tuple[str, msgs.Message]] = [
         (contract.TF_STATIC, sim.tf_static()),
-        (contract.MAP_TOPIC, grid_to_msg(OccupancyGrid.from_scenario(scenario), _time(run.t0))),
+        (contract.MAP_TOPIC, grid_to_msg(PlanningGrid.from_scenario(scenario), _time(run.t0))),
     ]
     steps_per_tick = max(1, rs.physics_hz // rs.control_hz)
     end_ns = run.t0 + int(limit_s * 1e9)

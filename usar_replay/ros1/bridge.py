@@ -49,8 +49,8 @@ from typing import Any
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
-from usar_replay.core.tf_tree import Buffer, TransformException
-from usar_replay.node import jail
+from usar_replay.core.tf_tree import BufferCore, TransformException
+from usar_replay.node import kernel_sandbox
 from usar_replay.node.wire_io import send_within
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1 import run_files
@@ -187,7 +187,7 @@ class Bridge:
         self._inbox: list[tuple[str, msgs.Message]] = []
         self._pubs: dict[str, Any] = {}
         self._static: dict[str, msgs.TransformStamped] = {}
-        self.buffer = Buffer(cache_time=30.0)
+        self.buffer = BufferCore(cache_time=30.0)
         self.info: msgs.CameraInfo | None = None
         self.move_base: dict[str, Any] = {}
         self.last_t: int | None = None
@@ -486,7 +486,7 @@ def main(argv: list[str]) -> None:
     setup = pickle.loads(conn.recv_bytes())  # from the recorder, which is trusted
     # the run's limits (memory, CPU, file size, open files) before the graph starts: every
     # process of it inherits them (in the kernel sandbox; empty without one)
-    jail.apply_rlimits(setup.get("rlimits", {}))
+    kernel_sandbox.apply_rlimits(setup.get("rlimits", {}))
     config = json.loads(Path(argv[2]).read_text(encoding="utf-8"))
     # rospy's and the master's chatter go to the run's folder, not the user's terminal
     log = os.open(Path(config["run_dir"]) / "bridge.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND)

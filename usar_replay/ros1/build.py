@@ -159,7 +159,7 @@ def _catkin_make(
 ) -> None:
     """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox; raise
     ``build_failed`` with the errors (paths as the student's) and a hint, or return."""
-    from usar_replay.node import jail
+    from usar_replay.node import kernel_sandbox
 
     cmd = ["catkin_make", "-C", str(ws), "-DPYTHON_EXECUTABLE=/usr/bin/python3", f"-j{jobs}"]
     if underlays:  # as on a course machine: the underlay sourced, then catkin_make
@@ -170,7 +170,7 @@ def _catkin_make(
             str(underlays[-1]),
             *cmd,
         ]
-    ok, _ = jail.bwrap_available()
+    ok, _ = kernel_sandbox.bwrap_available()
     sandbox = ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
     env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
     # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version

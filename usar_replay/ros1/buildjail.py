@@ -2,7 +2,7 @@
 
 Why: a package's ``CMakeLists.txt`` runs whatever it likes at build time (``execute_process``),
 so the build is the team's code as much as its nodes are. It runs as a run does
-(:mod:`usar_replay.node.jail`): uid 65534 with no capabilities, no network, the system and
+(:mod:`usar_replay.node.kernel_sandbox`): uid 65534 with no capabilities, no network, the system and
 Debian's ROS read-only, only its own workspace writable, a pids cgroup and rlimits (address
 space, CPU seconds per process, file size, open files, no core files) set by ``prlimit`` before
 catkin starts, and a wall-clock limit. usar reads its output from a pipe and writes nothing into
@@ -23,7 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.node import jail
+from usar_replay.node import kernel_sandbox
 
 __all__ = ["BUILD_WALL_S", "BuildLimits", "BuildOutcome", "run_jailed"]
 
@@ -60,7 +60,7 @@ class BuildOutcome:
 
 
 def _prlimit(limits: Mapping[str, int]) -> list[str]:
-    """``prlimit`` options for :meth:`usar_replay.node.jail.Jail.rlimits`."""
+    """``prlimit`` options for :meth:`usar_replay.node.kernel_sandbox.Jail.rlimits`."""
     out = ["/usr/bin/prlimit"]
     for name, value in limits.items():
         if value <= 0 and name != "CORE":
@@ -126,8 +126,8 @@ def run_jailed(
     """Run ``cmd`` with ``workspace`` its only writable folder (see the module doc); without
     ``sandbox`` (no bubblewrap, ``USAR_SANDBOX=off``) it runs with the same rlimits only, as a
     mission does then."""
-    box = jail.Jail(
-        jail.JailLimits(
+    box = kernel_sandbox.Jail(
+        kernel_sandbox.JailLimits(
             memory_mb=limits.memory_mb,
             cpu_s=limits.cpu_s,
             processes=limits.processes,
@@ -137,7 +137,7 @@ def run_jailed(
     argv = [*_prlimit(box.rlimits()), *cmd]
     fds: tuple[int, ...] = ()
     if sandbox:
-        argv = jail.jail_argv(
+        argv = kernel_sandbox.jail_argv(
             argv,
             ro_binds=ro_binds,
             work_dir=str(workspace),

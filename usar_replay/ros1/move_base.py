@@ -30,10 +30,10 @@ from typing import Any
 from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
 from usar_replay.world.nav import (
-    Limits,
+    DriveLimits,
     Navigator,
     NavStatus,
-    OccupancyGrid,
+    PlanningGrid,
     goal_status,
     robot_disc,
 )
@@ -56,7 +56,7 @@ class MoveBase:
         self.robot = robot
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
-        self.grid: OccupancyGrid | None = None
+        self.grid: PlanningGrid | None = None
         self.nav: Navigator | None = None
         self.active: Any = None
         self._events: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
@@ -155,7 +155,7 @@ class MoveBase:
             near = grid.nearest_free(x, y, GOAL_TOLERANCE_M)
             if near is not None:
                 x, y = near
-        self.nav = Navigator(grid, Limits())
+        self.nav = Navigator(grid, DriveLimits())
         path = self.nav.set_goal(
             x,
             y,

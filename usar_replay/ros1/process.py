@@ -31,8 +31,8 @@ from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.buildjail import BUILD_WALL_S
-from usar_replay.ros1.isolation import isolated_command
 from usar_replay.ros1.launch_output import file_label
+from usar_replay.ros1.netns import isolated_command
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 
@@ -166,7 +166,7 @@ class Ros1Process(MissionProcess):
         """The bridge (it writes its output to the run's folder and leads its own session, so
         the graph it starts is one process group). In the kernel sandbox it already has a
         network namespace of its own; without one it gets just that
-        (:func:`usar_replay.ros1.isolation.isolated_command`)."""
+        (:func:`usar_replay.ros1.netns.isolated_command`)."""
         cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
         if self._jail is not None:
             return cmd

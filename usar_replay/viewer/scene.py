@@ -14,7 +14,7 @@ The scene, on one time axis (the log's sim time in nanoseconds):
 * each robot's true pose, its true path so far (one row per sim second), its goals and plans;
 * the true markers, the markers the mission stored (wherever it put them:
   :mod:`usar_replay.grading.stored_markers`), and every broadcast ``marker_frame`` looked up in
-  ``map`` at its own stamp with :class:`usar_replay.core.tf_tree.Buffer`, labelled with the
+  ``map`` at its own stamp with :class:`usar_replay.core.tf_tree.BufferCore`, labelled with the
   nearest true marker and the distance to it;
 * the camera images (the recorded bytes, never decoded here) with each detection's outline
   (``aruco_detect``'s ``/fiducial_transforms`` or ``ros2_aruco``'s ``/aruco_markers``);
@@ -43,7 +43,7 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from usar_replay.core import contract, msgs, rotations
-from usar_replay.core.tf_tree import Buffer, TransformException
+from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.grading.stored_markers import StoredMarkers, is_marker_topic
 from usar_replay.world.assignment import USAR, Assignment
 from usar_replay.world.assignment import of as assignment_of
@@ -177,7 +177,7 @@ def _frame_parts(frame: str) -> list[str]:
 def frame_entity_paths(parents: Mapping[str, str]) -> dict[str, str]:
     """Every frame's entity path, so that the viewer's entity tree has the shape of the tf tree.
 
-    ``parents`` is ``{child: parent}`` (what :meth:`usar_replay.core.tf_tree.Buffer.frames`
+    ``parents`` is ``{child: parent}`` (what :meth:`usar_replay.core.tf_tree.BufferCore.frames`
     returns). A frame's path is its parent's path followed by the frame id; a root frame (``map``)
     is at the top: ``/map/explorer_tf/odom/explorer_tf/base_footprint/...``.
 
@@ -344,7 +344,7 @@ class Scene:
     def __init__(self, scenario: Scenario | None, *, marker_size: float = 0.15) -> None:
         self.scenario = scenario
         self.marker_size = marker_size
-        self.buffer = Buffer(cache_time=30.0)
+        self.buffer = BufferCore(cache_time=30.0)
         self.tf_parents: dict[str, str] = {}
         self.tf_static: dict[str, tuple[XYZ, tuple[float, float, float, float]]] = {}
         self.tf_dynamic: dict[str, Poses] = {}

@@ -2,19 +2,19 @@
 
 Pure numpy/scipy, deterministic, no clock: time comes in as integer nanoseconds with each pose.
 
-* :class:`OccupancyGrid` rasterises the scenario's walls and obstacles at 0.05 m (the course
+* :class:`PlanningGrid` rasterises the scenario's walls and obstacles at 0.05 m (the course
   costmap's resolution; never drawn by hand), computes each cell's distance to the nearest
   obstacle (``scipy.ndimage.distance_transform_edt``) and a move_base-like inflation cost that
   decays as ``exp(-3.0 (d - r))`` within 1.0 m. A cell is *free* when the robot, rotating about
-  base_footprint, fits there: its distance is at least :attr:`OccupancyGrid.robot_radius`.
+  base_footprint, fits there: its distance is at least :attr:`PlanningGrid.robot_radius`.
 * :func:`plan` is Dijkstra (scipy's compiled ``csgraph.dijkstra``) on the 8-connected free cells,
   each step weighted by its length times ``1 + cost_weight * cost``, so paths keep off walls;
   the graph is built once per grid.
 * :class:`Navigator` follows the plan with pure pursuit (look-ahead 0.35 m; rotate in place when
   the heading error exceeds 0.6 rad), within the waffle's velocity and acceleration limits, stops
   within the goal's xy tolerance, then turns to the goal's yaw if one is given. When the robot
-  makes no progress for :attr:`Limits.stuck_time_s` it backs up and replans (up to
-  :attr:`Limits.max_recoveries` times), then fails with a reason, as move_base's recovery
+  makes no progress for :attr:`DriveLimits.stuck_time_s` it backs up and replans (up to
+  :attr:`DriveLimits.max_recoveries` times), then fails with a reason, as move_base's recovery
   behaviours do.
 """
 
@@ -40,10 +40,10 @@ __all__ = [
     "goal_status",
     "grid_from_msg",
     "grid_to_msg",
-    "Limits",
+    "DriveLimits",
     "NavStatus",
     "Navigator",
-    "OccupancyGrid",
+    "PlanningGrid",
     "PlanResult",
     "plan",
     "robot_disc",
@@ -72,7 +72,7 @@ class NavStatus(enum.Enum):
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
-class Limits:
+class DriveLimits:
     """The controller's limits and gains (the waffle's and TurtleBot3's DWA defaults)."""
 
     max_linear: float = 0.26
@@ -99,7 +99,7 @@ class PlanResult:
     length_m: float = 0.0
 
 
-class OccupancyGrid:
+class PlanningGrid:
     """The costmap: occupancy, distance to obstacles and inflation cost, rows = y, cols = x."""
 
     def __init__(
@@ -136,7 +136,7 @@ class OccupancyGrid:
         *,
         robot_radius: float = ROBOT_RADIUS,
         margin: float = 0.5,
-    ) -> OccupancyGrid:
+    ) -> PlanningGrid:
         """Rasterise every wall, box, cylinder and sphere footprint (a cell is occupied when its
         centre is within half a cell of a shape, so thin walls never fall between centres)."""
         x0, y0, x1, y1 = building_extent(scn)
@@ -156,13 +156,13 @@ class OccupancyGrid:
         _add_discs(occ, gx, gy, discs, pad)
         return cls(occ, (ox, oy), resolution, robot_radius=robot_radius)
 
-    def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> OccupancyGrid:
+    def with_discs(self, discs: Iterable[tuple[float, float, float]]) -> PlanningGrid:
         """This grid plus round obstacles ``(x, y, radius)``: what a robot's sensors would add
         to its costmap, e.g. another robot parked in the way."""
         gx, gy = _cell_centres(self.origin, self.resolution, self.height, self.width)
         occ = self.occupied.copy()
         _add_discs(occ, gx, gy, discs, self.resolution / 2)
-        return OccupancyGrid(
+        return PlanningGrid(
             occ,
             self.origin,
             self.resolution,
@@ -276,7 +276,7 @@ def _add_discs(
         occ |= np.hypot(gx - x, gy - y) <= r + pad
 
 
-def plan(grid: OccupancyGrid, start: tuple[float, float], goal: tuple[float, float]) -> PlanResult:
+def plan(grid: PlanningGrid, start: tuple[float, float], goal: tuple[float, float]) -> PlanResult:
     """The cheapest path of free cells from ``start`` to ``goal``, as world points."""
     gx, gy = goal
     if not grid.is_free(gx, gy):
@@ -319,9 +319,9 @@ class _Mode(enum.Enum):
 class Navigator:
     """One robot's move_base: ``set_goal`` then ``update`` with each new pose."""
 
-    def __init__(self, grid: OccupancyGrid, limits: Limits | None = None) -> None:
+    def __init__(self, grid: PlanningGrid, limits: DriveLimits | None = None) -> None:
         self.grid = grid
-        self.limits = limits or Limits()
+        self.limits = limits or DriveLimits()
         self.status = NavStatus.IDLE
         self.reason = ""
         self.path: tuple[tuple[float, float], ...] = ()
@@ -471,7 +471,7 @@ class Navigator:
 # --- the grid as nav_msgs/OccupancyGrid (what /map carries) ---------------------------------
 
 
-def grid_to_msg(grid: OccupancyGrid, stamp: msgs.Time) -> msgs.OccupancyGrid:
+def grid_to_msg(grid: PlanningGrid, stamp: msgs.Time) -> msgs.OccupancyGrid:
     """The costmap's occupancy as ``nav_msgs/OccupancyGrid`` (0 free, 100 occupied)."""
     data = np.where(grid.occupied, 100, 0).astype(np.uint8).tobytes()
     return msgs.OccupancyGrid(
@@ -489,7 +489,7 @@ def grid_to_msg(grid: OccupancyGrid, stamp: msgs.Time) -> msgs.OccupancyGrid:
 
 def grid_from_msg(
     msg: msgs.OccupancyGrid, robot_radius: float = contract.WAFFLE.radius
-) -> OccupancyGrid:
+) -> PlanningGrid:
     """A costmap from ``/map``: occupied and unknown cells are obstacles, inflated by the robot.
 
     The resolution travels as float32; it is read back as the nearest short decimal (0.05, not
@@ -500,7 +500,7 @@ def grid_from_msg(
     occupied = (cells >= 50) | (cells < 0)
     resolution = float(f"{info.resolution:.7g}")
     origin = (info.origin.position.x, info.origin.position.y)
-    return OccupancyGrid(occupied, origin, resolution, robot_radius=robot_radius)
+    return PlanningGrid(occupied, origin, resolution, robot_radius=robot_radius)
 
 
 # --- a goal's outcome as diagnostic_msgs/DiagnosticStatus (what /<robot>/goal_status carries) ---

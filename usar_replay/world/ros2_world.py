@@ -35,7 +35,7 @@ import numpy as np
 from usar_replay.core import contract
 from usar_replay.core.errors import InvalidScenario
 from usar_replay.core.rotations import wrap_angle
-from usar_replay.world.nav import Navigator, NavStatus, OccupancyGrid
+from usar_replay.world.nav import Navigator, NavStatus, PlanningGrid
 from usar_replay.world.scenario import Box, Marker, Scenario, wall
 from usar_replay.world.world_key import WorldKey
 
@@ -204,7 +204,7 @@ def ros2_final_world() -> Scenario:
     )
 
 
-def _reachable(grid: OccupancyGrid, start: tuple[float, float], goal: tuple[float, float]) -> bool:
+def _reachable(grid: PlanningGrid, start: tuple[float, float], goal: tuple[float, float]) -> bool:
     if not grid.is_free(*goal):
         return False
     nav = Navigator(grid)
@@ -220,13 +220,13 @@ def _reachable(grid: OccupancyGrid, start: tuple[float, float], goal: tuple[floa
     return bool(path) and nav.status is not NavStatus.FAILED
 
 
-def check_ros2(scn: Scenario, grid: OccupancyGrid | None = None) -> str | None:
+def check_ros2(scn: Scenario, grid: PlanningGrid | None = None) -> str | None:
     """None when the world is playable, else the first problem: the marker must be in view
     from ``aruco_target`` (line of sight, within :data:`MAX_RANGE`, at most
     :data:`MAX_OBLIQUE` off its face), ``aruco_target`` reachable from the start and every
     destination (in ``final_destination.frame_id``) reachable from ``aruco_target``."""
     task = task_of(scn)
-    grid = grid or OccupancyGrid.from_scenario(scn)
+    grid = grid or PlanningGrid.from_scenario(scn)
     m = scn.markers[0]
     tx, ty = task.aruco_target
     d = math.dist((tx, ty), (m.x, m.y))
@@ -253,7 +253,7 @@ def make_ros2_variant(base: Scenario, seed: int, key: WorldKey | None = None) ->
     from ``numpy.random.default_rng(seed)`` until one passes :func:`check_ros2`; with a world
     ``key``, from HMAC-SHA256(key, seed) instead (:mod:`usar_replay.world.world_key`)."""
     task = task_of(base)
-    grid = OccupancyGrid.from_scenario(base)
+    grid = PlanningGrid.from_scenario(base)
     rng = np.random.default_rng(seed if key is None else key.rng_seed(seed))
     walls_x = [w.x for w in base.walls]
     walls_y = [w.y for w in base.walls]

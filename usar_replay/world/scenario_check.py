@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 from usar_replay.core.contract import WAFFLE
 from usar_replay.core.settings import MissionSettings
-from usar_replay.world.nav import OccupancyGrid
+from usar_replay.world.nav import PlanningGrid
 from usar_replay.world.scenario import Marker, Scenario
 
 __all__ = ["MAX_OBLIQUE", "MIN_MARKER_PX", "Verdict", "check"]
@@ -82,7 +82,7 @@ def _camera(scn: Scenario) -> tuple[float, float]:
     return fov_v, fy
 
 
-def _starts(scn: Scenario, grid: OccupancyGrid, v: Verdict) -> None:
+def _starts(scn: Scenario, grid: PlanningGrid, v: Verdict) -> None:
     for r in (scn.explorer, scn.follower):
         free = grid.is_free(r.x, r.y)
         v.add(
@@ -98,7 +98,7 @@ def _starts(scn: Scenario, grid: OccupancyGrid, v: Verdict) -> None:
     )
 
 
-def _marker_face(m: Marker, grid: OccupancyGrid, v: Verdict) -> None:
+def _marker_face(m: Marker, grid: PlanningGrid, v: Verdict) -> None:
     nx, ny = math.cos(m.yaw), math.sin(m.yaw)
     front = [grid.distance_to_obstacle(m.x + nx * d, m.y + ny * d) for d in (0.06, 0.15, 0.3)]
     free = all(d > 0.0 for d in front)
@@ -112,7 +112,7 @@ def _marker_face(m: Marker, grid: OccupancyGrid, v: Verdict) -> None:
 
 
 def _detection(
-    scn: Scenario, k: int, target: tuple[float, float], grid: OccupancyGrid, v: Verdict
+    scn: Scenario, k: int, target: tuple[float, float], grid: PlanningGrid, v: Verdict
 ) -> None:
     settings = MissionSettings()
     name = f"target_{k + 1}"
@@ -167,7 +167,7 @@ def check(scn: Scenario) -> Verdict:
     from usar_replay.world.variants import MAX_DRIVE_FRACTION, check_variant, drive_time_s
 
     v = Verdict(scn.name)
-    grid = OccupancyGrid.from_scenario(scn)
+    grid = PlanningGrid.from_scenario(scn)
     _starts(scn, grid, v)
     for m in sorted(scn.markers, key=lambda mk: mk.id):
         _marker_face(m, grid, v)

@@ -33,7 +33,7 @@ import numpy as np
 
 from usar_replay.core.errors import InvalidScenario
 from usar_replay.core.rotations import wrap_angle
-from usar_replay.world.nav import Limits, Navigator, NavStatus, OccupancyGrid, plan, robot_disc
+from usar_replay.world.nav import DriveLimits, Navigator, NavStatus, PlanningGrid, plan, robot_disc
 from usar_replay.world.scenario import Box, Marker, Scenario
 from usar_replay.world.world_key import WorldKey
 
@@ -128,7 +128,7 @@ def _place(face: Face, rng: np.random.Generator) -> tuple[float, float, float]:
     return (face.x + tx * off + nx * 0.01, face.y + ty * off + ny * 0.01, face.yaw)
 
 
-def _sees(grid: OccupancyGrid, target: tuple[float, float], m: Marker) -> tuple[bool, float]:
+def _sees(grid: PlanningGrid, target: tuple[float, float], m: Marker) -> tuple[bool, float]:
     d = math.dist(target, (m.x, m.y))
     to_target = math.atan2(target[1] - m.y, target[0] - m.x)
     oblique = abs(wrap_angle(to_target - m.yaw))
@@ -137,7 +137,7 @@ def _sees(grid: OccupancyGrid, target: tuple[float, float], m: Marker) -> tuple[
 
 
 def _reachable(
-    grid: OccupancyGrid, start: tuple[float, float, float], goal: tuple[float, float]
+    grid: PlanningGrid, start: tuple[float, float, float], goal: tuple[float, float]
 ) -> bool:
     nav = Navigator(grid)
     path = nav.set_goal(
@@ -146,12 +146,12 @@ def _reachable(
     return bool(path) and nav.status is not NavStatus.FAILED
 
 
-def check_variant(scn: Scenario, grid: OccupancyGrid | None = None) -> str | None:
+def check_variant(scn: Scenario, grid: PlanningGrid | None = None) -> str | None:
     """None when ``scn`` passes every rule of the module docstring, else the first failure.
 
     A target's own marker is the nearest marker to it; every marker must be some target's own.
     """
-    grid = grid or OccupancyGrid.from_scenario(scn)
+    grid = grid or PlanningGrid.from_scenario(scn)
     ex = (scn.explorer.x, scn.explorer.y, scn.explorer.yaw)
     fo = (scn.follower.x, scn.follower.y, scn.follower.yaw)
     # the follower drives while the explorer is parked at home
@@ -192,9 +192,9 @@ def _approach(m: Marker) -> tuple[float, float]:
     return (m.x + math.cos(m.yaw) * 0.35, m.y + math.sin(m.yaw) * 0.35)
 
 
-def drive_time_s(scn: Scenario, grid: OccupancyGrid | None = None) -> float:
+def drive_time_s(scn: Scenario, grid: PlanningGrid | None = None) -> float:
     """Seconds of driving at full speed along the planned routes of both robots."""
-    grid = grid or OccupancyGrid.from_scenario(scn)
+    grid = grid or PlanningGrid.from_scenario(scn)
     ex = (scn.explorer.x, scn.explorer.y)
     fo = (scn.follower.x, scn.follower.y)
     by_id = sorted(scn.markers, key=lambda m: m.id)
@@ -203,7 +203,7 @@ def drive_time_s(scn: Scenario, grid: OccupancyGrid | None = None) -> float:
         for a, b in itertools.pairwise(route):
             result = plan(grid, a, b)
             length += result.length_m if result.ok else math.inf
-    return length / Limits().max_linear
+    return length / DriveLimits().max_linear
 
 
 def make_variant(base: Scenario, seed: int, key: WorldKey | None = None) -> Scenario:
@@ -215,7 +215,7 @@ def make_variant(base: Scenario, seed: int, key: WorldKey | None = None) -> Scen
     if seed < 0:
         raise InvalidScenario(f"--seed {seed}: must be >= 0")
     rng = np.random.default_rng(seed if key is None else key.rng_seed(seed))
-    grid = OccupancyGrid.from_scenario(base)
+    grid = PlanningGrid.from_scenario(base)
     candidates = faces(base)
     ids = sorted(m.id for m in base.markers)
     template = {m.id: m for m in base.markers}

@@ -1,0 +1,252 @@
+"""ROS 1 front end: a course-style catkin package, built and run unmodified against usar's world.
+
+These run real things: catkin_make, a ROS master, roslaunch, the C++ node and the bridge (Debian
+12's ROS 1 packages; the README's test command installs them). The one-room run and the build
+failure are in the fast suite because nothing else proves the front end works; the course
+world's 60/60 is slow.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from clitools import one_error_line, usar
+from conftest import one_room
+
+from usar_replay.cli.main import main
+from usar_replay.core import msgs
+from usar_replay.grading.grade import grade_file
+from usar_replay.log.run import open_run
+from usar_replay.ros1 import debian
+from usar_replay.ros1.build import find_package, package_sha256
+from usar_replay.world.scenario import course_world
+from usar_replay.world.scenario_toml import save
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """One build cache for this module: the example is built once, its variants reuse it."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))
+    yield
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
+
+
+def test_debian_ros1_is_installed() -> None:
+    """The README's test command installs ROS 1; without it every other test here fails, so
+    this one says exactly what to install."""
+    assert debian.missing() == [], debian.install_line(debian.missing())
+
+
+def test_missing_packages_are_named_in_one_apt_line() -> None:
+    line = debian.install_line(["catkin", "python3-rospy"])
+    assert line == "apt-get install -y --no-install-recommends catkin python3-rospy"
+    assert set(debian.APT_PACKAGES) >= {"catkin", "python3-rosmaster", "libtf2-ros-dev"}
+
+
+def _ros1() -> None:
+    if str(debian.DIST_PACKAGES) not in sys.path:
+        sys.path.append(str(debian.DIST_PACKAGES))
+
+
+def test_messages_convert_both_ways() -> None:
+    """usar's values -> rospy's -> usar's is the identity (Time's secs/nsecs, CameraInfo's
+    D/K/R/P, a header's seq are the spellings that differ)."""
+    _ros1()
+    from usar_replay.ros1.convert import from_ros1, to_ros1
+
+    stamp = msgs.Time(sec=12, nanosec=500_000_000)
+    values: list[msgs.Message] = [
+        msgs.TFMessage(
+            transforms=(
+                msgs.TransformStamped(
+                    header=msgs.Header(stamp=stamp, frame_id="map"),
+                    child_frame_id="marker_frame",
+                    transform=msgs.Transform(
+                        translation=msgs.Vector3(x=1.0, y=-2.0, z=0.5),
+                        rotation=msgs.Quaternion(z=0.6, w=0.8),
+                    ),
+                ),
+            )
+        ),
+        msgs.CameraInfo(
+            header=msgs.Header(stamp=stamp, frame_id="cam"),
+            height=240,
+            width=320,
+            distortion_model="plumb_bob",
+            d=(0.0,) * 5,
+            k=tuple(float(i) for i in range(9)),
+        ),
+        msgs.Twist(angular=msgs.Vector3(z=0.1)),
+    ]
+    for value in values:
+        ros1 = to_ros1(value)
+        assert from_ros1(type(value), ros1) == value
+    assert to_ros1(values[1]).K[4] == 4.0
+    assert to_ros1(values[0]).transforms[0].header.stamp.nsecs == 500_000_000
+
+
+def test_usage_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["record", "--launch", "x.launch", "--out", str(tmp_path / "a.mcap")]) == 2
+    assert "--launch and --node go with --ros1 PKG" in capsys.readouterr().err
+    missing = tmp_path / "nothing"
+    assert main(["record", "--ros1", str(missing), "--out", str(tmp_path / "b.mcap")]) == 2
+    assert f"--ros1 {missing}: no such folder" in capsys.readouterr().err
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["record", "--ros1", str(empty), "--out", str(tmp_path / "c.mcap")]) == 2
+    assert "no package.xml found" in capsys.readouterr().err
+    args = ["record", "--ros1", str(EXAMPLE), "--launch", "nope.launch"]
+    assert main([*args, "--out", str(tmp_path / "d.mcap")]) == 2
+    assert "no such launch file in usar_course" in capsys.readouterr().err
+
+
+def test_package_hash_covers_the_sources(tmp_path: Path) -> None:
+    copy = tmp_path / "usar_course"
+    shutil.copytree(EXAMPLE, copy)
+    pkg = find_package(copy)
+    assert pkg.name == "usar_course"
+    before = package_sha256(pkg)
+    (copy / "build").mkdir()
+    (copy / "build" / "junk.o").write_bytes(b"\0")
+    assert package_sha256(pkg) == before, "build outputs are not the package"
+    src = copy / "src" / "follower.cpp"
+    src.write_text(src.read_text() + "\n// changed\n")
+    assert package_sha256(pkg) != before
+
+
+def test_batch_finds_a_catkin_package_in_a_team_folder(tmp_path: Path) -> None:
+    from usar_replay.batch.plan import discover
+
+    shutil.copytree(EXAMPLE, tmp_path / "subs" / "team1")
+    (tmp_path / "subs" / "team2" / "src").mkdir(parents=True)
+    shutil.copytree(EXAMPLE, tmp_path / "subs" / "team2" / "src" / "usar_course")
+    found = {s.team: s for s in discover(tmp_path / "subs")}
+    for team in ("team1", "team2"):
+        assert found[team].target == f"ros1:{(tmp_path / 'subs' / team).resolve()}"
+        assert found[team].problem == ""
+
+
+def test_a_build_failure_is_a_verdict(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A C++ error: exit 4, the compiler's error shown, a closed log saying ``build_failed``."""
+    broken = tmp_path / "usar_course"
+    shutil.copytree(EXAMPLE, broken)
+    src = broken / "src" / "follower.cpp"
+    src.write_text(src.read_text().replace("queue_.erase(queue_.begin());", "queue_.erase(;"))
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "broken.mcap"
+    code = main(["record", "--ros1", str(broken), "--scenario", str(world), "--out", str(out)])
+    text = capsys.readouterr().out
+    assert code == 4, text
+    assert "follower.cpp" in text and "error" in text, text
+    run = open_run(out)
+    assert run.outcome == "build_failed"
+    assert "catkin_make failed for package usar_course" in run.outcome_reason
+
+
+def _record(
+    tmp_path: Path, world_toml: Path, name: str, launch: str = "usar_course.launch"
+) -> Path:
+    out = tmp_path / f"{name}.mcap"
+    args = ["record", "--ros1", str(EXAMPLE), "--scenario", str(world_toml), "--out", str(out)]
+    assert main([*args, "--quiet", "--launch", launch]) == 0
+    return out
+
+
+def _failed(out: Path) -> set[str]:
+    report = grade_file(out)
+    for c in report.checks:
+        assert c.points == (c.max_points if c.passed else 0.0), c.id
+    return {c.id for c in report.checks if not c.passed}
+
+
+def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
+    """Build, run and grade the course-style C++ package: every rubric line passes, the run
+    ends because the node called ``ros::shutdown()``, and the log names the package."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = _record(tmp_path, world, "room")
+    run = open_run(out)
+    assert run.outcome == "done", run.outcome_reason
+    report = grade_file(out)
+    assert report.passed, [(c.id, c.measured) for c in report.checks if not c.passed]
+    assert report.points == report.max_points == 60
+    info = run.mission
+    assert info.target.startswith(f"ros1:{EXAMPLE}")
+    assert info.target.endswith("--launch usar_course.launch")
+    assert info.sha256 == package_sha256(find_package(EXAMPLE))
+    # replay cannot re-run live ROS code: --grade grades the recorded outputs, and says so
+    graded = usar("replay", "--grade", str(out))
+    assert graded.returncode == 0, graded.stderr
+    assert "not re-run" in graded.stdout and "Total: 60 / 60 points: PASS" in graded.stdout
+    plain = usar("replay", str(out))
+    one_error_line(plain, 2, "is a ROS 1 run", "usar replay --grade")
+
+
+def test_the_identity_broadcast_loses_the_broadcast_and_the_follower(tmp_path: Path) -> None:
+    """Team 001's bug: marker_frame broadcast with an empty (identity) transform. The stored
+    "marker" is the camera's own place, so the broadcast line fails, and the follower, sent in
+    front of the camera's place, misses the world's only marker; having visited none, its
+    return home does not count (the rubric's "home after its last marker") and neither does
+    the time limit. The explorer's lines all pass."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = _record(tmp_path, world, "identity", "faulty_identity_broadcast.launch")
+    lost = {"marker_0.broadcast", "follower.marker_0", "follower.home", "time_limit"}
+    assert _failed(out) == lost
+
+
+def test_two_cmd_vel_publishers_lose_only_their_line(tmp_path: Path) -> None:
+    """Team 002's bug: the spin publisher runs while move_base drives the explorer. move_base's
+    command is the later one in a tick, so the robot still drives (as team 002 saw, move_base
+    "overwriting" their publisher); the rubric reports the fight and nothing else fails."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = _record(tmp_path, world, "two", "faulty_two_cmd_vel_publishers.launch")
+    assert _failed(out) == {"explorer.cmd_vel_one_publisher"}
+
+
+@pytest.mark.slow
+def test_the_example_package_scores_60_on_the_course_world(tmp_path: Path) -> None:
+    world = tmp_path / "course.toml"
+    save(course_world(), world)
+    out = _record(tmp_path, world, "course")
+    report = grade_file(out)
+    assert report.points == report.max_points == 60, [
+        (c.id, c.measured) for c in report.checks if not c.passed
+    ]
+
+
+@pytest.mark.slow
+def test_a_class_of_catkin_packages_is_graded_in_parallel(tmp_path: Path) -> None:
+    """``usar batch`` on team folders holding catkin packages: two runs at once, each with its
+    own master (its own network namespace or port); one team's package does not build."""
+    import json
+
+    subs = tmp_path / "subs"
+    shutil.copytree(EXAMPLE, subs / "good")
+    shutil.copytree(EXAMPLE, subs / "broken")
+    src = subs / "broken" / "src" / "main.cpp"
+    src.write_text(src.read_text().replace("ros::Rate rate(20.0);", "ros::Rate rate(;"))
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "out"
+    args = ["batch", str(subs), "--scenario", str(world), "-o", str(out), "--jobs", "2"]
+    assert main([*args, "--quiet", "--gradescope"]) == 0
+    good = json.loads((out / "good" / "results.json").read_text())
+    broken = json.loads((out / "broken" / "results.json").read_text())
+    assert good["score"] == good["max_score"] == 60
+    assert broken["score"] == 0
+    run = json.loads((out / "broken" / "room.run.json").read_text())
+    assert run["outcome"] == "build_failed"

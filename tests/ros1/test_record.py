@@ -1,0 +1,241 @@
+"""What a ROS 1 run keeps: the package's own topics, its stored markers, each node's lines.
+
+A two-node package (``examples/ros1/usar_two_nodes``: the explorer node publishes its stored
+markers latched as a ``geometry_msgs/PoseArray`` on ``/explorer/marker_poses`` and a
+``std_msgs/Int32`` count usar has no type for; the follower node waits for them) is built and
+recorded on the one-room world, once for the module; then the log is read as a student would:
+``usar echo``, ``usar log --node``, ``usar log --output`` (each node's stdout and stderr),
+``usar info`` (the package, its nodes, the build), the summary, the report's picture and the
+viewer's scene. The run's private files are read as untrusted (no symlink followed, bounded).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from clitools import usar
+from conftest import one_room
+
+from usar_replay.core import msgs, ros1msg
+from usar_replay.grading.htmlreport import collect
+from usar_replay.log.run import open_run
+from usar_replay.ros1 import run_files
+from usar_replay.ros1.build import find_package, package_sha256
+from usar_replay.viewer.scene import Scene
+from usar_replay.world.scenario_toml import save
+
+PACKAGE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_two_nodes"
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Path, str]]:
+    """The two-node package recorded on the one-room world: (log, what `usar record` printed)."""
+    tmp = tmp_path_factory.mktemp("two_nodes")
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp / "cache")
+    world = tmp / "room.toml"
+    save(one_room(), world)
+    out = tmp / "two.mcap"
+    try:
+        done = usar("record", "--scenario", str(world), "--ros1", str(PACKAGE), "--out", str(out))
+    finally:
+        if before is None:
+            del os.environ["XDG_CACHE_HOME"]
+        else:
+            os.environ["XDG_CACHE_HOME"] = before
+    assert done.returncode == 0, done.stdout + done.stderr
+    yield out, done.stdout + done.stderr
+
+
+def test_the_package_topics_are_in_the_log(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    run = open_run(out)
+    assert run.outcome == "done", run.outcome_reason
+    topics = run.topics
+    assert topics["/explorer/marker_poses"].msgtype == "geometry_msgs/msg/PoseArray"
+    # a type usar has no value for stays in its ROS 1 encoding, with its definition
+    assert topics["/explorer/stored_count"].msgtype == "std_msgs/Int32"
+    assert run.reader.ros1_definition("/explorer/stored_count") == (
+        "std_msgs/Int32",
+        "int32 data\n",
+    )
+    poses = [m.msg for m in run.messages(["/explorer/marker_poses"])]
+    assert len(poses) == 1 and isinstance(poses[0], msgs.PoseArray)
+    assert len(poses[0].poses) == 1
+    # usar's own topics are not recorded twice (the bridge's move_base action topics)
+    assert not [t for t in topics if "/move_base/" in t]
+
+
+def test_echo_reads_both_encodings(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    poses = usar("echo", str(out), "/explorer/marker_poses")
+    assert poses.returncode == 0, poses.stderr
+    assert "poses:\n- position:\n    x: 1.9" in poses.stdout
+    count = usar("echo", str(out), "explorer/stored_count")
+    assert count.returncode == 0, count.stderr
+    assert count.stdout.splitlines()[1:] == ["data: 1", "---"]
+
+
+def test_a_ros1_message_decodes_only_as_its_definition() -> None:
+    value = ros1msg.Ros1Message(
+        msgtype="std_msgs/Int32", definition="int32 data\n", data=b"\x07\0\0\0"
+    )
+    wire_type, data = ros1msg.pack(value)
+    assert ros1msg.unpack(wire_type, data) == value
+    assert ros1msg.decode(value.msgtype, value.definition, value.data).data == 7
+    with pytest.raises(Exception, match="size mismatch"):
+        ros1msg.decode(value.msgtype, value.definition, value.data + b"\0")
+
+
+def test_the_stored_markers_are_shown(recorded: tuple[Path, str]) -> None:
+    out, printed = recorded
+    assert "stored on /explorer/marker_poses at (1.99" in printed
+    pic = collect(open_run(out))
+    assert list(pic.stored) == [0] and pic.stored_on == "/explorer/marker_poses"
+
+
+def test_log_by_node_finds_each_node(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    for name in ("explorer", "/explorer"):
+        got = usar("log", str(out), "--node", name)
+        assert got.returncode == 0, got.stderr
+        assert "[explorer]: explorer: home" in got.stdout
+        assert "[follower]" not in got.stdout
+    follower = usar("log", str(out), "--node", "follower").stdout
+    assert "waiting for the explorer's markers" in follower
+
+
+def test_a_repeated_line_does_not_take_the_status_line() -> None:
+    from usar_replay.pipeline.status_line import NodeLines
+
+    lines = NodeLines()
+    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
+    lines.note(msgs.Log(name="/explorer", msg="explorer: at target_1"))
+    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
+    assert lines.status() == "[explorer] explorer: at target_1"
+    lines.note(msgs.Log(name="follower", msg="follower: to marker 0"))
+    assert lines.status() == "[follower] follower: to marker 0"
+
+
+def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    got = usar("info", str(out))
+    assert got.returncode == 0, got.stderr
+    text = got.stdout
+    assert f"ROS 1 package: usar_two_nodes ({PACKAGE})" in text
+    assert f"sha256:        {package_sha256(find_package(PACKAGE))}" in text
+    assert "Started with:  roslaunch usar_two_nodes usar_two_nodes.launch" in text
+    nodes = "/explorer (usar_two_nodes/explorer_node), /follower (usar_two_nodes/follower_node)"
+    assert f"Nodes:         {nodes}" in text
+    assert re.search(r"^Build: +\d+\.\d s \(catkin_make, wall time\)$", text, re.M), text
+    # settings: only those usar applied (not the Python mission's own, such as settle_frames)
+    settings = text.split("Settings (those that applied to the ROS 1 run):\n")[1]
+    settings = settings.split("Parameters the package's nodes read:\n")[0]
+    assert "  record.control_hz = 20 Hz" in settings
+    assert "  mission.xy_tolerance = 0.05 m" in settings
+    assert "settle_frames" not in settings and "mission.spin_speed" not in settings
+    # what the nodes read: usar's values, a parameter usar did not set, no ROS internals
+    assert "  /mission/settle_frames = 5  (/explorer)" in text  # the explorer reads it
+    assert "  /usar_two_nodes/standoff = not set (the node's default)  (/follower)" in text
+    assert "/tcp_keepalive" not in text and "/use_sim_time" not in text
+    assert all(len(line) <= 100 for line in text.splitlines())
+
+
+def test_log_output_shows_each_nodes_stdout_and_stderr(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    got = usar("log", str(out), "--output", "--node", "explorer")
+    assert got.returncode == 0, got.stderr
+    lines = got.stdout.splitlines()
+    assert lines[0] == "--- /explorer: stdout and stderr ---"
+    assert "explorer node: started" in lines  # printf on stdout
+    assert "explorer node: a line on stderr" in lines  # fprintf on stderr
+    assert any(
+        line.endswith("explorer: home, 1 markers on /explorer/marker_poses") for line in lines
+    )
+    assert "\x1b" not in got.stdout and "follower" not in got.stdout.replace("/explorer", "")
+    both = usar("log", str(out), "--output").stdout
+    assert "--- /follower: stdout and stderr ---" in both
+    assert "follower: mission complete" in both
+    missing = usar("log", str(out), "--output", "--node", "nobody")
+    assert missing.returncode == 2
+    assert "no output of node /nobody kept; the nodes': /explorer, /follower" in missing.stderr
+
+
+def test_view_shows_the_stored_pose_array(recorded: tuple[Path, str]) -> None:
+    out, _ = recorded
+    run = open_run(out)
+    scene = Scene(run.scenario)
+    for m in run.messages():
+        scene.feed(m.topic, m.msg, m.log_time_ns)
+    rows = scene.stored_markers
+    assert rows.lengths == [1] and rows.labels == ["stored 0"]
+    assert abs(rows.items[0][0] - 1.994) < 0.01 and abs(rows.items[0][1] - 0.401) < 0.01
+
+
+def test_the_run_folder_is_read_as_untrusted(tmp_path: Path) -> None:
+    """A node's output is bounded (its start and end kept, the cut said); a symlink or a hard
+    link planted in the run's folder is not followed, a bad name not taken."""
+    secret = tmp_path / "secret"
+    secret.write_text("not the node's\n")
+    output = tmp_path / "run" / run_files.OUTPUT_DIR
+    output.mkdir(parents=True)
+    big = b"first line\n" + b"x" * 1_000_000 + b"\nlast\n"
+    (output / "explorer.out").write_bytes(big)
+    (output / "planted.out").symlink_to(secret)
+    os.link(secret, output / "linked.out")
+    (output / "bad name.out").write_text("x")
+    kept = dict(run_files.node_outputs(tmp_path / "run"))
+    assert list(kept) == ["explorer"]
+    text = kept["explorer"]
+    assert text.startswith(b"first line\n") and text.endswith(b"\nlast\n")
+    assert len(text) < run_files.OUTPUT_HEAD + run_files.OUTPUT_TAIL + 200
+    assert b"[usar: 934481 bytes of this node's output left out here" in text
+    # the whole output folder replaced by a symlink: nothing is read through it
+    os.rename(output, tmp_path / "elsewhere")
+    output.symlink_to(tmp_path / "elsewhere")
+    assert run_files.node_outputs(tmp_path / "run") == []
+
+
+def test_a_crash_reason_shows_the_nodes_lines_without_usars_prefix(tmp_path: Path) -> None:
+    """roslaunch reports a dead node with its command, usar's prefix included: the reason
+    shows the student's command, and each node's last lines from its own file."""
+    from usar_replay.ros1.launch_output import _prefix, without_prefix
+
+    out = tmp_path / run_files.OUTPUT_DIR
+    out.mkdir()
+    (out / "follower.out").write_text("follower: starting\nfollower: cannot go on\n")
+    cmd = " ".join([*_prefix(str(out / "follower.out")), "/ws/follower_node", "__name:=follower"])
+    died = f"process has died [pid 46, exit code 3, cmd {cmd}]."
+    assert without_prefix(died) == (
+        "process has died [pid 46, exit code 3, cmd /ws/follower_node __name:=follower]."
+    )
+    assert (
+        run_files.node_tails(out)
+        == "[follower] follower: starting\n[follower] follower: cannot go on\n"
+    )
+
+
+def test_the_masters_log_gives_the_parameters_read_and_the_nodes(tmp_path: Path) -> None:
+    """From the master's API log: the parameters the package's nodes read (not usar's own
+    node's, not those every roscpp node reads) and the nodes that registered (for rosrun)."""
+    head = "[rosmaster.master][DEBUG] 2026-11-24 05:40:00,123: "
+    calls = [
+        "setParam('/usar_sim', '/mission/spin_speed', 0.1)",
+        "getParam('/usar_sim', '/mission/xy_tolerance')",
+        "getParam('/explorer', '/use_sim_time')",
+        "getParam('/explorer', '/mission/spin_speed')",
+        "hasParam('/follower', '/mission/spin_speed')",
+        "getParam('/follower', '/follower/move_base/actionlib_client_sub_queue_size')",
+        "registerPublisher('/explorer', '/explorer/cmd_vel', 'geometry_msgs/Twist', 'http://x/')",
+        "registerSubscriber('/usar_sim', '/tf', 'tf2_msgs/TFMessage', 'http://y/')",
+        "getSystemState('/usar_sim',)",
+    ]
+    (tmp_path / run_files.MASTER_LOG).write_text("".join(head + c + "\n" for c in calls))
+    assert run_files.parameters_read(tmp_path) == {
+        "/mission/spin_speed": ["/explorer", "/follower"]
+    }
+    assert run_files.registered_nodes(tmp_path) == ["/explorer"]

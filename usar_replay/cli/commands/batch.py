@@ -1,0 +1,151 @@
+"""`usar batch`: grade a class, every team's mission on every world."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from usar_replay.cli import options
+from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
+from usar_replay.core.errors import UsageError
+
+if TYPE_CHECKING:
+    pass
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """This command's sub-parser and options (``usar COMMAND --help`` shows them)."""
+    p = sub.add_parser(
+        "batch", help="grade a class: every team's mission on every world, resumably"
+    )
+    p.add_argument("submissions", metavar="SUBMISSIONS_DIR", help="a .py file or folder per team")
+    p.add_argument("--seeds", metavar="N-M", help="seeded variants of the course world, e.g. 0-4")
+    options.add_world_key(p)
+    p.add_argument(
+        "--scenario", nargs="+", action="extend", metavar="FILE", help="scenario TOML worlds"
+    )
+    p.add_argument("-o", "--out", required=True, metavar="OUT_DIR", help="the batch's folder")
+    p.add_argument("--jobs", type=int, metavar="N", help="runs at a time (default: one per core)")
+    p.add_argument("--engine", choices=["local", "ray"], default="local", help="where runs run")
+    p.add_argument("--address", metavar="ADDR", help="Ray cluster address (--engine ray)")
+    p.add_argument("--settings", metavar="TOML", help="settings from [record]/[mission]/[detector]")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="a setting (as record)")
+    p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
+    p.add_argument(
+        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
+    )
+    p.add_argument(
+        "--tick-timeout", type=float, default=10.0, metavar="S", help="wall s per tick (10)"
+    )
+    p.add_argument(
+        "--mission-memory", type=int, default=4096, metavar="MIB", help="MiB (4096; 0: none)"
+    )
+    p.add_argument(
+        "--max-log-mib", type=int, default=2048, metavar="MIB", help="log budget (2048; 0: none)"
+    )
+    p.add_argument(
+        "--grade-limit", type=float, default=600.0, metavar="S", help="wall s to grade a log (600)"
+    )
+    p.add_argument(
+        "--cpu-limit", type=int, default=1800, metavar="S", help="mission CPU s (1800; 0: none)"
+    )
+    p.add_argument(
+        "--wall-limit", type=float, default=3600.0, metavar="S", help="wall s per run (3600)"
+    )
+    p.add_argument(
+        "--no-sandbox", action="store_true", help="run missions without bwrap and the guard"
+    )
+    p.add_argument("--gradescope", action="store_true", help="write TEAM/results.json per team")
+    p.add_argument(
+        "--visibility",
+        choices=["visible", "hidden", "after_due_date", "after_published"],
+        default="visible",
+        help="Gradescope visibility of the tests (visible)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar or per-run lines")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``usar batch``: every team's mission on every world, recorded, graded, summarised."""
+    import dataclasses as dc
+    import os
+
+    from usar_replay.batch.driver import grade_class, plan_class
+    from usar_replay.batch.engines import make_engine
+    from usar_replay.batch.plan import JobLimits, parse_seeds
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.core.settings import to_toml as settings_to_toml
+
+    jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+    if jobs < 1:
+        raise UsageError(f"--jobs {jobs}: expected 1 or more")
+    positive = (
+        ("--tick-timeout", args.tick_timeout),
+        ("--wall-limit", args.wall_limit),
+        ("--grade-limit", args.grade_limit),
+    )
+    for opt, value in positive:
+        if not value > 0:
+            raise UsageError(f"{opt} {value}: expected a positive number of seconds")
+    if args.mission_memory < 0 or args.cpu_limit < 0 or args.max_log_mib < 0:
+        raise UsageError(
+            "--mission-memory, --cpu-limit and --max-log-mib: expected 0 (none) or more"
+        )
+    base = RunSettings()
+    if args.max_sim_time is not None:
+        base = dc.replace(base, record=dc.replace(base.record, max_sim_time_s=args.max_sim_time))
+    settings = options.run_settings(args, base)
+    thresholds = ""
+    if args.thresholds:
+        options.thresholds(args)  # a bad file is a usage error before any run
+        thresholds = Path(args.thresholds).read_text(encoding="utf-8")
+    limits = JobLimits(
+        tick_timeout_s=args.tick_timeout,
+        memory_mb=args.mission_memory,
+        cpu_s=args.cpu_limit,
+        wall_s=args.wall_limit,
+        sandbox=not args.no_sandbox,
+        max_log_mib=args.max_log_mib,
+        grade_s=args.grade_limit,
+    )
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: is a file; give a folder for the batch's output")
+    plan = plan_class(
+        args.submissions,
+        out,
+        seeds=parse_seeds(args.seeds) if args.seeds else (),
+        scenarios=args.scenario or (),
+        settings_toml=settings_to_toml(settings),
+        thresholds_toml=thresholds,
+        limits=limits,
+        world_key=options.world_key(args),
+    )
+    engine = make_engine(args.engine, jobs, args.address) if plan.jobs else None
+    try:
+        summary = grade_class(
+            plan,
+            engine or make_engine("local", 1),
+            gradescope=args.gradescope,
+            visibility=args.visibility,
+            quiet=args.quiet,
+        )
+    except KeyboardInterrupt:
+        print(
+            "usar: interrupted; finished runs are kept, the cut-off ones are redone when the "
+            "same command runs again",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED
+    print(summary.table)
+    print()
+    print("\n".join(summary.lines()))
+    print(f"wrote {plan.out_root}/summary.csv, summary.txt and a folder per team")
+    if summary.interrupted:
+        return EXIT_INTERRUPTED
+    return EXIT_FAIL if summary.errors else EXIT_OK

@@ -1,0 +1,437 @@
+"""The kernel sandbox a mission process runs in: bubblewrap (``bwrap``) namespaces and limits.
+
+Why: a mission is untrusted code (a team's, graded against a world it must not see). The
+in-process guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
+extension, ``_posixsubprocess`` or ``/proc/<pid>/mem`` walk past it. In its own user, PID,
+IPC, UTS, mount, network and cgroup namespaces, as uid 65534 with no capabilities, the process
+sees only what is mounted for it: the Python install, the packages, its own submission (all
+read-only), a private work dir and a private ``/tmp``. It cannot see, signal or trace any usar
+process (its own PID namespace), reach the network (its own network namespace, whose loopback
+reaches only itself), or outlive its run (``--die-with-parent``, and the PID namespace ends with
+its first process, so a ``setsid`` daemon dies with it).
+
+What bwrap does not do: resource limits. rlimits (address space, CPU time, file size, open
+files, no core files) are set by the sandboxed program on itself before any untrusted code runs
+(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count is a
+``pids`` cgroup where one can be made (root, a writable cgroup file system), else RLIMIT_NPROC
+(a per-run count in the run's user namespace; the kernel does not apply it to processes that
+are root outside, which is why the cgroup comes first).
+
+Reusable: :func:`jail_argv` builds the command for any program (the ROS 1 bridge runs its graph
+with ``network="loopback"``), :class:`Jail` holds one run's cgroup and limits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import os
+import resource
+import select
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+__all__ = [
+    "INSTALL_HINT",
+    "Jail",
+    "JailLimits",
+    "apply_rlimits",
+    "bwrap_available",
+    "jail_argv",
+    "python_binds",
+    "signal_of_exit",
+]
+
+INSTALL_HINT = "apt-get install bubblewrap"
+"""How to get bwrap on Debian and Ubuntu (the package ships /usr/bin/bwrap)."""
+
+SANDBOX_UID = 65534
+"""``nobody`` inside the sandbox (root outside maps to it; it has no capabilities anywhere)."""
+
+# the operating system's shared libraries and tools a Python process loads; all read-only
+_SYSTEM_BINDS = ("/usr", "/bin", "/lib", "/lib32", "/lib64", "/libx32", "/sbin")
+_SYSTEM_FILES = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/alternatives")
+
+Network = Literal["none", "loopback"]
+
+
+@dataclass(frozen=True, slots=True)
+class JailLimits:
+    """What one sandboxed run may use (0: no limit). Past a limit the kernel refuses (a failed
+    ``fork``, ``open`` or ``write``: the mission's own error) or kills (memory, CPU time)."""
+
+    memory_mb: int = 4096
+    """Address space per process (RLIMIT_AS), MiB."""
+    cpu_s: int = 0
+    """CPU seconds per process (RLIMIT_CPU; SIGXCPU past it)."""
+    processes: int = 256
+    """Processes and threads of the run together (a pids cgroup, else RLIMIT_NPROC)."""
+    file_mb: int = 1024
+    """Largest file a process may write (RLIMIT_FSIZE), MiB."""
+    open_files: int = 1024
+    """Open file descriptors per process (RLIMIT_NOFILE)."""
+    tmp_mb: int = 512
+    """Size of the private ``/tmp`` and ``/dev/shm`` (memory-backed file systems), MiB."""
+
+
+def _bwrap() -> str | None:
+    return shutil.which("bwrap")
+
+
+@functools.lru_cache(maxsize=4)
+def _probe(bwrap: str) -> tuple[bool, str, bool]:
+    """Can ``bwrap`` make the namespaces here? (ok, why not, knows --disable-userns)"""
+    argv = [
+        bwrap, "--unshare-all", "--unshare-user", "--uid", str(SANDBOX_UID),
+        "--gid", str(SANDBOX_UID), "--cap-drop", "ALL", "--die-with-parent", "--new-session",
+        "--ro-bind", "/", "/", "--proc", "/proc", "--dev", "/dev", "--", "true",
+    ]  # fmt: skip
+    try:
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=30, check=False)
+        helped = subprocess.run(
+            [bwrap, "--help"], capture_output=True, text=True, timeout=30, check=False
+        )
+    except (OSError, subprocess.TimeoutExpired) as err:
+        return False, f"{bwrap} could not be run ({err})", False
+    if done.returncode != 0:
+        said = (done.stderr.strip().splitlines() or [f"exit {done.returncode}"])[-1]
+        return False, f"{bwrap} cannot create namespaces here ({said})", False
+    return True, "", "--disable-userns" in helped.stdout
+
+
+def bwrap_available() -> tuple[bool, str]:
+    """(True, '') when bwrap is on PATH and can create the sandbox here; else (False, why)."""
+    bwrap = _bwrap()
+    if bwrap is None:
+        return False, "bubblewrap (bwrap) is not installed"
+    ok, why, _ = _probe(bwrap)
+    return ok, why
+
+
+def python_binds() -> list[str]:
+    """The folders this Python needs, read-only: its install, the venv and usar's package.
+
+    Only ``site``-style folders of ``sys.path`` (under a prefix, or named site-packages /
+    dist-packages) are bound, never a development checkout as a whole: a checkout may hold
+    recordings and worlds. usar's own package folder is bound by itself."""
+    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
+    out = {os.path.realpath(p) for p in prefixes}
+    out.add(os.path.dirname(os.path.realpath(sys.executable)))
+    for entry in sys.path:
+        if not entry or not os.path.isabs(entry) or not os.path.isdir(entry):
+            continue
+        name = os.path.basename(entry.rstrip(os.sep))
+        if name in ("site-packages", "dist-packages"):
+            out.add(os.path.realpath(entry))
+    out.add(package_dir())
+    return sorted(out)
+
+
+def package_dir() -> str:
+    """usar_replay's own folder (bound alone; its parent goes on the jail's PYTHONPATH)."""
+    return str(Path(__file__).resolve().parents[1])
+
+
+def _covered(path: str, roots: Iterable[str]) -> bool:
+    return any(path == r or path.startswith(r.rstrip("/") + "/") for r in roots)
+
+
+def jail_argv(
+    argv: Sequence[str],
+    *,
+    ro_binds: Sequence[str],
+    work_dir: str,
+    env: Mapping[str, str],
+    limits: JailLimits | None = None,
+    network: Network = "none",
+    hidden: Sequence[str] = (),
+    info_fd: int | None = None,
+) -> list[str]:
+    """The bwrap command line that runs ``argv`` in the sandbox.
+
+    ``ro_binds``: host paths mounted read-only at the same path (the system's libraries are
+    added); ``work_dir``: mounted writable at its own path and the working directory; ``env``:
+    the whole environment (bwrap starts from an empty one); ``hidden``: existing files and
+    folders (real paths) under a mounted folder that the process must not read (the log being
+    written, the grader's files next to the mission's file: /dev/null is mounted over a file,
+    an empty read-only tmpfs over a folder; :mod:`usar_replay.node.hide` finds them);
+    ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
+    loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
+    outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
+    process's host PID (:attr:`Jail.info_fd`).
+    """
+    bwrap = _bwrap()
+    if bwrap is None:
+        raise FileNotFoundError("bwrap")
+    _, _, disable_userns = _probe(bwrap)
+    lim = limits or JailLimits()
+    out = [
+        bwrap, "--unshare-all", "--unshare-user", "--uid", str(SANDBOX_UID),
+        "--gid", str(SANDBOX_UID), "--cap-drop", "ALL", "--die-with-parent", "--new-session",
+        "--hostname", "mission", "--clearenv",
+    ]  # fmt: skip
+    if network not in ("none", "loopback"):
+        raise ValueError(f"network={network!r}: expected 'none' or 'loopback'")
+    if disable_userns:
+        out.append("--disable-userns")  # no nested namespace to regain capabilities in
+    if info_fd is not None:
+        out += ["--info-fd", str(info_fd)]
+    for path in _SYSTEM_BINDS:
+        out += ["--ro-bind-try", path, path]
+    for path in _SYSTEM_FILES:
+        out += ["--ro-bind-try", path, path]
+    # the private file systems first: a bound folder under /tmp (a submission, the work dir)
+    # is mounted on top of the private /tmp, not hidden by it
+    out += ["--proc", "/proc", "--dev", "/dev"]
+    if lim.tmp_mb > 0:
+        size = str(lim.tmp_mb * 1024 * 1024)
+        out += ["--size", size, "--tmpfs", "/tmp", "--size", size, "--tmpfs", "/dev/shm"]
+    else:
+        out += ["--tmpfs", "/tmp", "--tmpfs", "/dev/shm"]
+    bound: list[str] = []
+    for path in sorted(set(ro_binds)):
+        if _covered(path, bound) or not os.path.exists(path):
+            continue
+        out += ["--ro-bind", path, path]
+        bound.append(path)
+    visible = [*bound, *_SYSTEM_BINDS, *_SYSTEM_FILES]
+    for path in hidden:
+        real = os.path.realpath(path)
+        if not _covered(real, visible):
+            continue  # not mounted: nothing to hide
+        if os.path.isdir(real):
+            # a folder of the grader's inside a mounted one: an empty read-only folder over it
+            # (not over a folder that holds a mounted one: that is the mission's own)
+            if not any(_covered(b, [real]) for b in (*bound, work_dir)):
+                out += ["--perms", "0555", "--tmpfs", real, "--remount-ro", real]
+        elif os.path.exists(real):
+            out += ["--ro-bind", "/dev/null", real]
+    out += ["--bind", work_dir, work_dir, "--chdir", work_dir]
+    for key, value in sorted(env.items()):
+        out += ["--setenv", key, value]
+    return [*out, "--", *argv]
+
+
+def signal_of_exit(code: int | None) -> int | None:
+    """The signal that ended a sandboxed process, from bwrap's exit status: bwrap itself
+    killed gives a negative code; the process inside killed makes bwrap exit 128 + signal."""
+    if code is None:
+        return None
+    if code < 0:
+        return -code
+    if 128 < code < 128 + 65:
+        return code - 128
+    return None
+
+
+def apply_rlimits(limits: Mapping[str, int]) -> None:
+    """Set :meth:`Jail.rlimits` on this process (0: leave that one as it is, except CORE).
+    CPU gets a hard limit 5 s above the soft one: SIGXCPU first (a verdict), then SIGKILL."""
+    for name, value in limits.items():
+        if value <= 0 and name != "CORE":
+            continue
+        hard = value + 5 if name == "CPU" else value
+        with contextlib.suppress(ValueError, OSError, AttributeError):
+            resource.setrlimit(getattr(resource, f"RLIMIT_{name}"), (value, hard))
+
+
+class Jail:
+    """One sandboxed run's pids cgroup, rlimits and first process.
+
+    Start bwrap with :meth:`launch` (``jail_argv(..., info_fd=jail.info_fd)``, the info fd in
+    ``pass_fds``), call :meth:`started` right after, have the program inside call
+    :func:`apply_rlimits` with :meth:`rlimits`, and :meth:`close` once bwrap has ended."""
+
+    def __init__(self, limits: JailLimits | None = None) -> None:
+        self.limits = limits or JailLimits()
+        self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
+        self.memory_cgroup = _make_memory_cgroup(self.cgroup)
+        """The run's memory cgroup (no limit: RLIMIT_AS is the limit): where the kernel counts
+        the run's processes it killed for memory (:meth:`oom_killed`); None when none can be
+        made here (then a killed process is never called out of memory)."""
+        self._info_r, self.info_fd = os.pipe()
+        """Pass to :func:`jail_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
+        self._pidfd: int | None = None
+
+    def started(self) -> None:
+        """After bwrap was started: hold a pidfd of the sandbox's first process, so that
+        :meth:`close` can wait for the PID namespace to end (bwrap's own process exits as soon
+        as the program does, while the kernel is still ending the rest of the namespace)."""
+        self._close_info(write_end_only=True)
+        data = b""
+        with contextlib.suppress(OSError):
+            while not data.rstrip().endswith(b"}"):
+                block = os.read(self._info_r, 4096)
+                if not block:
+                    break
+                data += block
+        self._close_info()
+        with contextlib.suppress(ValueError, KeyError, TypeError, OSError, AttributeError):
+            self._pidfd = os.pidfd_open(int(json.loads(data)["child-pid"]))
+
+    def launch(self, argv: Sequence[str]) -> list[str]:
+        """``argv`` (the bwrap command) started inside the run's pids cgroup: a shell moves
+        itself into the cgroup and becomes bwrap, so every process of the run is counted from
+        the first. (No ``preexec_fn``: Python code between fork and exec can deadlock a
+        recorder whose renderer runs threads.)"""
+        groups = [g for g in (self.cgroup, self.memory_cgroup) if g]
+        if not groups:
+            return list(argv)
+        procs = [os.path.join(g, "cgroup.procs") for g in dict.fromkeys(groups)]
+        script = "".join(f'echo 0 > "${i}" 2>/dev/null; ' for i in range(len(procs)))
+        return ["/bin/sh", "-c", script + f'shift {len(procs) - 1}; exec "$@"', *procs, *argv]
+
+    def oom_killed(self) -> bool:
+        """Whether the kernel's out-of-memory killer ended a process of this run (the memory
+        cgroup's ``oom_kill`` count: ``memory.events`` in cgroup v2, ``memory.oom_control``
+        in v1). Read it before :meth:`close`, which removes the cgroup."""
+        if not self.memory_cgroup:
+            return False
+        for name in ("memory.events", "memory.oom_control"):
+            with contextlib.suppress(OSError, ValueError):
+                for line in Path(self.memory_cgroup, name).read_text().splitlines():
+                    key, _, value = line.partition(" ")
+                    if key == "oom_kill":
+                        return int(value) > 0
+        return False
+
+    def rlimits(self) -> dict[str, int]:
+        """The rlimits the sandboxed program sets on itself before it runs untrusted code
+        (:func:`apply_rlimits`); inherited by all it starts, and no process in the sandbox
+        may raise them (that needs a capability in the host's namespace)."""
+        lim = self.limits
+        mib = 1024 * 1024
+        return {
+            "AS": lim.memory_mb * mib,
+            "CPU": lim.cpu_s,
+            "FSIZE": lim.file_mb * mib,
+            "NOFILE": lim.open_files,
+            "NPROC": 0 if self.cgroup else lim.processes,
+            "CORE": 0,
+        }
+
+    def _close_info(self, write_end_only: bool = False) -> None:
+        ends = ("info_fd",) if write_end_only else ("info_fd", "_info_r")
+        for name in ends:
+            fd = getattr(self, name)
+            if fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+                setattr(self, name, -1)
+
+    def close(self) -> None:
+        """Wait for the PID namespace to end, kill whatever of the run is left in its cgroup
+        (nothing, normally) and remove the cgroup. Call once the bwrap process has ended."""
+        self._close_info()
+        if self._pidfd is not None:
+            # the namespace's first process ends last: the kernel ends the others first
+            select.select([self._pidfd], [], [], 10.0)
+            os.close(self._pidfd)
+            self._pidfd = None
+        for group in (self.cgroup, self.memory_cgroup):
+            if group:
+                _remove_cgroup(group)
+        self.cgroup = self.memory_cgroup = None
+
+    def __enter__(self) -> Jail:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _remove_cgroup(cgroup: str) -> None:
+    """Remove one of the run's cgroups, killing what is left in it first (nothing, normally)."""
+    for _ in range(200):
+        try:
+            os.rmdir(cgroup)
+            break
+        except FileNotFoundError:
+            break
+        except OSError:
+            _kill_members(cgroup)
+            time.sleep(0.01)  # the kernel reaps the killed processes
+
+
+def _kill_members(cgroup: str) -> None:
+    """SIGKILL the processes left in one run's cgroup (all of them the run's own)."""
+    with contextlib.suppress(OSError):
+        for pid in Path(cgroup, "cgroup.procs").read_text().split():
+            with contextlib.suppress(OSError):
+                os.kill(int(pid), signal.SIGKILL)
+
+
+_counter = 0
+
+
+def _pids_root() -> str | None:
+    """The folder of this process's pids cgroup (v1 ``pids`` hierarchy, or v2 with the pids
+    controller delegated), or None."""
+    return _controller_root("pids")
+
+
+def _controller_root(controller: str) -> str | None:
+    """The folder of this process's cgroup with ``controller`` (its v1 hierarchy, or v2 with
+    the controller delegated), or None."""
+    try:
+        lines = Path("/proc/self/cgroup").read_text().splitlines()
+    except OSError:
+        return None
+    for line in lines:
+        _, controllers, path = line.split(":", 2)
+        if controller in controllers.split(","):
+            return os.path.join("/sys/fs/cgroup", controller, path.lstrip("/"))
+    for line in lines:
+        if line.startswith("0::"):
+            base = os.path.join("/sys/fs/cgroup", line[3:].lstrip("/"))
+            try:
+                enabled = Path(base, "cgroup.subtree_control").read_text().split()
+            except OSError:
+                return None
+            return base if controller in enabled else None
+    return None
+
+
+def _make_memory_cgroup(pids_cgroup: str | None) -> str | None:
+    """The run's memory cgroup, only to read its OOM count: in cgroup v2 the pids cgroup
+    itself when the memory controller is on there; in v1 a fresh one in the memory
+    hierarchy; else None."""
+    if pids_cgroup and os.path.exists(os.path.join(pids_cgroup, "memory.events")):
+        return pids_cgroup
+    root = _controller_root("memory")
+    if root is None or not os.access(root, os.W_OK):
+        return None  # no memory controller of ours: no per-run record
+    global _counter
+    _counter += 1
+    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
+    try:
+        os.mkdir(path)
+    except OSError:
+        return None
+    return path
+
+
+def _make_pids_cgroup(limit: int) -> str | None:
+    """A fresh pids cgroup with ``pids.max = limit`` (None when this machine gives none)."""
+    global _counter
+    root = _pids_root()
+    if root is None or not os.access(root, os.W_OK):
+        return None
+    _counter += 1
+    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
+    try:
+        os.mkdir(path)
+        Path(path, "pids.max").write_text(str(limit))
+    except OSError:
+        with contextlib.suppress(OSError):
+            os.rmdir(path)
+        return None
+    return path
