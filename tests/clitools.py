@@ -46,3 +46,20 @@ def default_signals() -> None:
 
     for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(signum, signal.SIG_DFL)
+
+
+def run_batch(subs: Path, room: Path, out: Path, *extra: str) -> tuple[int, str]:
+    """``usar batch SUBS --scenario ROOM -o OUT EXTRA...`` in this process: its exit code and
+    what it printed (the batch's engines start their own processes)."""
+    import io
+
+    from usar_replay.cli import main as cli
+
+    buf = io.StringIO()
+    old = sys.stdout
+    sys.stdout = buf
+    try:
+        code = cli.main(["batch", str(subs), "--scenario", str(room), "-o", str(out), *extra])
+    finally:
+        sys.stdout = old
+    return code, buf.getvalue()

@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from clitools import default_signals
+from clitools import default_signals, run_batch
 from conftest import one_room
 from logtools import digest
 
@@ -35,7 +35,6 @@ from usar_replay.batch.plan import (
     parse_seeds,
     submission_digest,
 )
-from usar_replay.cli import main as cli
 from usar_replay.core.errors import UsageError
 from usar_replay.world.scenario_toml import to_toml
 
@@ -87,17 +86,6 @@ def room_file(root: Path) -> Path:
 
 
 CLASS_ARGS = ["--tick-timeout", "5", "--mission-memory", "1000", "--jobs", "2", "--quiet"]
-
-
-def run_batch(subs: Path, room: Path, out: Path, *extra: str) -> tuple[int, str]:
-    buf = io.StringIO()
-    old = sys.stdout
-    sys.stdout = buf
-    try:
-        code = cli.main(["batch", str(subs), "--scenario", str(room), "-o", str(out), *extra])
-    finally:
-        sys.stdout = old
-    return code, buf.getvalue()
 
 
 @pytest.fixture(scope="module")

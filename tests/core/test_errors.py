@@ -42,7 +42,10 @@ NOT_USAR_ERRORS = {
     "core/msg_text.py": {"FieldPathError": "caught by log/echo: becomes a UsageError"},
     "core/finite.py": {"NonFiniteValue": "caught at the process boundary: a refused output"},
     "core/signals.py": {"Terminated": "a KeyboardInterrupt: how the CLI and batch stop"},
-    "batch/run_one.py": {"WallLimit": "a KeyboardInterrupt: how a batch run stops"},
+    "batch/run_one.py": {
+        "WallLimit": "a KeyboardInterrupt: how a batch run stops",
+        "GradeStopped": "a BaseException: stops grading at its limit, past any `except`",
+    },
 }
 
 _BUILTIN_ROOTS = {"Exception", "BaseException", "KeyboardInterrupt"}

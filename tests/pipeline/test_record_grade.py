@@ -116,7 +116,7 @@ def test_a_ros2_final_world_in_a_batch_gets_its_own_rubric_when_the_mission_cras
 ) -> None:
     """The crash fallback (no log to grade: the mission died before the first tick) fails
     every line of the world's own rubric, not the US&R one; thresholds travel as data."""
-    from test_batch import run_batch
+    from clitools import run_batch
 
     subs = tmp_path / "subs"
     subs.mkdir()

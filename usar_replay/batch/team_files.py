@@ -21,6 +21,8 @@ import os
 import stat
 from pathlib import Path
 
+from usar_replay.core.errors import UnusableSubmission
+
 __all__ = [
     "MAX_FILE_BYTES",
     "MAX_FILES",
@@ -38,10 +40,6 @@ MAX_FILES = 20_000
 SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
 """Folders left out of the digest (caches, version control), as are hidden names and .pyc."""
 _CHUNK = 1024 * 1024
-
-
-class UnusableSubmission(ValueError):
-    """A team's folder breaks a rule of this module; ``str()`` says which file and why."""
 
 
 def _skipped(name: str) -> bool:

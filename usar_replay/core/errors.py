@@ -20,6 +20,8 @@ __all__ = [
     "MissionEnded",
     "DetectError",
     "MissingRos1",
+    "UnusableSubmission",
+    "TreeRefused",
 ]
 
 
@@ -84,3 +86,17 @@ class DetectError(UsarError):
 class MissingRos1(UsageError):
     """ROS 1 is not installed: the message is the ``apt-get install`` line to run. (Raised by
     :mod:`usar_replay.ros1.debian`, which re-exports it.)"""
+
+
+class UnusableSubmission(UsarError):
+    """A team's folder breaks a rule of :mod:`usar_replay.batch.team_files` (a FIFO, a link
+    out of it, a file over the caps); ``str()`` says which file and why. The batch makes it
+    that team's verdict (``bad_submission``)."""
+
+
+class TreeRefused(UsarError):
+    """A built catkin workspace holds something usar will not use (a link leading out, a
+    special file); the message says what (one line). (Raised by :mod:`usar_replay.ros1.tree`:
+    the build's verdict is ``build_failed``.)"""
+
+    exit_code = 4

@@ -23,11 +23,9 @@ import os
 import stat
 from pathlib import Path
 
+from usar_replay.core.errors import TreeRefused
+
 __all__ = ["TreeRefused", "check", "freeze", "manifest", "verify", "write_new"]
-
-
-class TreeRefused(Exception):
-    """The workspace holds something usar will not use; the message says what (one line)."""
 
 
 def _walk(root: str) -> list[tuple[str, os.stat_result]]:
