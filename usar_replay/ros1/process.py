@@ -23,9 +23,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget, Wire
 from usar_replay.ros1.build import Package, build, cached_build, package_sha256
 from usar_replay.ros1.isolation import isolated_command
+from usar_replay.ros1.scheduling import OneCpu
 
 __all__ = ["Ros1Options", "Ros1Process", "ros1_target"]
 
@@ -38,11 +39,12 @@ class Ros1Options:
     """A launch file of the package (name or path inside it): ``roslaunch PKG FILE``."""
     node: str = ""
     """An executable of the package: ``rosrun PKG NODE`` (when no launch file is given)."""
-    rtf: float = 4.0
-    """Real-time factor cap: each tick gets at least ``dt / rtf`` of wall time for the graph to
-    react (0: no cap, a fixed short settle only)."""
+    rtf: float = 0.5
+    """The slowest pace, a safety net: a tick waits at most ``dt / rtf`` of wall time for the
+    graph to go idle (docs/ros1.md, "Pacing"; 0: no cap). The graph sets the pace: a tick ends
+    as soon as it is idle."""
     settle_ms: float = 3.0
-    """Wall milliseconds the bridge waits at least after each tick, whatever ``rtf``."""
+    """The wall cap is at least this many milliseconds, whatever ``rtf``."""
     connect_timeout_s: float = 60.0
     """Wall seconds the student's graph has to register a node with the master."""
     isolate: bool = True
@@ -51,6 +53,8 @@ class Ros1Options:
     """Leave the run's folder (bridge, master and graph output, ROS logs) on disk."""
     cache: bool = True
     """Reuse a workspace built before from the same files (:func:`cached_build`)."""
+    one_cpu: bool = True
+    """Run the graph's threads on one CPU under SCHED_RR (:mod:`.scheduling`; needs root)."""
 
 
 _ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
@@ -90,6 +94,7 @@ class Ros1Process(MissionProcess):
         options: Ros1Options,
     ) -> None:
         self.options = options
+        self._one_cpu: OneCpu | None = None
         self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
         try:
             if options.cache:
@@ -132,6 +137,14 @@ class Ros1Process(MissionProcess):
         if self._jail is not None:
             return cmd
         return isolated_command(cmd, isolate=self.options.isolate)
+
+    def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
+        """Before each tick, the run's new threads go onto the graph's CPU (:mod:`.scheduling`)."""
+        if self.options.one_cpu:
+            if self._one_cpu is None:
+                self._one_cpu = OneCpu(self._proc.pid, self._jail.cgroup if self._jail else None)
+            self._one_cpu.apply()
+        super().send(t_ns, inputs)
 
     def close(self) -> None:
         try:
