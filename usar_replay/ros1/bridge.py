@@ -287,7 +287,7 @@ class Bridge:
             graph.watch.update()
 
         def idle(cap_s: float) -> bool:
-            quiet.refresh()
+            quiet.refresh(graph.watch.package())
             return quiet.wait(cap_s)
 
         try:
@@ -428,7 +428,8 @@ class Bridge:
         # the wall cap (dt / rtf) is a safety net for a graph that never goes idle
         assert self.quiet is not None
         cap = max(self.settle_s, dt / self.rtf) if self.rtf > 0 else None
-        self.quiet.refresh()
+        assert self.graph is not None
+        self.quiet.refresh(self.graph.watch.package())
         if not self.quiet.wait(cap):
             self.capped += 1
         with self._lock:

@@ -45,12 +45,15 @@ class ProcWatch:
     codes: dict[int, int] = field(default_factory=dict)
     """pid -> exit status (waitpid's encoding) of the ones seen as zombies."""
 
+    def package(self) -> list[int]:
+        """The package's processes now (the launcher's descendants; with roslaunch, not
+        roslaunch itself)."""
+        pids = descendants(self.launcher)
+        return pids if self.launcher_is_package else pids[1:]
+
     def update(self) -> None:
         """Note the package's processes running now (call once per tick)."""
-        pids = descendants(self.launcher)
-        if not self.launcher_is_package:
-            pids = pids[1:]
-        for pid in pids:
+        for pid in self.package():
             if pid not in self.seen:
                 with contextlib.suppress(OSError), open(f"/proc/{pid}/comm") as f:
                     self.seen[pid] = f.read().strip()

@@ -29,6 +29,7 @@ import contextlib
 import os
 import struct
 import time
+from collections.abc import Collection
 from dataclasses import dataclass
 
 from usar_replay.ros1.sock_diag import SockDiag
@@ -62,7 +63,12 @@ class ThreadState:
     runs: int
     """How many times it was given a CPU (schedstat's third field)."""
     polling: bool
-    """In a short timed sleep (it will wake by itself soon and look at the clock)."""
+    """A package thread in a short timed sleep (it will wake by itself soon and look at the
+    clock)."""
+    watched: bool
+    """A thread of the package or the bridge: when it ran matters. The master's and
+    roslaunch's threads only need to be blocked (they wake on their own wall-clock timers, and
+    what they do for the graph goes through sockets)."""
 
 
 def descendants(pid: int) -> list[int]:
@@ -85,6 +91,7 @@ class _Thread:
     def __init__(self, pid: int, tid: int) -> None:
         base = f"/proc/{pid}/task/{tid}/"
         self.pid = pid
+        self.role = "infra"
         self.stat = os.open(base + "stat", os.O_RDONLY)
         try:
             self.schedstat = os.open(base + "schedstat", os.O_RDONLY)
@@ -129,8 +136,9 @@ class Quiescence:
 
     # -- processes, threads, sockets -------------------------------------------------------------
 
-    def refresh(self) -> list[int]:
-        """Find the tree's processes and threads again (new nodes, exited ones)."""
+    def refresh(self, package: Collection[int] = ()) -> list[int]:
+        """Find the tree's processes and threads again (new nodes, exited ones); ``package``:
+        the pids of the package's processes (the nodes)."""
         self._pids = descendants(self.root)
         seen: set[int] = set()
         for pid in self._pids:
@@ -143,6 +151,9 @@ class Quiescence:
                     if tid not in self._threads:
                         with contextlib.suppress(OSError):
                             self._threads[tid] = _Thread(pid, tid)
+                    if tid in self._threads:
+                        role = "bridge" if pid == self.root else "infra"
+                        self._threads[tid].role = "node" if pid in package else role
         for tid in set(self._threads) - seen:
             self._threads.pop(tid).close()
         for pid in set(self._mem) - set(self._pids):
@@ -194,8 +205,8 @@ class Quiescence:
             fields = sched.split()
             runs = int(fields[2]) if len(fields) > 2 else 0
             running = state == b"R"
-            polling = not running and self._short_sleep(t)
-            out[tid] = ThreadState(running, runs, polling)
+            polling = not running and t.role == "node" and self._short_sleep(t)
+            out[tid] = ThreadState(running, runs, polling, t.role != "infra")
         self.samples += 1
         return out
 
@@ -267,10 +278,12 @@ class Quiescence:
 
 
 def _still(base: dict[int, ThreadState], now: dict[int, ThreadState]) -> bool:
-    """No thread appeared, and none but the pollers of ``base`` ran since."""
-    if set(now) - set(base):
+    """No watched thread appeared, and none but the pollers of ``base`` ran since."""
+    if any(now[tid].watched for tid in set(now) - set(base)):
         return False
-    return all(s.polling or now.get(tid, s).runs == s.runs for tid, s in base.items())
+    return all(
+        s.polling or not s.watched or now.get(tid, s).runs == s.runs for tid, s in base.items()
+    )
 
 
 def _pollers_cycled(base: dict[int, ThreadState], now: dict[int, ThreadState]) -> bool:
