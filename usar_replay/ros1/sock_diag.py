@@ -60,9 +60,12 @@ class SockQueue:
 
     @property
     def waiting(self) -> int:
-        """What is in flight at this socket: its receive queue, plus (not listening) what was
-        written and not yet taken by the peer (a listening socket's wqueue is its backlog)."""
-        return self.rqueue + (0 if self.state == TCP_LISTEN else self.wqueue)
+        """What is in flight at this socket: its receive queue, plus, for TCP not listening,
+        what was sent and not yet acknowledged (a listening socket's wqueue is its backlog; a
+        unix or UDP socket's is the memory of what it sent, which the peer's rqueue counts)."""
+        if self.kind != "tcp" or self.state == TCP_LISTEN:
+            return self.rqueue
+        return self.rqueue + self.wqueue
 
 
 class SockDiag:
