@@ -54,7 +54,7 @@ from usar_replay.node import jail
 from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
-from usar_replay.ros1.graph_start import launch_nodes, wait_until_ready
+from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
 from usar_replay.ros1.proc_watch import ProcWatch
 from usar_replay.ros1.quiescence import Quiescence
 from usar_replay.world.nav import grid_from_msg
@@ -188,6 +188,10 @@ class Bridge:
         self.sim_topics: list[str] = list(setup["sim_topics"])
         self.quiet: Quiescence | None = None
         self.capped = 0
+        self._master: Any = None
+        self._package_nodes: set[str] = set()
+        self._connected: frozenset[int] = frozenset()
+        """The package's nodes registered when /clock started (to see their ros::shutdown)."""
         """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
 
     # -- start-up -------------------------------------------------------------------------------
@@ -292,6 +296,28 @@ class Bridge:
 
         try:
             wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # the start time on /clock before the first tick: a node that waits for a valid
+            # sim time before it builds its clients (ros::Time::waitForValid) builds them now,
+            # and their subscriptions connect here, while /clock holds, not during the run
+            # (roscpp negotiates a new subscription on its XML-RPC thread's 100 ms wall-clock
+            # poll, so a connection made in a tick lands in a tick the machine decides)
+            from rosgraph_msgs.msg import Clock
+
+            self._clock.publish(Clock(clock=_genpy_time(contract.START_TIME_NS)))
+            wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # and each move_base's status (rospy's status timer runs on sim time, first at
+            # 0.2 s): an action client's waitForServer, which re-checks on a 500 ms wall-clock
+            # timeout when a status finds it not yet connected, is done before tick 1
+            for mb in self.move_base.values():
+                mb.server.publish_status()
+            wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # a client still re-checking on a wall-clock timeout gets up to 2 s to be done
+            deadline = time.monotonic() + 2.0
+            while quiet.long_waits() and time.monotonic() < deadline:
+                time.sleep(0.005)
+                wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            self._master = master
+            self._package_nodes = registered_nodes(master, NODE)
         except RuntimeError as err:
             if "ended (exit" in str(err):
                 raise
@@ -476,8 +502,25 @@ class Bridge:
         exited, seen from the process table (:mod:`.proc_watch`), not roslaunch's polling."""
         assert self.graph is not None
         ended = self.graph.exit_status()
-        if ended is not None or not self.graph.watch.ended():
+        if ended is not None:
             return ended
+        if not self.graph.watch.ended():
+            # a node's ros::shutdown closes its connections: ask the master (some ms) only in
+            # a tick in which a connection closed
+            assert self.quiet is not None
+            closed = self._connected - self.quiet.connected
+            self._connected = self.quiet.connected
+            nodes = self._package_nodes
+            if not closed or not nodes or registered_nodes(self._master, NODE) & nodes:
+                return None
+            # every node of the package unregistered in this tick (ros::shutdown): its
+            # processes take a wall-clock while to exit (roscpp joins threads that wake on
+            # 100 ms timeouts), so /clock holds until the process table shows them gone
+            deadline = time.monotonic() + 10.0
+            while not self.graph.watch.ended() and time.monotonic() < deadline:
+                if self.graph.exit_status() is not None:
+                    break
+                time.sleep(0.002)
         failures = self.graph.watch.failures()
         if failures:
             return 1, failures[0]

@@ -20,7 +20,7 @@ import xmlrpc.client
 from collections.abc import Callable, Sequence
 from typing import Any
 
-__all__ = ["launch_nodes", "missing_connections", "wait_until_ready"]
+__all__ = ["launch_nodes", "missing_connections", "registered_nodes", "wait_until_ready"]
 
 
 def launch_nodes(script_prefix: str, package: str, launch: str, env: dict[str, str]) -> list[str]:
@@ -40,6 +40,14 @@ def launch_nodes(script_prefix: str, package: str, launch: str, env: dict[str, s
     if done.returncode != 0:
         return []
     return sorted(n.strip() for n in done.stdout.splitlines() if n.strip().startswith("/"))
+
+
+def registered_nodes(master: Any, caller: str) -> set[str]:
+    """The nodes with a publication, subscription or service at the master, but ``caller``
+    and ``/rosout``."""
+    _code, _msg, state = master.getSystemState(caller)
+    nodes = {str(n) for group in state for _topic, names in group for n in names}
+    return nodes - {caller, "/rosout"}
 
 
 def _inbound(uri: str, caller: str) -> dict[str, set[str]]:
@@ -94,9 +102,7 @@ def wait_until_ready(
     why = "no node registered"
     while time.monotonic() < deadline:
         alive()
-        _code, _msg, state = master.getSystemState(caller)
-        nodes = {n for group in state for _topic, names in group for n in names}
-        nodes -= {caller, "/rosout"}
+        nodes = registered_nodes(master, caller)
         absent = sorted(set(expected) - nodes)
         if not nodes or absent:
             why = f"not registered: {', '.join(absent)}" if absent else "no node registered"

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 from usar_replay.ros1.sock_diag import SockDiag
 
+TCP_ESTABLISHED = 1
+
 __all__ = ["SHORT_SLEEP_S", "Quiescence", "ThreadState", "descendants"]
 
 SHORT_SLEEP_S = 0.005
@@ -42,6 +44,9 @@ sim-time timers wait 1 ms at a time); a longer one is woken by its condition whe
 POLL_SLEEP_S = 0.05
 """A plain sleep of at most this much counts as a poll: nothing but time wakes it (roscpp's
 sim-time sleeps nap 1 ms, ``ros::Time::waitForValid`` 10 ms until the first ``/clock``)."""
+LONG_WAIT_S = 0.15
+"""A timed wait with more than this left at start-up is a wall-clock re-check (see
+:meth:`Quiescence.long_waits`); roscpp's own spinners wait 100 ms at a time."""
 NAP_S = 0.0002
 """Wall time between two samples (the asking thread sleeps: on one CPU the graph runs then)."""
 
@@ -123,6 +128,9 @@ class Quiescence:
         self._inodes: set[int] = set()
         self.samples = 0
         """Samples taken (for the bridge's log)."""
+        self.connected: frozenset[int] = frozenset()
+        """The established TCP connections of the namespace at the last sample (a node's
+        ``ros::shutdown`` closes its connections: the bridge asks the master then)."""
 
     def close(self) -> None:
         for t in self._threads.values():
@@ -178,7 +186,10 @@ class Quiescence:
         machine's other sockets are in the dump too)."""
         total = 0
         refreshed = False
+        connected: set[int] = set()
         for q in self.diag.all():
+            if q.kind == "tcp" and q.state == TCP_ESTABLISHED:
+                connected.add(q.inode)
             if q.waiting <= 0:
                 continue
             if q.inode not in self._inodes and not refreshed:
@@ -186,6 +197,7 @@ class Quiescence:
                 refreshed = True
             if q.inode in self._inodes:
                 total += q.waiting
+        self.connected = frozenset(connected)
         return total
 
     def threads(self) -> dict[int, ThreadState]:
@@ -209,6 +221,34 @@ class Quiescence:
             out[tid] = ThreadState(running, runs, polling, t.role != "infra")
         self.samples += 1
         return out
+
+    def long_waits(self) -> list[int]:
+        """The package's threads in a timed wait on a condition with more than
+        :data:`LONG_WAIT_S` left: a client re-checking on a wall-clock timeout (actionlib's
+        ``waitForServer``, 500 ms). Before ``/clock`` starts the bridge lets these end, so that
+        they do not end in a tick the machine decides."""
+        out = []
+        for tid, t in self._threads.items():
+            if t.role == "node" and self._timed_wait_left(t) > LONG_WAIT_S:
+                out.append(tid)
+        return out
+
+    def _timed_wait_left(self, t: _Thread) -> float:
+        """Seconds left in a timed futex wait (0 when the thread is in none)."""
+        if t.syscall is None:
+            return 0.0
+        try:
+            text = os.pread(t.syscall, 256, 0).split()
+        except OSError:
+            return 0.0
+        if len(text) < 5 or not text[0].isdigit() or int(text[0]) != _FUTEX:
+            return 0.0
+        op, timeout = int(text[2], 16), int(text[4], 16)
+        if not timeout or (op & 127) != _FUTEX_WAIT_BITSET:
+            return 0.0
+        clock = time.CLOCK_REALTIME if op & _FUTEX_CLOCK_REALTIME else time.CLOCK_MONOTONIC
+        left = self._left(t.pid, timeout, absolute=clock)
+        return 0.0 if left == float("inf") else left
 
     def _short_sleep(self, t: _Thread) -> bool:
         if t.syscall is None:
