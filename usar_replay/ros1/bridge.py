@@ -314,7 +314,8 @@ class Bridge:
             # a client still re-checking on a wall-clock timeout gets up to 2 s to be done
             deadline = time.monotonic() + 2.0
             while quiet.long_waits() and time.monotonic() < deadline:
-                time.sleep(0.005)
+                for mb in self.move_base.values():
+                    mb.server.publish_status()
                 wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
             self._master = master
             self._package_nodes = registered_nodes(master, NODE)
