@@ -124,30 +124,39 @@ def _outputs(path: Path) -> list[tuple[int, str, bytes]]:
 
 
 @pytest.fixture(scope="module")
-def two_recordings(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+def three_recordings(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    """The example package on the quick room three times, the third while two CPU hogs
+    load both cores."""
     from usar_replay.ros1.record import record_ros1
 
     out = tmp_path_factory.mktemp("pacing")
-    paths = (out / "a.mcap", out / "b.mcap")
+    paths = (out / "a.mcap", out / "b.mcap", out / "loaded.mcap")
     for path in paths:
-        result = record_ros1(quick_room(), path, EXAMPLE, RunSettings())
+        hogs = []
+        if path.stem == "loaded":
+            hogs = [_child("while True: pass") for _ in range(2)]
+        try:
+            result = record_ros1(quick_room(), path, EXAMPLE, RunSettings())
+        finally:
+            for hog in hogs:
+                hog.kill()
+                hog.wait()
         assert result.outcome == "done", result
     return paths
 
 
-def test_two_recordings_start_alike(two_recordings: tuple[Path, Path]) -> None:
-    """Start-up gating: the node's first output lands in the same tick in both."""
-    a, b = (_outputs(p) for p in two_recordings)
-    assert a[0] == b[0]
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="not yet repeatable: actionlib's waitForServer re-checks on a 500 ms wall-clock "
-    "timeout, so the first goal's tick varies (docs/ros1.md, 'What is and is not deterministic')",
-)
-def test_two_recordings_are_identical_message_for_message(
-    two_recordings: tuple[Path, Path],
+def test_two_recordings_and_a_loaded_third_are_identical_message_for_message(
+    three_recordings: tuple[Path, Path, Path],
 ) -> None:
-    a, b = (_outputs(p) for p in two_recordings)
+    a, b, loaded = (_outputs(p) for p in three_recordings)
+    assert len(a) > 100
     assert a == b
+    assert a == loaded
+
+
+def test_the_simulator_side_is_identical_too(three_recordings: tuple[Path, Path, Path]) -> None:
+    everything = [
+        [(m.log_time_ns, m.topic, bytes(m.data)) for m in open_run(p).messages(decode=False)]
+        for p in three_recordings
+    ]
+    assert everything[0] == everything[1] == everything[2]
