@@ -19,13 +19,15 @@ on socket FD; to the student's graph it is what the course's ``multiple_robots.l
 What the graph publishes on ``/tf``, ``/tf_static``, ``/explorer/cmd_vel``, ``/follower/cmd_vel``
 and ``/rosout`` goes back to the recorder as the mission's outputs of the tick it reacted to.
 
-Pacing: one tick is: publish its messages, then ``/clock`` (so a node woken by the clock finds
-the tick's data already queued), then wait ``max(settle, dt / rtf)`` of wall time for the graph
-to react, then hand back what arrived. ``/clock`` never runs ahead: the next tick starts only
-after the recorder has the outputs. The graph runs on sim time, so a slow machine makes a run
-slower, not different in kind; but which tick a reply lands in depends on the scheduler, so a
-live ROS 1 run is *not* bit for bit repeatable (the log, once written, grades and replays
-deterministically; ``docs/ros1.md``).
+Pacing: the graph paces the clock. One tick is: publish its messages, then ``/clock`` (so a
+node woken by the clock finds the tick's data already queued), then wait until the graph is
+idle (:mod:`.quiescence`; at most ``dt / rtf`` of wall time, a safety net), then hand back what
+arrived, sorted by (topic, node). ``/clock`` never runs ahead: the next tick starts only after
+the recorder has the outputs. It starts only once the graph is connected and idle
+(:mod:`.graph_start`), and the run ends in the tick the package shut down, held until the
+process table shows it gone (:mod:`.proc_watch`); the recorder runs the graph on one CPU under
+SCHED_RR (:mod:`.scheduling`). With these, two recordings of a package that does not read the
+wall clock are identical (docs/ros1.md, "Pacing").
 """
 
 from __future__ import annotations
