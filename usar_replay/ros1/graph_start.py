@@ -99,13 +99,15 @@ def wait_until_ready(
     ``alive`` raises when the graph ended, ``idle(cap)`` waits for quiescence. Raises
     RuntimeError naming what is missing after ``timeout_s``."""
     deadline = time.monotonic() + timeout_s
-    why = "no node registered"
+    why = "registered no node with the master"
     while time.monotonic() < deadline:
         alive()
         nodes = registered_nodes(master, caller)
         absent = sorted(set(expected) - nodes)
         if not nodes or absent:
-            why = f"not registered: {', '.join(absent)}" if absent else "no node registered"
+            why = "registered no node with the master"
+            if absent and nodes:
+                why = f"not registered: {', '.join(absent)}"
             time.sleep(0.05)
             continue
         missing = missing_connections(master, caller)
