@@ -134,6 +134,9 @@ class Graph:
         return ""
 
     def stop(self) -> None:
+        if self.proc.poll() is None and self.watch.seen and self.watch.ended():
+            self.proc.kill()  # the package is gone: roslaunch has nothing left to stop
+            self.proc.wait()
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGINT)  # roslaunch stops its nodes on SIGINT
             try:
@@ -155,7 +158,7 @@ class Bridge:
         self.conn = conn
         self.config = config
         self.parameters: dict[str, Any] = setup["parameters"]
-        self.rtf = float(config.get("rtf", 4.0))
+        self.rtf = float(config.get("rtf", 0.5))
         self.settle_s = float(config.get("settle_ms", 3.0)) / 1000.0
         ws = Path(config["workspace"])
         run = Path(config["run_dir"])
@@ -190,6 +193,8 @@ class Bridge:
         self.sim_topics: list[str] = list(setup["sim_topics"])
         self.quiet: Quiescence | None = None
         self.capped = 0
+        self.waited_s = 0.0
+        """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
         self._master: Any = None
         self._package_nodes: set[str] = set()
         self._connected: frozenset[int] = frozenset()
@@ -459,8 +464,10 @@ class Bridge:
         cap = max(self.settle_s, dt / self.rtf) if self.rtf > 0 else None
         assert self.graph is not None
         self.quiet.refresh(self.graph.watch.package())
+        waited = time.perf_counter()  # pacing only: never reaches a message
         if not self.quiet.wait(cap):
             self.capped += 1
+        self.waited_s += time.perf_counter() - waited
         with self._lock:
             got, self._inbox = self._inbox, []
         # what arrived within the tick in a fixed order: by topic, then publishing node (one
@@ -541,22 +548,18 @@ class Bridge:
     def stop(self) -> None:
         if self.quiet is not None:
             print(
-                f"usar pacing: {self.quiet.samples} samples, {self.capped} ticks capped",
+                f"usar pacing: {self.quiet.samples} samples, {self.capped} ticks capped, "
+                f"{self.waited_s:.1f} s waiting for the graph",
                 flush=True,
             )
             self.quiet.close()
         if self.graph is not None:
             self.graph.stop()
-        with contextlib.suppress(Exception):
-            import rospy
-
-            rospy.signal_shutdown("usar: run over")
+        # no rospy.signal_shutdown(): it unregisters every topic with the master, call by
+        # call, for a second or two; the master goes, and main() ends the process
         if self.master is not None and self.master.poll() is None:
-            self.master.terminate()
-            try:
-                self.master.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                self.master.kill()
+            self.master.kill()  # it keeps nothing: the run's folder goes with it
+            self.master.wait()
 
 
 def _caller(msg: Any) -> str:
@@ -605,6 +608,10 @@ def main(argv: list[str]) -> None:
             conn.send_bytes(_CRASH + text.encode("utf-8", errors="replace"))
     finally:
         bridge.stop()
+        # rospy's and actionlib's threads would keep the interpreter up until the recorder's
+        # kill, 2 s later: the run is over, so end now
+        sys.stdout.flush()
+        os._exit(0)
 
 
 if __name__ == "__main__":
