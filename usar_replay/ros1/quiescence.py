@@ -5,7 +5,8 @@ soon as the graph is done with this one, not after a fixed wall-time wait, so a 
 as the graph and the same on a loaded machine as on an idle one. The graph is idle when
 
 1. every thread of its processes (the bridge's own included, but not the thread asking) is
-   blocked: ``/proc/<pid>/task/<tid>/stat`` state is not ``R``;
+   blocked: ``/proc/<pid>/task/<tid>/stat`` state is neither ``R`` nor ``D`` (a thread
+   in uninterruptible I/O, writing its output to a file, is still reacting);
 2. no bytes wait in any of its sockets (:mod:`.sock_diag`: a message on its way between two
    nodes is a reaction not finished);
 3. every thread that was in a *short timed sleep* when the graph first looked idle has woken
@@ -216,7 +217,7 @@ class Quiescence:
             state = stat[stat.rfind(b")") + 2 : stat.rfind(b")") + 3]
             fields = sched.split()
             runs = int(fields[2]) if len(fields) > 2 else 0
-            running = state == b"R"
+            running = state in (b"R", b"D")  # D: in I/O for the reaction (a write), not done
             polling = not running and t.role == "node" and self._short_sleep(t)
             out[tid] = ThreadState(running, runs, polling, t.role != "infra")
         self.samples += 1
