@@ -22,6 +22,7 @@ __all__ = [
     "MissingRos1",
     "UnusableSubmission",
     "TreeRefused",
+    "ProtocolMismatch",
 ]
 
 
@@ -64,7 +65,7 @@ class MissingTopic(LogError):
 class MissionEnded(UsarError):
     """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
     ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason.
-    (Raised by :mod:`usar_replay.node.worker`, which re-exports it.)"""
+    (Raised by :mod:`usar_replay.node.mission_process`, which re-exports it.)"""
 
     exit_code = 4
 
@@ -100,3 +101,11 @@ class TreeRefused(UsarError):
     the build's verdict is ``build_failed``.)"""
 
     exit_code = 4
+
+
+class ProtocolMismatch(UsarError):
+    """The mission process (or the ROS 1 bridge) speaks another version of the mission wire
+    protocol than the recorder: two installations of usar mixed. (Raised by
+    :mod:`usar_replay.node.protocol`.)"""
+
+    exit_code = 2
