@@ -180,8 +180,9 @@ def test_a_process_of_another_protocol_version_is_a_clear_error(
     cls = _fake(tmp_path, f"conn.send_bytes({ready})\nconn.recv_bytes()\n")
     with pytest.raises(ProtocolMismatch) as err:
         _start(_TARGET, cls)
-    assert says in str(err.value)
-    assert "reinstall" in str(err.value) and "\n" not in str(err.value)
+    assert err.value.verdict == "refused"
+    assert says in err.value.detail
+    assert "reinstall" in err.value.detail and "\n" not in err.value.detail
 
 
 @pytest.mark.parametrize(

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from usar_replay.core.errors import ProtocolMismatch, UsarError
+from usar_replay.core.errors import MissionEnded, ProtocolMismatch
 from usar_replay.node import protocol
 from usar_replay.node.protocol import FrameKind
 
@@ -95,10 +95,12 @@ def test_the_ready_frame_carries_the_version() -> None:
 def test_a_ready_of_another_version_is_a_clear_error(frame: bytes, says: str) -> None:
     with pytest.raises(ProtocolMismatch) as err:
         protocol.check_ready(frame, "the ROS 1 bridge")
-    text = str(err.value)
+    text = err.value.detail
     assert text.startswith(f"the ROS 1 bridge speaks {says}, this usar speaks version 1")
-    assert "\n" not in text
-    assert isinstance(err.value, UsarError) and err.value.exit_code == 2
+    assert "\n" not in text and text in str(err.value)
+    # a mission can forge any frame: a mismatch ends the run like any refused output
+    assert isinstance(err.value, MissionEnded) and err.value.verdict == "refused"
+    assert err.value.exit_code == 4
 
 
 def test_text_frames_carry_the_users_text() -> None:

@@ -38,12 +38,13 @@ import struct, sys
 from multiprocessing.connection import Connection
 
 from usar_replay.api import Node
+from usar_replay.node.protocol import ready_frame
 
 
 def main() -> None:
     Node("deaf")
     conn = Connection(int(sys.argv[1]))
-    conn.send_bytes(b"R")  # READY, then well-formed empty outputs forever, never reading
+    conn.send_bytes(ready_frame())  # READY, then well-formed empty outputs forever, never reading
     empty = b"O" + struct.pack("<qI", 0, 0) + b"\\x00"
     for _ in range(1_000_000):
         conn.send_bytes(empty)

@@ -103,9 +103,12 @@ class TreeRefused(UsarError):
     exit_code = 4
 
 
-class ProtocolMismatch(UsarError):
-    """The mission process (or the ROS 1 bridge) speaks another version of the mission wire
-    protocol than the recorder: two installations of usar mixed. (Raised by
-    :mod:`usar_replay.node.protocol`.)"""
+class ProtocolMismatch(MissionEnded):
+    """The mission process (or the ROS 1 bridge) answered in another version of the mission
+    wire protocol than the recorder's: two installations of usar mixed, or a mission that
+    writes to usar's socket itself. Either way the run ends as ``refused`` with this reason (a
+    mission can forge any frame, so this is a verdict like any other, never an error outside
+    the run). (Raised by :mod:`usar_replay.node.protocol`.)"""
 
-    exit_code = 2
+    def __init__(self, detail: str) -> None:
+        super().__init__("refused", detail)

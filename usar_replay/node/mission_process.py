@@ -40,7 +40,7 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.core import msgs
-from usar_replay.core.errors import MissionEnded, UsageError
+from usar_replay.core.errors import MissionEnded, ProtocolMismatch, UsageError
 from usar_replay.node import hide, kernel_sandbox, protocol
 from usar_replay.node.audit_guard import GuardPolicy
 from usar_replay.node.boundary_check import MAX_FRAME_BYTES, BoundaryCheck, OutputRefused
@@ -281,7 +281,11 @@ class MissionProcess:
             raise self._refuse(
                 f"the mission process sent a frame of kind {frame[:1]!r} before it was ready"
             )
-        protocol.check_ready(frame)
+        try:
+            protocol.check_ready(frame)
+        except ProtocolMismatch:
+            self._proc.kill()  # what it sends is not read any more
+            raise
 
     # -- what others may ask -------------------------------------------------------------------
 

@@ -23,8 +23,9 @@ its :class:`FrameKind`:
 
   nothing may follow the last item.
 * ``R`` (ready, child -> parent, once the mission's ``main()`` created its nodes): the kind and
-  :data:`PROTOCOL_VERSION` as a uint16 LE. A parent that reads another version stops with
-  :class:`~usar_replay.core.errors.ProtocolMismatch`.
+  :data:`PROTOCOL_VERSION` as a uint16 LE. A parent that reads another version ends the run
+  as ``refused`` (:class:`~usar_replay.core.errors.ProtocolMismatch`, which says so); a child
+  given a setup of another version loads no mission code and answers with its own ready.
 * ``C`` (crashed), ``M`` (out of memory), ``F`` (refused): the kind and the user's traceback or
   the reason as UTF-8 text; the child sends one and ends.
 * ``S`` (stop, parent -> child): the kind alone.
@@ -170,5 +171,6 @@ def check_ready(frame: bytes, peer: str = "the mission process") -> None:
     )
     raise ProtocolMismatch(
         f"{peer} speaks {theirs}, this usar speaks version {PROTOCOL_VERSION}: both must come "
-        "from one installation of usar-replay (reinstall it)"
+        "from one installation of usar-replay (reinstall it), and mission code must not write "
+        "to usar's socket"
     )
