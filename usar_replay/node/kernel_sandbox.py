@@ -1,7 +1,7 @@
 """The kernel sandbox a mission process runs in: bubblewrap (``bwrap``) namespaces and limits.
 
 Why: a mission is untrusted code (a team's, graded against a world it must not see). The
-in-process guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
+in-process audit guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
 extension, ``_posixsubprocess`` or ``/proc/<pid>/mem`` walk past it. In its own user, PID,
 IPC, UTS, mount, network and cgroup namespaces, as uid 65534 with no capabilities, the process
 sees only what is mounted for it: the Python install, the packages, its own submission (all

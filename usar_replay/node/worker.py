@@ -83,6 +83,9 @@ def _preload() -> None:
 def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, Any]) -> None:
     """The mission process: load the target, run ``main()``, then serve ticks until told to
     stop. Every failure is reported as text, never raised into the parent."""
+    if setup.get("protocol_version") != protocol.PROTOCOL_VERSION:
+        conn.send_bytes(protocol.ready_frame())  # no mission code: the parent says what is wrong
+        return
     # one thread per library: the mission process shares the machine with usar's own process
     # (replay reads and grades while the mission runs), and OpenCV's thread pool in the ArUco
     # detector costs a third more CPU time than it saves wall time there (2 cores); these are
@@ -95,9 +98,6 @@ def _child_main(conn: multiprocessing.connection.Connection, setup: dict[str, An
     target: MissionTarget = setup["target"]
     policy = PublishPolicy(sim_topics=setup["sim_topics"], sim_frames=setup["sim_frames"])
     executor = Executor(setup["parameters"], policy)
-    if setup.get("protocol_version") != protocol.PROTOCOL_VERSION:
-        conn.send_bytes(protocol.ready_frame())  # the parent says what is wrong and stops
-        return
     if setup.get("guard") is not None:
         _preload()
         setup["guard"].install()  # the audit guard: after usar's imports, before the user's
