@@ -27,7 +27,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from usar_replay.core import cdr, contract, msgs  # noqa: E402
 from usar_replay.node.kernel_sandbox import bwrap_available  # noqa: E402
-from usar_replay.node.worker import MissionLimits, MissionProcess, resolve_target  # noqa: E402
+from usar_replay.node.mission_process import MissionLimits, MissionProcess  # noqa: E402
+from usar_replay.node.mission_target import resolve_target  # noqa: E402
 
 MODES = {"bare": "off", "bwrap": "required"}
 
@@ -43,28 +44,28 @@ def _tick_wire(t: int, image_bytes: int) -> list[tuple[str, str, bytes]]:
     return [(topic, m.__msgtype__, cdr.encode(m)) for topic, m in items]
 
 
-def _process(jail: str) -> MissionProcess:
+def _process(mode: str) -> MissionProcess:
     return MissionProcess(
         resolve_target(str(ROOT / "bench" / "_idle_mission.py")),
         {},
         sim_topics=contract.SIM_TOPICS,
         sim_frames=contract.sim_frames(),
-        limits=MissionLimits(jail=jail),
+        limits=MissionLimits(kernel_sandbox=mode),
     )
 
 
-def startup_s(jail: str) -> tuple[float, float]:
+def startup_s(mode: str) -> tuple[float, float]:
     """(start to ready, close) in seconds."""
     t0 = time.perf_counter()
-    proc = _process(jail)
+    proc = _process(mode)
     t1 = time.perf_counter()
     proc.close()
     return t1 - t0, time.perf_counter() - t1
 
 
-def boundary_us(jail: str, ticks: int) -> float:
+def boundary_us(mode: str, ticks: int) -> float:
     wire = _tick_wire(1_000_000_000, 25_000)
-    with _process(jail) as proc:
+    with _process(mode) as proc:
         t0 = time.perf_counter()
         for i in range(ticks):
             proc.tick(1_000_000_000 + i * 50_000_000, wire)
@@ -79,7 +80,7 @@ def _cpu() -> float:
     return own.ru_utime + own.ru_stime
 
 
-def recording_ms_per_tick(jail: str, sim_s: float) -> tuple[float, float]:
+def recording_ms_per_tick(mode: str, sim_s: float) -> tuple[float, float]:
     from conftest import one_room
 
     from usar_replay.core.settings import RunSettings
@@ -90,7 +91,8 @@ def recording_ms_per_tick(jail: str, sim_s: float) -> tuple[float, float]:
     ticks = sim_s * base.record.control_hz
     with tempfile.TemporaryDirectory() as tmp:
         c0, t0 = _cpu(), time.perf_counter()
-        record(one_room(), Path(tmp) / "room.mcap", settings, limits=MissionLimits(jail=jail))
+        limits = MissionLimits(kernel_sandbox=mode)
+        record(one_room(), Path(tmp) / "room.mcap", settings, limits=limits)
         wall, cpu = time.perf_counter() - t0, _cpu() - c0
     return wall / ticks * 1e3, cpu / ticks * 1e3
 
@@ -106,20 +108,20 @@ def main() -> None:
         sys.exit(f"bench_sandbox: {why}; apt-get install bubblewrap")
     starts: dict[str, list[tuple[float, float]]] = {m: [] for m in MODES}
     for _ in range(args.runs):
-        for mode, jail in MODES.items():
-            starts[mode].append(startup_s(jail))
+        for mode, setting in MODES.items():
+            starts[mode].append(startup_s(setting))
     print(f"mission process start-up to ready, and close (median of {args.runs}):")
     for mode in MODES:
         up = statistics.median(s for s, _ in starts[mode]) * 1e3
         down = statistics.median(c for _, c in starts[mode]) * 1e3
         print(f"  {mode:6s} {up:8.1f} ms start  {down:8.1f} ms close")
     print(f"process boundary, idle mission, 25 kB image per tick ({args.ticks} ticks):")
-    for mode, jail in MODES.items():
-        print(f"  {mode:6s} {boundary_us(jail, args.ticks):8.1f} µs/tick")
+    for mode, setting in MODES.items():
+        print(f"  {mode:6s} {boundary_us(setting, args.ticks):8.1f} µs/tick")
     print(f"one-room recording, built-in mission, {args.sim_s:g} sim-s:")
     recording_ms_per_tick("off", 1.0)  # warm-up: the first recording loads pybullet and EGL
-    for mode, jail in MODES.items():
-        wall, cpu = recording_ms_per_tick(jail, args.sim_s)
+    for mode, setting in MODES.items():
+        wall, cpu = recording_ms_per_tick(setting, args.sim_s)
         print(f"  {mode:6s} {wall:8.2f} ms wall/tick  {cpu:8.2f} ms recorder CPU/tick")
 
 

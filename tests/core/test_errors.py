@@ -31,7 +31,7 @@ NOT_USAR_ERRORS = {
         "GuardViolation": "raised in the mission's own code (a PermissionError)"
     },
     "node/boundary_check.py": {
-        "OutputRefused": "turned into the verdict `refused` (MissionEnded) by the worker",
+        "OutputRefused": "turned into the verdict `refused` (MissionEnded) by the mission process",
         "PublishRefused": "raised in the mission's own code (a PermissionError)",
     },
     "log/mcapfile.py": {"Broken": "caught inside mcapfile: becomes a Damage report"},
@@ -92,7 +92,7 @@ def test_every_usar_error_is_defined_in_core_errors() -> None:
 @pytest.mark.parametrize(
     ("module", "name"),
     [
-        ("usar_replay.node.worker", "MissionEnded"),
+        ("usar_replay.node.mission_process", "MissionEnded"),
         ("usar_replay.world.detect", "DetectError"),
         ("usar_replay.ros1.debian", "MissingRos1"),
     ],

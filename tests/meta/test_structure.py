@@ -417,7 +417,10 @@ UNTESTED: dict[str, str] = {
     "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
     "node/navigation.py": "the built-in missions drive with it: tests/e2e/test_examples.py",
     "node/tf2.py": "tests/node/test_node.py (listeners, static broadcasts)",
-    "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
+    "node/worker.py": (
+        "the mission's side: tests/node/test_mission_process.py (handshake, verdicts), "
+        "tests/node/test_node.py (crash, hang, memory)"
+    ),
     "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
     "pipeline/replay_report.py": "`usar replay --json/--junit`: tests/pipeline/test_replay.py",
     "ros1/convert.py": "tests/e2e/test_ros1.py (messages both ways)",

@@ -32,7 +32,7 @@ from usar_replay.cli import main as cli
 from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
 from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.worker import MissionEnded, MissionLimits
+from usar_replay.node.mission_process import MissionEnded, MissionLimits
 from usar_replay.ros1 import tree
 from usar_replay.ros1.build import BuildLimits, cached_build, find_package
 from usar_replay.ros1.process import Ros1Options

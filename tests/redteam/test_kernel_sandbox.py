@@ -29,7 +29,7 @@ from conftest import one_room
 from usar_replay.cli import main as cli
 from usar_replay.core.settings import RunSettings
 from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.worker import MissionLimits
+from usar_replay.node.mission_process import MissionLimits
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.world.scenario_toml import to_toml
 
@@ -84,7 +84,7 @@ def run_attack(
         team / "run.mcap",
         SHORT,
         mission=str(mission),
-        limits=MissionLimits(jail="required", tick_timeout_s=20.0),
+        limits=MissionLimits(kernel_sandbox="required", tick_timeout_s=20.0),
     )
     out = capfd.readouterr().out
     said = {}
@@ -459,12 +459,12 @@ def test_the_sandbox_changes_no_message_byte(tmp_path: Path) -> None:
     from usar_replay.pipeline.replay import replay
 
     settings = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_s=4.0))
-    bare, jailed = tmp_path / "bare.mcap", tmp_path / "jailed.mcap"
-    a = record(one_room(), bare, settings, limits=MissionLimits(jail="off"))
-    b = record(one_room(), jailed, settings, limits=MissionLimits(jail="required"))
+    bare, sandboxed = tmp_path / "bare.mcap", tmp_path / "sandboxed.mcap"
+    a = record(one_room(), bare, settings, limits=MissionLimits(kernel_sandbox="off"))
+    b = record(one_room(), sandboxed, settings, limits=MissionLimits(kernel_sandbox="required"))
     assert a.outcome == b.outcome == "max_sim_time"
     assert a.messages == b.messages > 50
-    assert digest(bare) == digest(jailed)
-    # and the jailed replay of the bare recording reproduces it bit for bit
-    report = replay(bare, limits=MissionLimits(jail="required"))
+    assert digest(bare) == digest(sandboxed)
+    # and the sandboxed replay of the bare recording reproduces it bit for bit
+    report = replay(bare, limits=MissionLimits(kernel_sandbox="required"))
     assert report.identical, report

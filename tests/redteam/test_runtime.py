@@ -22,12 +22,12 @@ from conftest import one_room
 from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
 from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.worker import MissionLimits
+from usar_replay.node.mission_process import MissionLimits
 from usar_replay.pipeline.record import record
 
 ROOT = Path(__file__).resolve().parents[2]
 _OK, _WHY = bwrap_available()
-needs_jail = pytest.mark.skipif(not _OK, reason=f"no kernel sandbox here: {_WHY}")
+needs_kernel_sandbox = pytest.mark.skipif(not _OK, reason=f"no kernel sandbox here: {_WHY}")
 
 RUN = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_s=20.0))
 
@@ -38,26 +38,27 @@ import struct, sys
 from multiprocessing.connection import Connection
 
 from usar_replay.api import Node
+from usar_replay.node.protocol import ready_frame
 
 
 def main() -> None:
     Node("deaf")
     conn = Connection(int(sys.argv[1]))
-    conn.send_bytes(b"R")  # READY, then well-formed empty outputs forever, never reading
+    conn.send_bytes(ready_frame())  # READY, then well-formed empty outputs forever, never reading
     empty = b"O" + struct.pack("<qI", 0, 0) + b"\\x00"
     for _ in range(1_000_000):
         conn.send_bytes(empty)
 """
 
 
-@needs_jail
+@needs_kernel_sandbox
 def test_a_mission_that_stops_reading_is_hung_within_the_tick_timeout(tmp_path: Path) -> None:
     mission = tmp_path / "deaf.py"
     mission.write_text(DEAF, encoding="utf-8")
     out = tmp_path / "deaf.mcap"
     result = record(
         one_room(), out, RUN, mission=str(mission),
-        limits=MissionLimits(jail="required", tick_timeout_s=1.0),
+        limits=MissionLimits(kernel_sandbox="required", tick_timeout_s=1.0),
     )  # fmt: skip
     assert result.outcome == "hung", result.outcome_reason
     assert "did not read its input within 1 s" in result.outcome_reason
@@ -160,7 +161,7 @@ def _record_attack(tmp_path: Path, source: str, **limits: object) -> tuple[Path,
     mission = tmp_path / "attack.py"
     mission.write_text(source, encoding="utf-8")
     out = tmp_path / "attack.mcap"
-    lim = MissionLimits(jail="required" if _OK else "off", **limits)  # type: ignore[arg-type]
+    lim = MissionLimits(kernel_sandbox="required" if _OK else "off", **limits)  # type: ignore[arg-type]
     return out, record(one_room(), out, RUN, mission=str(mission), limits=lim)
 
 
@@ -244,7 +245,7 @@ def test_sigterm_stops_grading_as_the_wall_limit() -> None:
 # --- every point in one batch: each attacker its verdict, the honest grades unchanged -----------
 
 
-@needs_jail
+@needs_kernel_sandbox
 def test_a_class_of_runtime_attackers_gets_verdicts_and_honest_grades_do_not_move(
     tmp_path: Path,
 ) -> None:

@@ -200,7 +200,7 @@ def grade_job(
 
 def _mission_limits(job: RunJob) -> Any:
     from usar_replay.node.audit_guard import GuardPolicy
-    from usar_replay.node.worker import MissionLimits
+    from usar_replay.node.mission_process import MissionLimits
 
     lim = job.limits
     guard = None
@@ -219,10 +219,10 @@ def _mission_limits(job: RunJob) -> Any:
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
         max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
-        sandbox=guard,
+        guard=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident
-        jail="required" if lim.get("sandbox", True) else "off",
+        kernel_sandbox="required" if lim.get("sandbox", True) else "off",
         read_roots=(str(Path(job.submission_path).resolve()),),
         hidden=(job.out_root,),  # never mounted, unless it lies in the team's folder
     )
@@ -236,7 +236,7 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
 
     from usar_replay.ros1.record import record_ros1
 
-    limits = dataclasses.replace(_mission_limits(job), sandbox=None)
+    limits = dataclasses.replace(_mission_limits(job), guard=None)
     package = job.target.removeprefix(ROS1_TARGET_PREFIX)
     return record_ros1(scenario, log, package, settings, watchdog, limits=limits)
 

@@ -22,6 +22,7 @@ __all__ = [
     "MissingRos1",
     "UnusableSubmission",
     "TreeRefused",
+    "ProtocolMismatch",
 ]
 
 
@@ -64,7 +65,7 @@ class MissingTopic(LogError):
 class MissionEnded(UsarError):
     """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
     ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason.
-    (Raised by :mod:`usar_replay.node.worker`, which re-exports it.)"""
+    (Raised by :mod:`usar_replay.node.mission_process`, which re-exports it.)"""
 
     exit_code = 4
 
@@ -100,3 +101,14 @@ class TreeRefused(UsarError):
     the build's verdict is ``build_failed``.)"""
 
     exit_code = 4
+
+
+class ProtocolMismatch(MissionEnded):
+    """The mission process (or the ROS 1 bridge) answered in another version of the mission
+    wire protocol than the recorder's: two installations of usar mixed, or a mission that
+    writes to usar's socket itself. Either way the run ends as ``refused`` with this reason (a
+    mission can forge any frame, so this is a verdict like any other, never an error outside
+    the run). (Raised by :mod:`usar_replay.node.protocol`.)"""
+
+    def __init__(self, detail: str) -> None:
+        super().__init__("refused", detail)

@@ -49,9 +49,9 @@ from usar_replay.node.node import (
     Node,
     Subscription,
     Timer,
-    _reset_current,
-    _set_current,
     current_executor,
+    reset_current_executor,
+    set_current_executor,
 )
 
 __all__ = ["MAX_LOCAL_DELIVERIES", "Executor", "PublishPolicy", "shutdown"]
@@ -142,11 +142,11 @@ class Executor:
     @contextlib.contextmanager
     def activate(self) -> Iterator[Executor]:
         """Make this the executor new nodes join (the mission process does it around main)."""
-        token = _set_current(self)
+        token = set_current_executor(self)
         try:
             yield self
         finally:
-            _reset_current(token)
+            reset_current_executor(token)
 
     # -- registration (called by Node) ---------------------------------------------------------
 

@@ -1,7 +1,7 @@
 """The kernel sandbox a mission process runs in: bubblewrap (``bwrap``) namespaces and limits.
 
 Why: a mission is untrusted code (a team's, graded against a world it must not see). The
-in-process guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
+in-process audit guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
 extension, ``_posixsubprocess`` or ``/proc/<pid>/mem`` walk past it. In its own user, PID,
 IPC, UTS, mount, network and cgroup namespaces, as uid 65534 with no capabilities, the process
 sees only what is mounted for it: the Python install, the packages, its own submission (all
@@ -17,8 +17,8 @@ files, no core files) are set by the sandboxed program on itself before any untr
 (a per-run count in the run's user namespace; the kernel does not apply it to processes that
 are root outside, which is why the cgroup comes first).
 
-Reusable: :func:`jail_argv` builds the command for any program (the ROS 1 bridge runs its graph
-with ``network="loopback"``), :class:`Jail` holds one run's cgroup and limits.
+Reusable: :func:`sandbox_argv` builds the command for any program (the ROS 1 bridge runs its graph
+with ``network="loopback"``), :class:`KernelSandbox` holds one run's cgroup and limits.
 """
 
 from __future__ import annotations
@@ -41,12 +41,12 @@ from typing import Literal
 
 __all__ = [
     "INSTALL_HINT",
-    "Jail",
-    "JailLimits",
+    "KernelSandbox",
+    "SandboxLimits",
     "apply_rlimits",
     "bwrap_available",
-    "jail_argv",
     "python_binds",
+    "sandbox_argv",
     "signal_of_exit",
 ]
 
@@ -64,7 +64,7 @@ Network = Literal["none", "loopback"]
 
 
 @dataclass(frozen=True, slots=True)
-class JailLimits:
+class SandboxLimits:
     """What one sandboxed run may use (0: no limit). Past a limit the kernel refuses (a failed
     ``fork``, ``open`` or ``write``: the mission's own error) or kills (memory, CPU time)."""
 
@@ -136,7 +136,7 @@ def python_binds() -> list[str]:
 
 
 def package_dir() -> str:
-    """usar_replay's own folder (bound alone; its parent goes on the jail's PYTHONPATH)."""
+    """usar_replay's own folder (bound alone; its parent goes on the sandbox's PYTHONPATH)."""
     return str(Path(__file__).resolve().parents[1])
 
 
@@ -144,13 +144,13 @@ def _covered(path: str, roots: Iterable[str]) -> bool:
     return any(path == r or path.startswith(r.rstrip("/") + "/") for r in roots)
 
 
-def jail_argv(
+def sandbox_argv(
     argv: Sequence[str],
     *,
     ro_binds: Sequence[str],
     work_dir: str,
     env: Mapping[str, str],
-    limits: JailLimits | None = None,
+    limits: SandboxLimits | None = None,
     network: Network = "none",
     hidden: Sequence[str] = (),
     info_fd: int | None = None,
@@ -166,13 +166,13 @@ def jail_argv(
     ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
     loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
     outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
-    process's host PID (:attr:`Jail.info_fd`).
+    process's host PID (:attr:`KernelSandbox.info_fd`).
     """
     bwrap = _bwrap()
     if bwrap is None:
         raise FileNotFoundError("bwrap")
     _, _, disable_userns = _probe(bwrap)
-    lim = limits or JailLimits()
+    lim = limits or SandboxLimits()
     out = [
         bwrap, "--unshare-all", "--unshare-user", "--uid", str(SANDBOX_UID),
         "--gid", str(SANDBOX_UID), "--cap-drop", "ALL", "--die-with-parent", "--new-session",
@@ -233,7 +233,7 @@ def signal_of_exit(code: int | None) -> int | None:
 
 
 def apply_rlimits(limits: Mapping[str, int]) -> None:
-    """Set :meth:`Jail.rlimits` on this process (0: leave that one as it is, except CORE).
+    """Set :meth:`KernelSandbox.rlimits` on this process (0: leave that one as it is, except CORE).
     CPU gets a hard limit 5 s above the soft one: SIGXCPU first (a verdict), then SIGKILL."""
     for name, value in limits.items():
         if value <= 0 and name != "CORE":
@@ -243,22 +243,22 @@ def apply_rlimits(limits: Mapping[str, int]) -> None:
             resource.setrlimit(getattr(resource, f"RLIMIT_{name}"), (value, hard))
 
 
-class Jail:
+class KernelSandbox:
     """One sandboxed run's pids cgroup, rlimits and first process.
 
-    Start bwrap with :meth:`launch` (``jail_argv(..., info_fd=jail.info_fd)``, the info fd in
+    Start bwrap with :meth:`launch` (``sandbox_argv(..., info_fd=box.info_fd)``, the info fd in
     ``pass_fds``), call :meth:`started` right after, have the program inside call
     :func:`apply_rlimits` with :meth:`rlimits`, and :meth:`close` once bwrap has ended."""
 
-    def __init__(self, limits: JailLimits | None = None) -> None:
-        self.limits = limits or JailLimits()
+    def __init__(self, limits: SandboxLimits | None = None) -> None:
+        self.limits = limits or SandboxLimits()
         self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
         self.memory_cgroup = _make_memory_cgroup(self.cgroup)
         """The run's memory cgroup (no limit: RLIMIT_AS is the limit): where the kernel counts
         the run's processes it killed for memory (:meth:`oom_killed`); None when none can be
         made here (then a killed process is never called out of memory)."""
         self._info_r, self.info_fd = os.pipe()
-        """Pass to :func:`jail_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
+        """Pass to :func:`sandbox_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
         self._pidfd: int | None = None
 
     def started(self) -> None:
@@ -341,7 +341,7 @@ class Jail:
                 _remove_cgroup(group)
         self.cgroup = self.memory_cgroup = None
 
-    def __enter__(self) -> Jail:
+    def __enter__(self) -> KernelSandbox:
         return self
 
     def __exit__(self, *exc: object) -> None:

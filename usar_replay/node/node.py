@@ -40,6 +40,8 @@ __all__ = [
     "Time",
     "Timer",
     "current_executor",
+    "reset_current_executor",
+    "set_current_executor",
 ]
 
 M = TypeVar("M", bound=msgs.Message)
@@ -82,11 +84,13 @@ def current_executor() -> Executor:
     return ex
 
 
-def _set_current(ex: Executor | None) -> contextvars.Token[Executor | None]:
+def set_current_executor(ex: Executor | None) -> contextvars.Token[Executor | None]:
+    """Make ``ex`` the executor new nodes join (the executor's ``activate()`` calls it)."""
     return _CURRENT.set(ex)
 
 
-def _reset_current(token: contextvars.Token[Executor | None]) -> None:
+def reset_current_executor(token: contextvars.Token[Executor | None]) -> None:
+    """Undo the :func:`set_current_executor` that gave ``token``."""
     _CURRENT.reset(token)
 
 

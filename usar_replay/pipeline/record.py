@@ -1,10 +1,10 @@
 """`usar record`: run a mission live in pybullet and write everything to one MCAP file.
 
-The loop is the design's data flow, sim -> messages -> mission -> messages -> sim, on the sim
-clock only. At each control tick (``record.control_hz``) the simulator's messages (``/tf``, a
-camera frame when one is due, odometry; ``/tf_static`` and ``/map`` at the first tick) are
-written to the log as the ``sim`` publisher and handed, as the same CDR bytes, to the mission
-process (:mod:`usar_replay.node.worker`) as one tick; whatever the mission publishes is written at
+The loop is the design's data flow, sim -> messages -> mission -> messages -> sim, on the sim clock
+only. At each control tick (``record.control_hz``) the simulator's messages (``/tf``, a camera frame
+when one is due, odometry; ``/tf_static`` and ``/map`` at the first tick) are written to the log as
+the ``sim`` publisher and handed, as the same CDR bytes, to the mission process
+(:mod:`usar_replay.node.mission_process`) as one tick; whatever the mission publishes is written at
 the same sim time as the ``mission`` publisher, and its ``cmd_vel``s go to the simulator before the
 next physics step. Ground truth is written as the ``recorder`` publisher and never reaches the
 mission. Because the mission sees exactly the logged bytes, a replay from the log reproduces its
@@ -44,14 +44,13 @@ from usar_replay.grading.stored_markers import StoredMarkers
 from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
-from usar_replay.node.worker import (
+from usar_replay.node.mission_process import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
-    MissionTarget,
     hide_from_mission,
-    resolve_target,
 )
+from usar_replay.node.mission_target import MissionTarget, resolve_target
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.pipeline.status_line import NodeLines
 from usar_replay.sim.camera import encode_image

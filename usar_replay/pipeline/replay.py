@@ -4,11 +4,12 @@ The recorded *inputs* (everything the simulator published: ``/tf_static``, ``/ma
 odometry, ``CameraInfo``, camera frames, and the course detector's ``/fiducial_transforms``, which
 replay re-runs on the recorded frames, compares with the recorded ones and hands to the mission:
 :mod:`usar_replay.pipeline.course_detector`) are handed, tick by tick and as the very bytes that
-were logged, to a fresh mission process (:mod:`usar_replay.node.worker`), the same code path as
-live. Every message it publishes is compared with the recorded one on the same topic at the same sim
-time: the same CDR bytes. The report gives counts per topic, the first divergence (topic, sim time,
-field, both values) and a sha256 digest of the replayed outputs (:func:`outputs_digest` computes the
-same digest over a log's recorded outputs, so two machines can compare replays by one line).
+were logged, to a fresh mission process (:mod:`usar_replay.node.mission_process`), the same code
+path as live. Every message it publishes is compared with the recorded one on the same topic at the
+same sim time: the same CDR bytes. The report gives counts per topic, the first divergence (topic,
+sim time, field, both values) and a sha256 digest of the replayed outputs (:func:`outputs_digest`
+computes the same digest over a log's recorded outputs, so two machines can compare replays by one
+line).
 
 Which messages are inputs and which outputs is written in the log itself: each channel says who
 published it (``sim``, ``mission``, ``recorder``), so a mission may broadcast any tf frame it
@@ -46,14 +47,13 @@ from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
-from usar_replay.node.worker import (
+from usar_replay.node.mission_process import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
-    MissionTarget,
     hide_from_mission,
-    resolve_target,
 )
+from usar_replay.node.mission_target import MissionTarget, resolve_target
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
 from usar_replay.world.assignment import of as assignment_of
 

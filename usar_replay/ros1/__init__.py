@@ -5,7 +5,7 @@
 cache; ``build_failed``), ``buildjail`` (the build in the run's sandbox and limits),
 ``buildmsg`` (a failed build's errors in the student's folder, with a hint), ``tree`` (a built
 workspace checked, frozen, listed and verified),
-``isolation`` (the one function that starts the bridge in its own network namespace),
+``netns`` (the one function that starts the bridge in its own network namespace),
 ``process`` (the recorder's side: the bridge takes the mission process's place),
 ``bridge`` (the bridge process: the tick protocol to the recorder, ROS 1 to the student's graph),
 ``convert`` (usar's ROS 2 message values <-> rospy's), ``move_base`` (actionlib servers backed

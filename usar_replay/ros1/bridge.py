@@ -2,7 +2,7 @@
 
 ``python -m usar_replay.ros1.bridge FD CONFIG.json``, started by
 :class:`usar_replay.ros1.process.Ros1Process` (in its own network namespace where possible).
-To the recorder it speaks the mission process's tick protocol (:mod:`usar_replay.node.worker`)
+To the recorder it speaks the mission process's tick protocol (:mod:`usar_replay.node.protocol`)
 on socket FD; to the student's graph it is what the course's ``multiple_robots.launch`` starts:
 
 * a private ROS master on a port of its own, the parameters as the course's launch sets them
@@ -53,8 +53,8 @@ from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
+from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, text_frame, unpack
 from usar_replay.node.wire_io import send_within
-from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
@@ -505,16 +505,16 @@ class Bridge:
     # -- the loop -------------------------------------------------------------------------------
 
     def serve(self) -> None:
-        if not send_within(self.conn, _READY, self.write_timeout_s):
+        if not send_within(self.conn, ready_frame(), self.write_timeout_s):
             return
         while True:
             try:
                 frame = self.conn.recv_bytes()
             except (EOFError, OSError):
                 return
-            if frame[:1] == _STOP:
+            if frame[:1] == FrameKind.STOP:
                 return
-            _, t_ns, items, _ = _unpack(frame)
+            _, t_ns, items, _ = unpack(frame)
             outputs = self.tick(t_ns, items)
             assert self.graph is not None
             ended = self._ended()
@@ -530,7 +530,7 @@ class Bridge:
                     return
                 done = 1
             wire = [wire_item(topic, m) for topic, m in outputs]
-            if not send_within(self.conn, _pack(_OUT, t_ns, wire, done), self.write_timeout_s):
+            if not send_within(self.conn, outputs_frame(t_ns, wire, done), self.write_timeout_s):
                 return
 
     def _ended(self) -> tuple[int, str] | None:
@@ -569,7 +569,7 @@ class Bridge:
 
     def _crash(self, text: str) -> None:
         with contextlib.suppress(OSError, ValueError):
-            send_within(self.conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
+            send_within(self.conn, text_frame(FrameKind.CRASHED, text), 1.0)
 
     def stop(self) -> None:
         if self.quiet is not None:
@@ -631,7 +631,7 @@ def main(argv: list[str]) -> None:
     except BaseException as err:  # noqa: BLE001 - reported to the recorder as the verdict
         text = str(err) if isinstance(err, RuntimeError) else traceback.format_exc()
         with contextlib.suppress(OSError, ValueError):
-            send_within(conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
+            send_within(conn, text_frame(FrameKind.CRASHED, text), 1.0)
     finally:
         bridge.stop()
         # rospy's and actionlib's threads would keep the interpreter up until the recorder's

@@ -39,8 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from usar_replay.core.errors import UsageError
-from usar_replay.node.worker import MissionEnded
+from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.ros1 import buildmsg, tree
 from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 

@@ -60,7 +60,7 @@ class BuildOutcome:
 
 
 def _prlimit(limits: Mapping[str, int]) -> list[str]:
-    """``prlimit`` options for :meth:`usar_replay.node.kernel_sandbox.Jail.rlimits`."""
+    """``prlimit`` options for :meth:`usar_replay.node.kernel_sandbox.KernelSandbox.rlimits`."""
     out = ["/usr/bin/prlimit"]
     for name, value in limits.items():
         if value <= 0 and name != "CORE":
@@ -126,8 +126,8 @@ def run_jailed(
     """Run ``cmd`` with ``workspace`` its only writable folder (see the module doc); without
     ``sandbox`` (no bubblewrap, ``USAR_SANDBOX=off``) it runs with the same rlimits only, as a
     mission does then."""
-    box = kernel_sandbox.Jail(
-        kernel_sandbox.JailLimits(
+    box = kernel_sandbox.KernelSandbox(
+        kernel_sandbox.SandboxLimits(
             memory_mb=limits.memory_mb,
             cpu_s=limits.cpu_s,
             processes=limits.processes,
@@ -137,7 +137,7 @@ def run_jailed(
     argv = [*_prlimit(box.rlimits()), *cmd]
     fds: tuple[int, ...] = ()
     if sandbox:
-        argv = kernel_sandbox.jail_argv(
+        argv = kernel_sandbox.sandbox_argv(
             argv,
             ro_binds=ro_binds,
             work_dir=str(workspace),

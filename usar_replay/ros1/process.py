@@ -1,12 +1,11 @@
 """The recorder's side of a ROS 1 run: the bridge process takes the mission process's place.
 
-:class:`Ros1Process` is a :class:`usar_replay.node.worker.MissionProcess` whose process is the
-bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the same socket, the same
-tick protocol, the same checks on what comes back (a student's ``/tf`` that moves a simulator
-frame is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is
-``crashed`` with its output, one that stops answering is ``hung``). The package was built
-before (:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's
-underlay read-only.
+:class:`Ros1Process` is a :class:`usar_replay.node.mission_process.MissionProcess` whose process is
+the bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the same socket, the same
+tick protocol, the same checks on what comes back (a student's ``/tf`` that moves a simulator frame
+is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is ``crashed``
+with its output, one that stops answering is ``hung``). The package was built before
+(:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only.
 """
 
 from __future__ import annotations
@@ -26,7 +25,9 @@ from typing import Any
 
 from usar_replay.core import contract
 from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
-from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget, Wire
+from usar_replay.node.mission_process import MissionLimits, MissionProcess
+from usar_replay.node.mission_target import MissionTarget
+from usar_replay.node.protocol import Wire
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
@@ -80,7 +81,7 @@ def _ros_etc() -> tuple[str, ...]:
 
 def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits:
     """The build's limits from the run's: the same memory per process (and the same process
-    count and file size as every jailed run), the run's CPU seconds per process when it has
+    count and file size as every sandboxed run), the run's CPU seconds per process when it has
     some, and the build's own wall time."""
     base = BuildLimits()
     return dataclasses.replace(
@@ -167,13 +168,13 @@ class Ros1Process(MissionProcess):
             self._remove_run_dir()
             raise
 
-    def _argv(self, fd: int) -> list[str]:
+    def command(self, fd: int) -> list[str]:
         """The bridge (it writes its output to the run's folder and leads its own session, so
         the graph it starts is one process group). In the kernel sandbox it already has a
         network namespace of its own; without one it gets just that
         (:func:`usar_replay.ros1.netns.isolated_command`)."""
         cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
-        if self._jail is not None:
+        if self.kernel_sandbox is not None:
             return cmd
         return isolated_command(cmd, isolate=self.options.isolate)
 
@@ -181,7 +182,8 @@ class Ros1Process(MissionProcess):
         """Before each tick, the run's new threads go onto the graph's CPU (:mod:`.scheduling`)."""
         if self.options.one_cpu:
             if self._one_cpu is None:
-                self._one_cpu = OneCpu(self._proc.pid, self._jail.cgroup if self._jail else None)
+                box = self.kernel_sandbox
+                self._one_cpu = OneCpu(self.pid, box.cgroup if box else None)
             self._one_cpu.apply()
         super().send(t_ns, inputs)
 
@@ -191,7 +193,7 @@ class Ros1Process(MissionProcess):
         finally:
             # the bridge leads its own process group: whatever of the graph outlived it goes too
             with contextlib.suppress(OSError):
-                os.killpg(self._proc.pid, signal.SIGKILL)
+                os.killpg(self.pid, signal.SIGKILL)
             try:
                 self._kept = self._collect()
             finally:

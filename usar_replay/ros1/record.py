@@ -21,7 +21,7 @@ from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.worker import MissionEnded, MissionLimits
+from usar_replay.node.mission_process import MissionEnded, MissionLimits
 from usar_replay.pipeline.record import Progress, RecordResult, record
 from usar_replay.ros1 import debian
 from usar_replay.ros1.build import (

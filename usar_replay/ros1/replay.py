@@ -21,7 +21,8 @@ from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.log.run import Run
-from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.node.mission_process import MissionLimits, MissionProcess
+from usar_replay.node.mission_target import MissionTarget
 from usar_replay.ros1 import debian
 from usar_replay.ros1.build import cached_build, find_package
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target

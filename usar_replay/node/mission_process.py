@@ -1,0 +1,467 @@
+"""usar's handle on a mission process: start it, hand it ticks, check what comes back, judge it.
+
+Why a process: a mission is untrusted code (a student's, a team's). In its own process it sees
+what a ROS node sees, the messages it subscribes to and its parameters, and never the
+simulator, the scenario's marker list or ground truth; its crash, hang or memory blow-up ends
+*its* process, and usar records a verdict (``crashed``, ``hung``, ``out_of_memory``,
+``refused``) in the log instead of crashing itself. Live (``usar record``) and in replay the
+same code path runs: :class:`MissionProcess` hands the process one tick at a time and gets back
+what the mission published, as frames of :mod:`usar_replay.node.protocol`. Outputs come back
+as (topic, type, CDR) triples that are decoded with usar's own schemas and checked against the
+:class:`PublishPolicy` again (:mod:`~usar_replay.node.boundary_check`): nothing from the mission
+process is ever unpickled.
+
+Where: in the kernel sandbox (bubblewrap, :mod:`usar_replay.node.kernel_sandbox`) by default,
+with the mission's file's folder read-only, a private work dir as its working directory, no
+network, no view of any usar process and a handful of environment variables; the socket to the
+parent is the one thing it shares with usar (see :attr:`MissionLimits.kernel_sandbox`). Inside
+it, the audit guard (:mod:`usar_replay.node.audit_guard`, :attr:`MissionLimits.guard`) watches
+what the mission's Python code opens. What runs there is :mod:`usar_replay.node.worker`, or
+another program that speaks the protocol (:meth:`MissionProcess.command`: the ROS 1 bridge).
+
+Wall-clock limits only decide verdicts; they never reach a message.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing.connection
+import os
+import pickle
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+from usar_replay import __version__
+from usar_replay.core import msgs
+from usar_replay.core.errors import MissionEnded, ProtocolMismatch, UsageError
+from usar_replay.node import hide, kernel_sandbox, protocol
+from usar_replay.node.audit_guard import GuardPolicy
+from usar_replay.node.boundary_check import MAX_FRAME_BYTES, BoundaryCheck, OutputRefused
+from usar_replay.node.executor import PublishPolicy
+from usar_replay.node.kernel_sandbox import KernelSandbox, SandboxLimits
+from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
+from usar_replay.node.mission_target import MissionTarget
+from usar_replay.node.protocol import FrameKind, Wire
+from usar_replay.node.wire_io import send_within
+
+__all__ = ["MissionEnded", "MissionLimits", "MissionProcess", "hide_from_mission"]
+
+
+@dataclass(frozen=True, slots=True)
+class MissionLimits:
+    """What a mission process may use. Wall-clock limits only decide *verdicts*; they never
+    reach a message (a slow machine gives the same log, or a ``hung`` verdict)."""
+
+    tick_timeout_s: float = 10.0
+    """Wall seconds one tick's callbacks may take before the mission is declared hung."""
+    startup_timeout_s: float = 60.0
+    """Wall seconds for importing the mission and running its ``main()``."""
+    memory_mb: int = 4096
+    """Address-space limit of the mission process (RLIMIT_AS), in MiB; 0 for none."""
+    cpu_s: int = 0
+    """CPU-time limit of the mission process (RLIMIT_CPU), in seconds; 0 for none. Past it the
+    process is killed and the run is ``hung`` (a batch sets it: see usar_replay.batch.plan)."""
+    guard: GuardPolicy | None = None
+    """The audit guard's policy: files, processes and network the mission's Python code may not
+    touch (usar_replay.node.audit_guard); None: no guard."""
+    kernel_sandbox: str = "auto"
+    """The kernel sandbox (usar_replay.node.kernel_sandbox): ``auto`` uses it when bwrap works
+    here (else one warning on stderr, and the environment variable ``USAR_SANDBOX=off`` turns
+    it off), ``required`` refuses to start without it (a batch), ``off`` never uses it."""
+    read_roots: tuple[str, ...] = ()
+    """What the sandboxed mission may read besides Python (default: its file's folder, or the
+    folder its module was found in); a batch gives the team's submission."""
+    hidden: tuple[str, ...] = ()
+    """Files and folders the sandboxed mission may not read even when they lie in a readable
+    folder (the log being written or replayed, and every file the grader passed in: the
+    world, the world key, the settings, the thresholds, the output; :mod:`~usar_replay.node.hide`
+    also finds their other hard-linked names)."""
+    work_dir: str = ""
+    """The sandboxed mission's writable folder and working directory: default a fresh one,
+    removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
+    max_log_mib: int = DEFAULT_MAX_LOG_MIB
+    """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
+    (:mod:`usar_replay.node.log_budget`)."""
+
+
+def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimits:
+    """``limits`` with ``paths`` (the log being written) hidden from the sandboxed mission."""
+    base = limits or MissionLimits()
+    return replace(base, hidden=(*base.hidden, *paths))
+
+
+_warned = False
+
+
+def _use_kernel_sandbox(limits: MissionLimits) -> bool:
+    """Run this mission in the kernel sandbox? (see :attr:`MissionLimits.kernel_sandbox`)"""
+    global _warned
+    mode = limits.kernel_sandbox
+    if mode == "auto" and os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
+        mode = "off"
+    if mode == "off":
+        return False
+    ok, why = kernel_sandbox.bwrap_available()
+    if ok:
+        return True
+    hint = kernel_sandbox.INSTALL_HINT
+    if mode == "required":
+        raise UsageError(
+            f"{why}: usar will not run untrusted mission code without a kernel sandbox; "
+            f"install it ({hint}) or pass --no-sandbox"
+        )
+    if not _warned:
+        _warned = True
+        print(
+            f"usar: warning: {why}; the mission runs without a kernel sandbox "
+            f"({hint} to get one; USAR_SANDBOX=off silences this)",
+            file=sys.stderr,
+        )
+    return False
+
+
+def _mission_env(target: MissionTarget) -> dict[str, str]:
+    """The mission's whole environment in the kernel sandbox: nothing of the caller's but the
+    thread settings (and PYTHONHASHSEED, which decides set order in the mission's own code)."""
+    path = [os.path.dirname(kernel_sandbox.package_dir())]
+    if not target.is_file and not target.is_usar_module:
+        root = target.module_root()
+        if root:
+            path.append(root)
+    env = {
+        "PATH": "/usr/local/bin:/usr/bin:/bin",
+        "PYTHONPATH": os.pathsep.join(path),
+        "LANG": "C.UTF-8",
+        "HOME": "/tmp",
+        "TMPDIR": "/tmp",
+        "PYTHONDONTWRITEBYTECODE": "1",
+    }
+    for name in ("OMP_NUM_THREADS", "OPENCV_FOR_THREADS_NUM"):
+        env[name] = os.environ.get(name, "1")
+    if "PYTHONHASHSEED" in os.environ:
+        env["PYTHONHASHSEED"] = os.environ["PYTHONHASHSEED"]
+    return env
+
+
+class MissionProcess:
+    """The parent's handle on a mission process. Use as a context manager::
+
+    with MissionProcess(target, parameters, ...) as proc:
+        outputs = proc.tick(t_ns, inputs)   # raises MissionEnded on crash / hang / refusal
+
+    A front end that runs another program in the mission's place (the ROS 1 bridge,
+    :class:`usar_replay.ros1.process.Ros1Process`) overrides :meth:`command`.
+    """
+
+    def __init__(
+        self,
+        target: MissionTarget,
+        parameters: dict[str, Any],
+        *,
+        sim_topics: Sequence[str],
+        sim_frames: Sequence[str],
+        limits: MissionLimits | None = None,
+    ) -> None:
+        self.target = target
+        self.limits = limits or MissionLimits()
+        self.policy = PublishPolicy(sim_topics=sim_topics, sim_frames=sim_frames)
+        self.boundary = BoundaryCheck(self.policy)
+        self.budget = LogBudget(self.limits.max_log_mib)
+        self.shutdown_requested = False
+        self._work: str | None = None
+        self._own_work = False
+        self._sandbox: KernelSandbox | None = None
+        guard = self._prepare_sandbox()
+        setup = {
+            "protocol_version": protocol.PROTOCOL_VERSION,
+            "target": target,
+            "parameters": parameters,
+            "sim_topics": tuple(sim_topics),
+            "sim_frames": tuple(sim_frames),
+            "memory_mb": self.limits.memory_mb,
+            "cpu_s": self.limits.cpu_s,
+            "rlimits": self._sandbox.rlimits() if self._sandbox else {},
+            "guard": guard,
+            "usar_version": __version__,
+            "tick_timeout_s": self.limits.tick_timeout_s,
+        }
+        self._proc, self._conn = self._start()
+        self._in_flight = 0
+        try:
+            self._send_frame(pickle.dumps(setup), self.limits.startup_timeout_s, "starting")
+            self._wait_ready()
+        except BaseException:
+            self.close()
+            raise
+
+    # -- starting ------------------------------------------------------------------------------
+
+    def _prepare_sandbox(self) -> GuardPolicy | None:
+        """Make the kernel sandbox's run (cgroups, limits) and the mission's work dir when the
+        mission runs sandboxed; the audit guard's policy, which may write the work dir too."""
+        guard = self.limits.guard
+        if not _use_kernel_sandbox(self.limits):
+            return guard
+        # the mission's own writable folder (its working directory), removed at close
+        self._own_work = not self.limits.work_dir
+        self._work = self.limits.work_dir or tempfile.mkdtemp(prefix="usar-mission-")
+        if guard is not None:
+            guard = replace(
+                guard,
+                write_roots=(*guard.write_roots, self._work),
+                own_roots=(*guard.own_roots, self._work),
+            )
+        self._sandbox = KernelSandbox(
+            SandboxLimits(memory_mb=self.limits.memory_mb, cpu_s=self.limits.cpu_s)
+        )
+        return guard
+
+    def _start(self) -> tuple[subprocess.Popen[bytes], multiprocessing.connection.Connection]:
+        """Start :meth:`command` (in the kernel sandbox when there is one) with one end of a
+        socket pair: a fresh interpreter, no fork of usar's state (pybullet, an open log), no
+        re-import of the caller's ``__main__`` (multiprocessing's spawn does); the socket keeps
+        its number through bwrap, which passes inherited descriptors on."""
+        try:
+            roots = self.limits.read_roots or self.target.submission_roots()
+            hidden: list[str] = []
+            if self._sandbox is not None:  # the grader's files, by any of their names
+                hidden = [*sum(hide.grader_files(self.limits.hidden, roots), ())]
+            parent_sock, child_sock = socket.socketpair()
+        except BaseException:
+            self._cleanup()
+            raise
+        with child_sock:
+            argv = self.command(child_sock.fileno())
+            env: dict[str, str] | None = None
+            fds: tuple[int, ...] = (child_sock.fileno(),)
+            if self._sandbox is not None and self._work is not None:
+                # bwrap gets the mission's environment too: its init process stays in the
+                # sandbox, where /proc/1/environ would show the caller's variables
+                env = _mission_env(self.target)
+                argv = self._sandbox.launch(
+                    kernel_sandbox.sandbox_argv(
+                        argv,
+                        ro_binds=[*kernel_sandbox.python_binds(), *roots],
+                        work_dir=self._work,
+                        env=env,
+                        limits=self._sandbox.limits,
+                        hidden=hidden,
+                        info_fd=self._sandbox.info_fd,
+                    )
+                )
+                fds += (self._sandbox.info_fd,)
+            try:
+                proc = subprocess.Popen(argv, pass_fds=fds, stdin=subprocess.DEVNULL, env=env)
+            except BaseException:
+                parent_sock.close()
+                self._cleanup()
+                raise
+            if self._sandbox is not None:
+                self._sandbox.started()
+        return proc, multiprocessing.connection.Connection(parent_sock.detach())
+
+    def command(self, fd: int) -> list[str]:
+        """The command that serves the tick protocol on socket ``fd``: here a fresh interpreter
+        running :mod:`usar_replay.node.worker`. Another front end (the ROS 1 bridge,
+        :mod:`usar_replay.ros1.process`) starts its own program here; :attr:`kernel_sandbox` is
+        already decided when this is asked."""
+        return [sys.executable, "-m", "usar_replay.node.worker", str(fd)]
+
+    def _wait_ready(self) -> None:
+        """The process's first frame: ready, of this protocol version (else it ends here)."""
+        frame = self._wait(self.limits.startup_timeout_s, "starting (import and main())")
+        if frame[:1] != FrameKind.READY:
+            raise self._refuse(
+                f"the mission process sent a frame of kind {frame[:1]!r} before it was ready"
+            )
+        try:
+            protocol.check_ready(frame)
+        except ProtocolMismatch:
+            self._proc.kill()  # what it sends is not read any more
+            raise
+
+    # -- what others may ask -------------------------------------------------------------------
+
+    @property
+    def kernel_sandbox(self) -> KernelSandbox | None:
+        """The kernel sandbox's run the process is in (None: it runs without one)."""
+        return self._sandbox
+
+    @property
+    def pid(self) -> int:
+        """The process usar started (bwrap's, in the kernel sandbox)."""
+        return self._proc.pid
+
+    def __enter__(self) -> MissionProcess:
+        return self
+
+    def attachments(self) -> list[tuple[str, str, bytes]]:
+        """Files the process leaves for the log, as (name, media type, bytes), asked once it
+        is closed (none for a Python mission; the ROS 1 bridge's: its nodes' output)."""
+        return []
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the process (politely, then for good)."""
+        with contextlib.suppress(OSError, ValueError):
+            send_within(self._conn, FrameKind.STOP, 1.0)  # one that reads no more is killed
+        try:
+            self._proc.wait(timeout=2.0)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+            self._proc.wait(timeout=5.0)
+        self._conn.close()
+        self._cleanup()
+
+    def _cleanup(self) -> None:
+        """Remove the kernel sandbox's cgroup (killing what is left in it) and the private work
+        dir."""
+        if self._sandbox is not None:
+            self._sandbox.close()
+        if self._work is not None:
+            if self._own_work:
+                shutil.rmtree(self._work, ignore_errors=True)
+            self._work = None
+
+    # -- verdicts ------------------------------------------------------------------------------
+
+    def _died(self, doing: str) -> MissionEnded:
+        try:
+            code: int | None = self._proc.wait(timeout=2.0)
+        except subprocess.TimeoutExpired:
+            code = None
+        if self._sandbox is not None:
+            signum = kernel_sandbox.signal_of_exit(code)
+        else:
+            signum = -code if code and code < 0 else None
+        if signum is None:
+            return MissionEnded(
+                "crashed", f"the mission process exited (code {code}) while {doing}"
+            )
+        name = _signal_name(signum)
+        if signum == signal.SIGXCPU:
+            return MissionEnded(
+                "hung", f"the mission process used up its CPU-time limit while {doing}"
+            )
+        if signum == signal.SIGKILL and self._sandbox is not None and self._sandbox.oom_killed():
+            return MissionEnded(
+                "out_of_memory",
+                f"the kernel's out-of-memory killer ended the mission process ({name}) "
+                f"while {doing}",
+            )
+        # what happened, and no more: a SIGKILL is not called out of memory unless the
+        # kernel's record says so (a ROS 1 node may kill its bridge)
+        return MissionEnded(
+            "crashed",
+            f"crashed (signal {signum}): the mission process was killed by {name} while {doing}",
+        )
+
+    def _wait(self, timeout_s: float, doing: str) -> bytes:
+        if not self._conn.poll(timeout_s):
+            self._proc.kill()
+            self._proc.wait()
+            raise MissionEnded(
+                "hung",
+                f"no answer within {timeout_s:g} s of wall time while {doing}: a callback does "
+                "not return (an endless loop, a sleep, a wait for a message that cannot come "
+                "within the same tick); raise the limit with --tick-timeout",
+            )
+        try:
+            frame = self._conn.recv_bytes(MAX_FRAME_BYTES)
+        except (EOFError, OSError):
+            if self._conn.closed or not self._conn.readable:  # a frame over the length
+                raise self._refuse(
+                    f"the mission process sent more than {MAX_FRAME_BYTES} bytes in one frame"
+                ) from None
+            raise self._died(doing) from None
+        verdict = _TEXT_VERDICTS.get(frame[:1])
+        if verdict is not None:
+            raise MissionEnded(verdict, protocol.text_of(frame))
+        return frame
+
+    def _refuse(self, reason: str) -> MissionEnded:
+        """End the process now (what it sends is not read any more) and say why."""
+        self._proc.kill()
+        return MissionEnded("refused", reason)
+
+    # -- ticks ---------------------------------------------------------------------------------
+
+    def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
+        """Hand one tick to the mission without waiting (replay keeps several in flight)."""
+        # each tick already in flight may take its own tick timeout before the process reads on
+        timeout_s = self.limits.tick_timeout_s * (self._in_flight + 1)
+        frame = protocol.tick_frame(t_ns, inputs)
+        try:
+            self._send_frame(frame, timeout_s, "handling a tick")
+        except (BrokenPipeError, ConnectionResetError):
+            # the process is gone (a crash while ticks were in flight): its report, if it sent
+            # one, is waiting to be read; else say how it died
+            if self._conn.poll(0):
+                self._wait(0, "handling a tick")
+            raise self._died("handling a tick") from None
+        self._in_flight += 1
+        self.budget.inputs(inputs)
+
+    def _send_frame(self, frame: bytes, timeout_s: float, doing: str) -> None:
+        """Write one frame to the process within ``timeout_s`` wall seconds, or end it as
+        ``hung``: a process that stops reading its socket must not block the recorder in a
+        write (:mod:`usar_replay.node.wire_io`)."""
+        if not send_within(self._conn, frame, timeout_s):
+            self._proc.kill()
+            self._proc.wait()
+            raise MissionEnded(
+                "hung",
+                f"the mission process did not read its input within {timeout_s:g} s of wall "
+                f"time while {doing}: it stopped reading its socket (or a callback does not "
+                "return); raise the limit with --tick-timeout",
+            )
+
+    def receive(self) -> list[tuple[str, str, bytes, msgs.Message]]:
+        """The outputs of the oldest tick in flight: (topic, type, CDR, decoded), checked."""
+        frame = self._wait(self.limits.tick_timeout_s, "handling a tick")
+        self._in_flight -= 1
+        if frame[:1] != FrameKind.OUTPUTS:
+            raise self._refuse(f"the mission process sent a frame of unknown kind {frame[:1]!r}")
+        try:
+            _kind, _t, items, flag = protocol.unpack(frame)
+        except ValueError as err:
+            raise self._refuse(f"the mission process sent a malformed frame ({err})") from None
+        try:
+            out = self.boundary.check(items)
+        except OutputRefused as err:
+            raise self._refuse(str(err)) from None
+        over = self.budget.outputs(items)
+        if over:
+            raise self._refuse(over)
+        self.shutdown_requested = self.shutdown_requested or bool(flag)
+        return out
+
+    def tick(self, t_ns: int, inputs: Sequence[Wire]) -> list[tuple[str, str, bytes, msgs.Message]]:
+        """One tick, closed loop (live recording): send and wait for the outputs."""
+        self.send(t_ns, inputs)
+        return self.receive()
+
+
+def _signal_name(signum: int) -> str:
+    """``SIGKILL`` for 9; the number itself for one Python has no name for."""
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return str(signum)
+
+
+_TEXT_VERDICTS: dict[bytes, str] = {
+    FrameKind.CRASHED: "crashed",
+    FrameKind.OUT_OF_MEMORY: "out_of_memory",
+    FrameKind.REFUSED: "refused",
+}
+"""The frames a mission process ends with, and the verdict each one is."""
