@@ -313,20 +313,3 @@ def test_a_bad_budget_or_grade_limit_is_one_line(tmp_path: Path, args: tuple[str
 
     (tmp_path / "subs").mkdir()
     one_error_line(usar(*args, cwd=tmp_path), 2, args[-2])
-
-
-def test_a_write_to_a_peer_that_reads_nothing_ends_by_its_deadline() -> None:
-    """The shared write of the tick protocol (the recorder's to a mission or the bridge, the
-    bridge's to the recorder): the bytes Connection.send_bytes writes, or False by the deadline."""
-    import socket
-    from multiprocessing.connection import Connection
-
-    from usar_replay.node.wire_io import send_within
-
-    a, b = socket.socketpair()
-    writer, reader = Connection(a.detach()), Connection(b.detach())
-    with writer, reader:
-        assert send_within(writer, b"frame", 1.0)
-        assert reader.recv_bytes() == b"frame"  # the reading side is unchanged
-        big = bytes(range(256)) * 64 * 1024  # 16 MiB: far more than a socket's buffer
-        assert not send_within(writer, big, 0.2)  # nobody reads: the deadline ends it

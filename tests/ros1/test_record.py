@@ -20,7 +20,7 @@ import pytest
 from clitools import usar
 from conftest import one_room
 
-from usar_replay.core import msgs, ros1msg
+from usar_replay.core import msgs
 from usar_replay.grading.htmlreport import collect
 from usar_replay.log.run import open_run
 from usar_replay.ros1 import run_files
@@ -80,17 +80,6 @@ def test_echo_reads_both_encodings(recorded: tuple[Path, str]) -> None:
     assert count.stdout.splitlines()[1:] == ["data: 1", "---"]
 
 
-def test_a_ros1_message_decodes_only_as_its_definition() -> None:
-    value = ros1msg.Ros1Message(
-        msgtype="std_msgs/Int32", definition="int32 data\n", data=b"\x07\0\0\0"
-    )
-    wire_type, data = ros1msg.pack(value)
-    assert ros1msg.unpack(wire_type, data) == value
-    assert ros1msg.decode(value.msgtype, value.definition, value.data).data == 7
-    with pytest.raises(Exception, match="size mismatch"):
-        ros1msg.decode(value.msgtype, value.definition, value.data + b"\0")
-
-
 def test_the_stored_markers_are_shown(recorded: tuple[Path, str]) -> None:
     out, printed = recorded
     assert "stored on /explorer/marker_poses at (1.99" in printed
@@ -107,18 +96,6 @@ def test_log_by_node_finds_each_node(recorded: tuple[Path, str]) -> None:
         assert "[follower]" not in got.stdout
     follower = usar("log", str(out), "--node", "follower").stdout
     assert "waiting for the explorer's markers" in follower
-
-
-def test_a_repeated_line_does_not_take_the_status_line() -> None:
-    from usar_replay.pipeline.status_line import NodeLines
-
-    lines = NodeLines()
-    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
-    lines.note(msgs.Log(name="/explorer", msg="explorer: at target_1"))
-    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
-    assert lines.status() == "[explorer] explorer: at target_1"
-    lines.note(msgs.Log(name="follower", msg="follower: to marker 0"))
-    assert lines.status() == "[follower] follower: to marker 0"
 
 
 def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, str]) -> None:
