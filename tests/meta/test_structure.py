@@ -359,15 +359,12 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
-    "batch/team_files.py": "tests/redteam/test_runtime.py (FIFO, link to /dev/zero, sparse file)",
     "log/ros1_run.py": "tests/ros1/test_record.py (`usar info`, `usar log --output`)",
     "ros1/boundary.py": "tests/ros1/test_record.py (a ros1 message decodes only as its definition)",
     "ros1/buildjail.py": "tests/redteam/test_build.py (fork bomb, memory, file size, CPU, wall)",
-    "ros1/buildmsg.py": "tests/ros1/test_build.py (paths in the student's folder, hints)",
     "ros1/launch_output.py": "tests/ros1/test_record.py (each node's stdout and stderr)",
     "ros1/run_files.py": "tests/ros1/test_record.py (the run folder read as untrusted)",
     "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
-    "ros1/tree.py": "tests/redteam/test_build.py (links and special files left by a build)",
     "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
     "batch/plan.py": "tests/batch/test_driver.py (discovery, digests, seeds, resume)",
@@ -411,8 +408,6 @@ UNTESTED: dict[str, str] = {
     "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
     "pipeline/replay_report.py": "`usar replay --json/--junit`: tests/pipeline/test_replay.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
-    "ros1/convert.py": "tests/e2e/test_ros1.py (messages both ways)",
-    "ros1/debian.py": "tests/e2e/test_ros1.py (installed, missing packages)",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/netns.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
@@ -421,7 +416,6 @@ UNTESTED: dict[str, str] = {
     "viewer/viewer_process.py": "tests/viewer/test_view.py",
     "world/ros2_world.py": "tests/missions/test_ros2_final.py (the world, its checks)",
     "world/scenario_toml.py": "TOML round trips: tests/world/test_scenario.py",
-    "world/world_key.py": "tests/redteam/test_grade.py (a key that hides the world)",
 }
 
 
