@@ -360,9 +360,7 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
     "log/ros1_run.py": "tests/ros1/test_record.py (`usar info`, `usar log --output`)",
-    "ros1/boundary.py": "tests/ros1/test_record.py (a ros1 message decodes only as its definition)",
     "ros1/buildjail.py": "tests/redteam/test_build.py (fork bomb, memory, file size, CPU, wall)",
-    "ros1/run_files.py": "tests/ros1/test_record.py (the run folder read as untrusted)",
     "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
     "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
