@@ -378,7 +378,6 @@ UNTESTED: dict[str, str] = {
     "cli/parser.py": "tests/meta/test_readme.py checks every command's --help against the README",
     "cli/parser_parts.py": "bad command lines: tests/e2e/test_reliability.py",
     "grading/rubric_ros2.py": "tests/missions/test_ros2_final.py grades the final project",
-    "log/echo.py": "tests/cli/commands/test_echo.py",
     "log/info.py": "tests/cli/test_main.py (`usar info`)",
     "log/mcapfile.py": "the MCAP records under log/bag: tests/log/test_bag.py",
     "log/run.py": "the opened run every grade and replay uses: tests/grading/test_grade.py",
@@ -400,7 +399,6 @@ UNTESTED: dict[str, str] = {
     "sim/eglshadow.py": "tests/sim/test_simulator.py",
     "viewer/viewer_process.py": "tests/viewer/test_view.py",
     "world/ros2_world.py": "tests/missions/test_ros2_final.py (the world, its checks)",
-    "world/scenario_toml.py": "TOML round trips: tests/world/test_scenario.py",
 }
 
 
