@@ -364,7 +364,6 @@ UNTESTED: dict[str, str] = {
     "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
     "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
-    "batch/plan.py": "tests/batch/test_driver.py (discovery, digests, seeds, resume)",
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/__main__.py": "`python -m usar_replay.cli`: two lines that call cli/main",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
