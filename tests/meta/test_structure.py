@@ -374,6 +374,7 @@ UNTESTED: dict[str, str] = {
     "cli/commands/report.py": "tests/grading/test_htmlreport.py runs `usar report`",
     "cli/commands/scenario.py": "tests/cli/test_main.py runs `usar scenario`",
     "cli/commands/view.py": "tests/viewer/test_view.py runs `usar view`",
+    "cli/parser.py": "tests/meta/test_readme.py checks every command's --help against the README",
     "grading/rubric_ros2.py": "tests/missions/test_ros2_final.py grades the final project",
     "log/info.py": "tests/cli/test_main.py (`usar info`)",
     "log/mcapfile.py": "the MCAP records under log/bag: tests/log/test_bag.py",
