@@ -359,7 +359,6 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
-    "log/ros1_run.py": "tests/ros1/test_record.py (`usar info`, `usar log --output`)",
     "ros1/buildjail.py": "tests/redteam/test_build.py (fork bomb, memory, file size, CPU, wall)",
     "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
     "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
@@ -387,7 +386,6 @@ UNTESTED: dict[str, str] = {
     "node/tf2.py": "tests/node/test_node.py (listeners, static broadcasts)",
     "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
     "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
-    "pipeline/replay_report.py": "`usar replay --json/--junit`: tests/pipeline/test_replay.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/netns.py": "covered end to end by tests/e2e/test_ros1.py",
