@@ -377,7 +377,6 @@ UNTESTED: dict[str, str] = {
     "grading/rubric_ros2.py": "tests/missions/test_ros2_final.py grades the final project",
     "log/mcapfile.py": "the MCAP records under log/bag: tests/log/test_bag.py",
     "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
-    "node/boundary_check.py": "refused outputs: tests/node/test_node.py",
     "node/executor.py": "the callback order: tests/node/test_node.py",
     "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
     "node/navigation.py": "the built-in missions drive with it: tests/e2e/test_examples.py",
