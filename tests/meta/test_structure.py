@@ -375,7 +375,6 @@ UNTESTED: dict[str, str] = {
     "cli/commands/view.py": "tests/viewer/test_view.py runs `usar view`",
     "cli/parser.py": "tests/meta/test_readme.py checks every command's --help against the README",
     "grading/rubric_ros2.py": "tests/missions/test_ros2_final.py grades the final project",
-    "log/mcapfile.py": "the MCAP records under log/bag: tests/log/test_bag.py",
     "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
     "node/executor.py": "the callback order: tests/node/test_node.py",
     "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
