@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from usar_replay.core import msgs
+from usar_replay.core import msg_text, msgs
 from usar_replay.core.msg_text import (
     MAX_ITEMS,
     FieldPathError,
@@ -55,15 +55,7 @@ def test_strings_are_quoted_where_yaml_would_misread_them() -> None:
     assert message_lines(msgs.String(data="a\x1bb")) == ['data: "a\\x1bb"']
 
 
-def test_a_long_string_is_continued_and_reads_back_unchanged() -> None:
-    yaml = pytest.importorskip("yaml")
-    for text in ("x" * 150, "word " * 40 + "end", "tab\there " * 20 + "\x1b[2J"):
-        lines = message_lines(msgs.String(data=text))
-        assert len(lines) > 1 and all(len(line) <= 100 for line in lines)
-        assert yaml.safe_load("\n".join(lines)) == {"data": text}
-
-
-def test_field_paths_are_checked_against_the_type() -> None:
+def test_field_paths_through_lists_and_past_their_end() -> None:
     path = field_path(msgs.TFMessage, "transforms.0.child_frame_id")
     assert path.parts == ("transforms", 0, "child_frame_id") and path.kind == "str"
     assert path.get(TF) == "marker_frame"
@@ -88,3 +80,60 @@ def test_a_wrong_path_says_what_is_there(cls: type[msgs.Message], text: str, why
     with pytest.raises(FieldPathError) as caught:
         field_path(cls, text)
     assert str(caught.value).startswith(why)
+
+
+def _read_double_quoted(lines: list[str]) -> str:
+    """A YAML double-quoted scalar continued with ``\\`` (what the printer writes), read back
+    by YAML's rules: an escaped line break and the next line's indent are dropped."""
+    text = lines[0].split(': "', 1)[1]
+    for line in lines[1:]:
+        assert text.endswith("\\")
+        text = text[:-1] + line.lstrip(" ")
+    assert text.endswith('"')
+    escapes = {"n": "\n", "t": "\t", "\\": "\\", '"': '"', " ": " "}
+    out, i = [], 0
+    body = text[:-1]
+    while i < len(body):
+        if body[i] == "\\":
+            out.append(escapes[body[i + 1]])
+            i += 2
+        else:
+            out.append(body[i])
+            i += 1
+    return "".join(out)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "a long line of words, " * 9,
+        "x" * 250,
+        'quotes " and \\ backslashes,  double  spaces ' * 4 + "\nand\ta traceback's lines",
+    ],
+)
+def test_a_long_string_is_continued_and_reads_back_unchanged(text: str) -> None:
+    lines = msg_text.message_lines(msgs.Log(name="n", msg=text))
+    start = next(i for i, line in enumerate(lines) if line.startswith('msg: "'))
+    end = next(i for i in range(start, len(lines)) if lines[i].endswith('"'))
+    assert max(map(len, lines)) <= 100
+    assert _read_double_quoted(lines[start : end + 1]) == text
+
+
+def test_a_long_array_is_elided_with_its_count() -> None:
+    info = msgs.CameraInfo(d=tuple(float(i) for i in range(1000)))
+    lines = msg_text.message_lines(info)
+    d = next(line for line in lines if line.startswith("d: "))
+    assert d.startswith("d: [0.0, 1.0, 2.0,")
+    assert any(line.endswith(f"... {1000 - msg_text.MAX_ITEMS} more]") for line in lines)
+    assert max(map(len, lines)) <= 100
+    assert len(msg_text.message_lines(info, full=True)) > len(lines)
+
+
+def test_a_field_path_is_checked_against_the_type() -> None:
+    path = msg_text.field_path(msgs.Odometry, "pose.pose.position.x")
+    odom = msgs.Odometry(pose=msgs.PoseWithCovariance(pose=msgs.Pose(position=msgs.Point(x=1.5))))
+    assert msg_text.path_lines(path, odom) == ["pose.pose.position.x: 1.5"]
+    with pytest.raises(msg_text.FieldPathError, match="its fields: pose, covariance"):
+        msg_text.field_path(msgs.Odometry, "pose.position")
+    with pytest.raises(msg_text.FieldPathError, match="single value"):
+        msg_text.field_path(msgs.Odometry, "child_frame_id.x")
