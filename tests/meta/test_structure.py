@@ -361,10 +361,8 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 UNTESTED: dict[str, str] = {
     "ros1/buildjail.py": "tests/redteam/test_build.py (fork bomb, memory, file size, CPU, wall)",
     "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
-    "api.py": "re-exports only; every example mission (tests/e2e/test_examples.py) imports it",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
-    "cli/__main__.py": "`python -m usar_replay.cli`: two lines that call cli/main",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
     "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
     "cli/commands/report.py": "tests/grading/test_htmlreport.py runs `usar report`",
@@ -380,7 +378,6 @@ UNTESTED: dict[str, str] = {
     "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
-    "ros1/netns.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
     "sim/camera.py": "tests/world/test_detect.py, tests/pipeline/test_replay.py",
     "sim/eglshadow.py": "tests/sim/test_simulator.py",
