@@ -374,11 +374,9 @@ UNTESTED: dict[str, str] = {
     "node/navigation.py": "the built-in missions drive with it: tests/e2e/test_examples.py",
     "node/tf2.py": "tests/node/test_node.py (listeners, static broadcasts)",
     "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
-    "pipeline/course_detector.py": "/fiducial_transforms: tests/pipeline/test_record.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
-    "sim/camera.py": "tests/world/test_detect.py, tests/pipeline/test_replay.py",
     "sim/eglshadow.py": "tests/sim/test_simulator.py",
     "viewer/viewer_process.py": "tests/viewer/test_view.py",
 }
