@@ -7,6 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
+from usar_replay.sim import camera
 from usar_replay.sim.camera import encode_image
 
 
@@ -31,19 +32,28 @@ def test_png_is_lossless_and_jpeg_is_smaller_and_close() -> None:
     assert int(np.abs(decoded.astype(int) - 90).max()) <= 2
 
 
-def test_the_same_pixels_give_the_same_bytes_and_a_change_is_seen() -> None:
-    frame = _frame(2)
+@pytest.mark.parametrize("fmt", ["png", "jpeg"])
+def test_equal_pixels_give_the_bytes_a_fresh_encode_gives(fmt: str) -> None:
+    """(Moved from tests/world/test_detect.py, on a drawn frame instead of a rendered one.)"""
+    pixels = _frame(2)
+    first = encode_image(pixels, fmt)
+    again = encode_image(pixels.copy(), fmt)  # equal pixels, another array: from the memory
+    camera._ENCODED.last = None  # forget it, as a fresh process would
+    assert again == first == encode_image(pixels.copy(), fmt)
+    other = pixels.copy()
+    other[0, 0, 0] ^= 1  # one changed bit is a new frame
+    assert encode_image(other, fmt) != first or fmt == "jpeg"
+    assert encode_image(pixels, "jpeg", 50) != encode_image(pixels, "jpeg", 95)
+
+
+def test_a_frame_changed_in_place_after_encoding_is_encoded_again() -> None:
+    frame = _frame(4)
     first = encode_image(frame)
-    assert encode_image(frame.copy()) == first  # the kept result, for equal pixels
-    frame[0, 0] = (0, 0, 0)  # changed in place after encoding: never the stale bytes
+    frame[0, 0] = (0, 0, 0)  # the memory holds a copy, never the caller's array
     changed = encode_image(frame)
     assert changed != first
-    assert cv2.imdecode(np.frombuffer(changed, np.uint8), cv2.IMREAD_COLOR)[0, 0].tolist() == [
-        0,
-        0,
-        0,
-    ]
-    assert encode_image(_frame(2)) == first  # and back: a fresh encode, the same bytes
+    pixel = cv2.imdecode(np.frombuffer(changed, np.uint8), cv2.IMREAD_COLOR)[0, 0]
+    assert pixel.tolist() == [0, 0, 0]
     assert encode_image(frame, png_level=1) != changed  # other settings: other bytes
 
 
