@@ -365,7 +365,6 @@ UNTESTED: dict[str, str] = {
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
     "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
-    "cli/commands/view.py": "tests/viewer/test_view.py runs `usar view`",
     "cli/parser.py": "tests/meta/test_readme.py checks every command's --help against the README",
     "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
     "node/executor.py": "the callback order: tests/node/test_node.py",
