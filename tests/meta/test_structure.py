@@ -368,7 +368,6 @@ UNTESTED: dict[str, str] = {
     "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
     "node/executor.py": "the callback order: tests/node/test_node.py",
     "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
-    "node/navigation.py": "the built-in missions drive with it: tests/e2e/test_examples.py",
     "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
