@@ -365,8 +365,6 @@ UNTESTED: dict[str, str] = {
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
     "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
-    "node/audit_guard.py": "tests/redteam/test_kernel_sandbox.py, tests/batch/test_driver.py",
-    "node/kernel_sandbox.py": "tests/redteam/test_kernel_sandbox.py",
     "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
