@@ -368,7 +368,6 @@ UNTESTED: dict[str, str] = {
     "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
-    "viewer/viewer_process.py": "tests/viewer/test_view.py",
 }
 
 

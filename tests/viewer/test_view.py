@@ -40,8 +40,6 @@ from usar_replay.viewer.scene import escape_path_part, frame_entity_path, frame_
 from usar_replay.viewer.view import ViewResult, view_run
 from usar_replay.viewer.viewer_process import (
     Output,
-    choose_output,
-    default_rrd_path,
     open_command,
 )
 from usar_replay.world.detect import DetectorParams, detect_with_corners
@@ -323,17 +321,6 @@ def test_escape_path_part_is_rerun_own_escaping() -> None:
         assert escape_path_part(c) == rr.escape_entity_path_part(c), repr(c)
     for frame in ("explorer_tf/odom", "cam 1:left$", "a.b-c_d", "../x"):
         assert escape_path_part(frame) == rr.escape_entity_path_part(frame)
-
-
-def test_choose_output_rules(tmp_path: Path) -> None:
-    log = tmp_path / "run.mcap"
-    assert choose_output(log, save=None, web=False, env={"DISPLAY": ":0"}) == Output(spawn=True)
-    assert choose_output(log, save=None, web=False, env={"WAYLAND_DISPLAY": "w"}).spawn
-    assert choose_output(log, save=None, web=False, env={}) == Output(rrd=tmp_path / "run.rrd")
-    out = tmp_path / "o.rrd"
-    assert choose_output(log, save=out, web=False, env={"DISPLAY": ":0"}) == Output(rrd=out)
-    assert choose_output(log, save=None, web=True, env={"DISPLAY": ":0"}) == Output(web=True)
-    assert default_rrd_path("runs/course.mcap") == Path("runs/course.rrd")
 
 
 # --- rerun's own MCAP loader --------------------------------------------------------------------
