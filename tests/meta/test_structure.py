@@ -359,7 +359,6 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
-    "ros1/topic_recorder.py": "tests/ros1/test_record.py (the package's topics are in the log)",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
