@@ -36,15 +36,10 @@ def _subs(root: Path) -> Path:
     return root
 
 
-def test_discover_finds_each_teams_mission(tmp_path: Path) -> None:
+def test_a_catkin_package_is_a_ros1_team(tmp_path: Path) -> None:
     root = _subs(tmp_path / "subs")
     subs = {s.team: s for s in p.discover(root)}
-    assert list(subs) == ["alpha", "beta", "delta", "gamma_team", "ros"]
-    assert subs["alpha"].target == str(root / "alpha.py")
-    assert subs["beta"].target == str(root / "beta" / "mission.py")
-    assert subs["gamma_team"].target == str(root / "gamma team" / "src" / "run.py") + ":go"
     assert subs["ros"].target == "ros1:" + str(root / "ros")
-    assert subs["delta"].target == "" and "no mission.py, no usar.toml" in subs["delta"].problem
     assert subs["delta"].problem_outcome == "no_mission"
     assert all(len(s.sha256) == 64 for s in subs.values())
 
@@ -86,18 +81,9 @@ def _empty(path: Path) -> Path:
     return path
 
 
-def test_team_names_and_seeds() -> None:
+def test_team_names() -> None:
     assert p.team_name("Team A/B") == "Team_A_B"
     assert p.team_name("..") == "team"
-    assert p.parse_seeds("0-3") == [0, 1, 2, 3]
-    assert p.parse_seeds("7, 0,3,2-3") == [0, 2, 3, 7]
-    for bad, why in [
-        ("a", "expected N, N-M"),
-        ("4-2", "4-2 is not a range"),
-        ("0-20000", "0-20000 is not a range"),
-    ]:
-        with pytest.raises(UsageError, match=why):
-            p.parse_seeds(bad)
 
 
 def test_worlds_are_seeds_then_files_with_distinct_names(tmp_path: Path) -> None:
@@ -178,3 +164,43 @@ def test_read_json_takes_only_a_plain_file_holding_an_object(tmp_path: Path) -> 
     os.mkfifo(tmp_path / "fifo.json")
     assert p.read_json(tmp_path / "fifo.json") is None
     assert p.read_json(tmp_path / "missing.json") is None
+
+
+def test_discover_submissions(tmp_path: Path) -> None:
+    subs = tmp_path / "subs"
+    (subs / "a_team").mkdir(parents=True)
+    (subs / "a_team" / "mission.py").write_text("def main(): pass\n")
+    (subs / "b team").mkdir()
+    (subs / "b team" / "usar.toml").write_text('[mission]\ntarget = "src/run.py:make"\n')
+    (subs / "b team" / "src").mkdir()
+    (subs / "b team" / "src" / "run.py").write_text("def make(): pass\n")
+    (subs / "c.py").write_text("def main(): pass\n")
+    (subs / "d").mkdir()
+    (subs / "e").mkdir()
+    (subs / "e" / "usar.toml").write_text('[mission]\ntarget = "../c.py"\n')
+    (subs / ".hidden").mkdir()
+    (subs / "__pycache__").mkdir()
+    (subs / "notes.txt").write_text("x")
+    found = {s.team: s for s in p.discover(subs)}
+    assert sorted(found) == ["a_team", "b_team", "c", "d", "e"]
+    assert found["a_team"].target == str((subs / "a_team" / "mission.py").resolve())
+    assert found["b_team"].target == str((subs / "b team" / "src" / "run.py").resolve()) + ":make"
+    assert found["c"].target.endswith("c.py") and not found["c"].problem
+    assert "no mission.py" in found["d"].problem and not found["d"].target
+    assert "outside the team's folder" in found["e"].problem
+    (subs / "c").mkdir()
+    (subs / "c" / "mission.py").write_text("")
+    with pytest.raises(UsageError, match="both team 'c'"):
+        p.discover(subs)
+
+
+def test_parse_seeds() -> None:
+    assert p.parse_seeds("0-4") == [0, 1, 2, 3, 4]
+    assert p.parse_seeds("7,0-1,1") == [0, 1, 7]
+    for bad in ("", "a", "4-0", "1-"):
+        with pytest.raises(UsageError):
+            p.parse_seeds(bad)
+    with pytest.raises(UsageError, match="expected N, N-M or a comma list"):
+        p.parse_seeds("a")
+    with pytest.raises(UsageError, match="0-20000 is not a range from low to high"):
+        p.parse_seeds("0-20000")
