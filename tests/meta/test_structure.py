@@ -359,12 +359,12 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
+    "ros1/graph_start.py": "tests/ros1/test_bridge.py: recordings agree from tick 1",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
     "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
     "node/worker.py": "crash, hang, memory: tests/node/test_node.py",
-    "ros1/bridge.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
 }

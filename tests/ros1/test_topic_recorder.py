@@ -61,8 +61,11 @@ def test_a_known_type_becomes_usars_value_and_an_unknown_one_keeps_its_bytes() -
     rec._on_message(_raw(Int32(data=1), BRIDGE, "std_msgs/Int32"), "/mine")  # usar's own node
     rec._on_message(_raw(Int32(data=1), "/explorer", "nonsense"), "/odd")  # no pkg/Type
     got = rec.take()
-    assert [topic for topic, _ in got] == ["/count", "/stored"]
-    counter, stored = got[0][1], got[1][1]
+    assert [(topic, node) for topic, node, _ in got] == [
+        ("/count", "/explorer"),
+        ("/stored", "/explorer"),
+    ]
+    counter, stored = got[0][2], got[1][2]
     assert isinstance(stored, msgs.PoseArray) and stored.poses[0].position.x == 1.5
     assert counter == ros1msg.Ros1Message(
         msgtype="my_pkg/Counter", definition="int32 data\n", data=b"\x05\x00\x00\x00"
@@ -79,8 +82,17 @@ def test_what_arrived_is_sorted_by_topic_then_node_then_arrival() -> None:
         ("/explorer", "/b", 4.0),
     ]:
         rec._on_message(_raw(_pose_array(x), caller, "geometry_msgs/PoseArray"), topic)
-    order = [(t, v.poses[0].position.x) for t, v in rec.take() if isinstance(v, msgs.PoseArray)]
-    assert order == [("/a", 3.0), ("/b", 2.0), ("/b", 4.0), ("/b", 1.0)]
+    order = [
+        (t, node, v.poses[0].position.x)
+        for t, node, v in rec.take()
+        if isinstance(v, msgs.PoseArray)
+    ]
+    assert order == [
+        ("/a", "/follower", 3.0),
+        ("/b", "/explorer", 2.0),
+        ("/b", "/explorer", 4.0),
+        ("/b", "/follower", 1.0),
+    ]
 
 
 def test_wire_items_are_cdr_or_packed_ros1() -> None:

@@ -448,6 +448,8 @@ def replay(
     required_topics: Sequence[str] = (),
     limits: MissionLimits | None = None,
     window: int = WINDOW_TICKS,
+    target: MissionTarget | None = None,
+    process: Callable[..., MissionProcess] | None = None,
 ) -> ReplayReport:
     """Replay a log (a path or an opened :class:`Run`) and compare.
 
@@ -455,6 +457,8 @@ def replay(
     built-in one, or the file the log names, if it is here). ``grade_sink`` receives the stream
     a grader should see (inputs, ground truth and the *replayed* outputs, never the recorded
     ones), in time order; messages on ``grade_topics`` reach it decoded, others as None.
+    ``target`` and ``process``: another mission process than a Python mission's (a ROS 1
+    package: :mod:`usar_replay.ros1.replay`).
 
     A damaged or interrupted log is replayed as far as it goes; ``report.log_problem`` says so
     (the CLI exits 3). Raises :class:`MissingTopic` for a complete log without a needed topic.
@@ -468,7 +472,7 @@ def replay(
     scenario = run.require_scenario()
     asg = assignment_of(scenario)
     run.require_topics([*asg.sim_topics, *required_topics])
-    target = _resolve_mission(run, mission)
+    target = target or _resolve_mission(run, mission)
     use = settings or run.settings
     same_code = bool(run.mission.sha256) and target.sha256 == run.mission.sha256
     replayer = _Replayer(grade_sink, frozenset(grade_topics) if grade_sink else frozenset())
@@ -482,7 +486,7 @@ def replay(
     replayer.never_graded = frozenset({asg.course_detections} - {""})
     crashed: MissionEnded | None = None
     last: _Tick | None = None
-    with MissionProcess(
+    with (process or MissionProcess)(
         target,
         asg.parameters(scenario, use),
         sim_topics=mission_inputs(asg, world_detects),

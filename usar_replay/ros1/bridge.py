@@ -19,13 +19,15 @@ on socket FD; to the student's graph it is what the course's ``multiple_robots.l
 What the graph publishes on ``/tf``, ``/tf_static``, ``/explorer/cmd_vel``, ``/follower/cmd_vel``
 and ``/rosout`` goes back to the recorder as the mission's outputs of the tick it reacted to.
 
-Pacing: one tick is: publish its messages, then ``/clock`` (so a node woken by the clock finds
-the tick's data already queued), then wait ``max(settle, dt / rtf)`` of wall time for the graph
-to react, then hand back what arrived. ``/clock`` never runs ahead: the next tick starts only
-after the recorder has the outputs. The graph runs on sim time, so a slow machine makes a run
-slower, not different in kind; but which tick a reply lands in depends on the scheduler, so a
-live ROS 1 run is *not* bit for bit repeatable (the log, once written, grades and replays
-deterministically; ``docs/ros1.md``).
+Pacing: the graph paces the clock. One tick is: publish its messages, then ``/clock`` (so a
+node woken by the clock finds the tick's data already queued), then wait until the graph is
+idle (:mod:`.quiescence`; at most ``dt / rtf`` of wall time, a safety net), then hand back what
+arrived, sorted by (topic, node). ``/clock`` never runs ahead: the next tick starts only after
+the recorder has the outputs. It starts only once the graph is connected and idle
+(:mod:`.graph_start`), and the run ends in the tick the package shut down, held until the
+process table shows it gone (:mod:`.proc_watch`); the recorder runs the graph on one CPU under
+SCHED_RR (:mod:`.scheduling`). With these, two recordings of a package that does not read the
+wall clock are identical (docs/ros1.md, "Pacing").
 """
 
 from __future__ import annotations
@@ -56,7 +58,10 @@ from usar_replay.node.worker import _CRASH, _OUT, _READY, _STOP, _pack, _unpack
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
+from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
 from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
+from usar_replay.ros1.proc_watch import ProcWatch
+from usar_replay.ros1.quiescence import Quiescence
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
 
@@ -106,7 +111,8 @@ class Graph:
             cmd = rosrun_command(self.output_dir, config["package"], config["node"])
         self.what = what
         self.log_path = run / "graph.log"
-        script = f'source "{ws}/devel/setup.bash" && exec {cmd}'
+        self.setup = f'source "{ws}/devel/setup.bash"'
+        script = f"{self.setup} && exec {cmd}"
         with self.log_path.open("wb") as log:
             self.proc = subprocess.Popen(
                 ["bash", "-c", script],
@@ -116,6 +122,7 @@ class Graph:
                 stdout=log,
                 stderr=subprocess.STDOUT,
             )
+        self.watch = ProcWatch(self.proc.pid, launcher_is_package=not config.get("launch"))
 
     def exit_status(self) -> tuple[int, str] | None:
         """None while running; (exit code, problem) once it ended: roslaunch exits 0 even when
@@ -136,6 +143,9 @@ class Graph:
         return without_prefix(_ANSI.sub("", text))
 
     def stop(self) -> None:
+        if self.proc.poll() is None and self.watch.seen and self.watch.ended():
+            self.proc.kill()  # the package is gone: roslaunch has nothing left to stop
+            self.proc.wait()
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGINT)  # roslaunch stops its nodes on SIGINT
             try:
@@ -160,7 +170,7 @@ class Bridge:
         self.write_timeout_s = float(setup.get("tick_timeout_s", 10.0))
         self.config = config
         self.parameters: dict[str, Any] = setup["parameters"]
-        self.rtf = float(config.get("rtf", 4.0))
+        self.rtf = float(config.get("rtf", 0.5))
         self.settle_s = float(config.get("settle_ms", 3.0)) / 1000.0
         ws = Path(config["workspace"])
         run = Path(config["run_dir"])
@@ -184,7 +194,7 @@ class Bridge:
         self.master: subprocess.Popen[bytes] | None = None
         self.graph: Graph | None = None
         self._lock = threading.Lock()
-        self._inbox: list[tuple[str, msgs.Message]] = []
+        self._inbox: list[tuple[str, str, msgs.Message]] = []
         self._pubs: dict[str, Any] = {}
         self._static: dict[str, msgs.TransformStamped] = {}
         self.buffer = BufferCore(cache_time=30.0)
@@ -193,6 +203,16 @@ class Bridge:
         self.last_t: int | None = None
         self.robots = [r for r in contract.ROBOTS if contract.odom(r) in setup["sim_topics"]]
         self.topics = TopicRecorder(NODE, self.uri)  # the graph's own topics, recorded
+        self.sim_topics: list[str] = list(setup["sim_topics"])
+        self.quiet: Quiescence | None = None
+        self.capped = 0
+        self.waited_s = 0.0
+        """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
+        self._master: Any = None
+        self._package_nodes: set[str] = set()
+        self._connected: frozenset[int] = frozenset()
+        """The package's nodes registered when /clock started (to see their ros::shutdown)."""
+        """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
 
     # -- start-up -------------------------------------------------------------------------------
 
@@ -227,8 +247,14 @@ class Bridge:
             if value is not None and key != "use_sim_time":
                 master.setParam(NODE, _ros_param(key), _xmlrpc_value(value))
         self._start_node()
+        self._advertise()
+        self.quiet = Quiescence(own_tid=threading.get_native_id())
+        expected: list[str] = []
+        if self.config.get("launch"):
+            setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
+            expected = launch_nodes(setup, self.config["package"], self.config["launch"], self.env)
         self.graph = Graph(self.config, self.env)
-        self._wait_for_graph(master, float(self.config.get("connect_timeout_s", 60.0)))
+        self._wait_for_graph(master, expected, float(self.config.get("connect_timeout_s", 60.0)))
 
     def _start_node(self) -> None:
         import rospy
@@ -256,25 +282,73 @@ class Bridge:
         for robot in self.robots:
             self.move_base[robot] = MoveBase(robot, xy_tolerance=xy, yaw_tolerance=yaw)
 
-    def _wait_for_graph(self, master: Any, timeout_s: float) -> None:
-        assert self.graph is not None
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            ended = self.graph.exit_status()
+    def _advertise(self) -> None:
+        """Every topic the simulator will publish, before the graph starts: its subscribers
+        connect before the first ``/clock`` (:mod:`.graph_start`), not during the run."""
+        kinds: dict[str, type[msgs.Message]] = {
+            contract.TF: msgs.TFMessage,
+            contract.TF_STATIC: msgs.TFMessage,
+            contract.MAP_TOPIC: msgs.OccupancyGrid,
+            contract.CAMERA_INFO: msgs.CameraInfo,
+            contract.IMAGE: msgs.CompressedImage,
+            contract.FIDUCIALS: msgs.FiducialTransformArray,
+            **{contract.odom(r): msgs.Odometry for r in self.robots},
+        }
+        for topic in self.sim_topics:
+            if topic in kinds:
+                self._publisher(topic, kinds[topic].__msgtype__)
+        if contract.IMAGE in self.sim_topics:
+            self._raw_publisher()
+
+    def _wait_for_graph(self, master: Any, expected: list[str], timeout_s: float) -> None:
+        """Hold ``/clock`` until the graph is ready (:func:`.graph_start.wait_until_ready`)."""
+        graph, quiet = self.graph, self.quiet
+        assert graph is not None and quiet is not None
+
+        def alive() -> None:
+            ended = graph.exit_status()
             if ended is not None:
                 raise RuntimeError(
-                    f"{self.graph.what} ended (exit {ended[0]}) before it connected:\n"
-                    + self.graph.tail()
+                    f"{graph.what} ended (exit {ended[0]}) before it connected:\n" + graph.tail()
                 )
-            _code, _msg, state = master.getSystemState(NODE)
-            nodes = {n for group in state for _topic, names in group for n in names}
-            if nodes - {NODE, "/rosout"}:
-                return
-            time.sleep(0.05)
-        raise RuntimeError(
-            f"{self.graph.what} registered no node with the master within {timeout_s:g} s:\n"
-            + self.graph.tail()
-        )
+            graph.watch.update()
+
+        def idle(cap_s: float) -> bool:
+            quiet.refresh(graph.watch.package())
+            return quiet.wait(cap_s)
+
+        try:
+            wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # the graph's own topics, subscribed and connected while /clock holds (recorded)
+            if self.topics.discover():
+                self.topics.wait_connected(5.0)
+            # the start time on /clock before the first tick: a node that waits for a valid
+            # sim time before it builds its clients (ros::Time::waitForValid) builds them now,
+            # and their subscriptions connect here, while /clock holds, not during the run
+            # (roscpp negotiates a new subscription on its XML-RPC thread's 100 ms wall-clock
+            # poll, so a connection made in a tick lands in a tick the machine decides)
+            from rosgraph_msgs.msg import Clock
+
+            self._clock.publish(Clock(clock=_genpy_time(contract.START_TIME_NS)))
+            wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # and each move_base's status (rospy's status timer runs on sim time, first at
+            # 0.2 s): an action client's waitForServer, which re-checks on a 500 ms wall-clock
+            # timeout when a status finds it not yet connected, is done before tick 1
+            for mb in self.move_base.values():
+                mb.server.publish_status()
+            wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            # a client still re-checking on a wall-clock timeout gets up to 2 s to be done
+            deadline = time.monotonic() + 2.0
+            while quiet.long_waits() and time.monotonic() < deadline:
+                for mb in self.move_base.values():
+                    mb.server.publish_status()
+                wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            self._master = master
+            self._package_nodes = registered_nodes(master, NODE)
+        except RuntimeError as err:
+            if "ended (exit" in str(err):
+                raise
+            raise RuntimeError(f"{graph.what}: {err}:\n" + graph.tail()) from None
 
     # -- what the graph publishes (rospy's threads) ----------------------------------------------
 
@@ -289,14 +363,14 @@ class Bridge:
 
         value = from_ros1(msgs.TFMessage, msg)
         with self._lock:
-            self._inbox.append((topic, value))
+            self._inbox.append((topic, _caller(msg), value))
 
     def _on_twist(self, msg: Any, topic: str) -> None:
         from usar_replay.ros1.convert import from_ros1
 
         value = from_ros1(msgs.Twist, msg)
         with self._lock:
-            self._inbox.append((topic, value))
+            self._inbox.append((topic, _caller(msg), value))
 
     def _on_log(self, msg: Any) -> None:
         if self._ours(msg):
@@ -305,7 +379,7 @@ class Bridge:
 
         value = log_from_ros1(msg)
         with self._lock:
-            self._inbox.append((contract.ROSOUT, value))
+            self._inbox.append((contract.ROSOUT, _caller(msg), value))
 
     # -- one tick -------------------------------------------------------------------------------
 
@@ -330,8 +404,7 @@ class Bridge:
 
         pub.publish(to_ros1(value))
 
-    def _raw_image(self, image: msgs.CompressedImage) -> None:
-        """The frame as Gazebo's camera plugin publishes it: ``sensor_msgs/Image`` rgb8."""
+    def _raw_publisher(self) -> Any:
         topic = contract.IMAGE.removesuffix("/compressed")
         pub = self._pubs.get(topic)
         if pub is None:
@@ -339,6 +412,11 @@ class Bridge:
             from sensor_msgs.msg import Image
 
             pub = self._pubs[topic] = rospy.Publisher(topic, Image, queue_size=None)
+        return pub
+
+    def _raw_image(self, image: msgs.CompressedImage) -> None:
+        """The frame as Gazebo's camera plugin publishes it: ``sensor_msgs/Image`` rgb8."""
+        pub = self._raw_publisher()
         if pub.get_num_connections() == 0:
             return
         import cv2
@@ -372,8 +450,10 @@ class Bridge:
         """Publish one tick, wait for the graph, return the outputs (usar values)."""
         from rosgraph_msgs.msg import Clock
 
-        wall0 = time.perf_counter()  # pacing only: never reaches a message
-        self.topics.discover()
+        if self.topics.discover():
+            # a topic the graph just advertised: connected before this tick's /clock, so what
+            # it latched arrives in this tick whatever the machine's speed
+            self.topics.wait_connected(self.settle_s + 2.0)
         for topic, msgtype, data in items:
             value = cdr.decode(data, msgtype)
             if topic == contract.TF_STATIC and isinstance(value, msgs.TFMessage):
@@ -401,17 +481,26 @@ class Bridge:
         self._clock.publish(Clock(clock=_genpy_time(t_ns)))
         dt = 0.0 if self.last_t is None else (t_ns - self.last_t) / 1e9
         self.last_t = t_ns
-        budget = max(self.settle_s, dt / self.rtf if self.rtf > 0 else 0.0)
-        remaining = wall0 + budget - time.perf_counter()
-        if remaining > 0:
-            time.sleep(remaining)
+        # the graph paces the clock: the tick ends when the graph is idle (:mod:`.quiescence`);
+        # the wall cap (dt / rtf) is a safety net for a graph that never goes idle
+        assert self.quiet is not None
+        cap = max(self.settle_s, dt / self.rtf) if self.rtf > 0 else None
+        assert self.graph is not None
+        self.quiet.refresh(self.graph.watch.package())
+        waited = time.perf_counter()  # pacing only: never reaches a message
+        if not self.quiet.wait(cap):
+            self.capped += 1
+        self.waited_s += time.perf_counter() - waited
         with self._lock:
             got, self._inbox = self._inbox, []
         got += self.topics.take()
+        # what arrived within the tick in a fixed order: by topic, then publishing node (one
+        # node's messages on one topic keep their order: one TCP connection)
+        got.sort(key=lambda item: (item[0], item[1]))
         # move_base's commands last: when the package also commands a robot move_base drives,
         # move_base's command is the one the robot follows (what team 002 saw) and the rubric's
         # cmd_vel_one_publisher line reports the fight
-        return got + driven
+        return [(topic, value) for topic, _node, value in got] + driven
 
     # -- the loop -------------------------------------------------------------------------------
 
@@ -428,7 +517,7 @@ class Bridge:
             _, t_ns, items, _ = _unpack(frame)
             outputs = self.tick(t_ns, items)
             assert self.graph is not None
-            ended = self.graph.exit_status()
+            ended = self._ended()
             done = 0
             if ended is not None:
                 code, problem = ended
@@ -444,23 +533,65 @@ class Bridge:
             if not send_within(self.conn, _pack(_OUT, t_ns, wire, done), self.write_timeout_s):
                 return
 
+    def _ended(self) -> tuple[int, str] | None:
+        """None while the package runs; (exit code, problem) in the tick its last process
+        exited, seen from the process table (:mod:`.proc_watch`), not roslaunch's polling."""
+        assert self.graph is not None
+        ended = self.graph.exit_status()
+        if ended is not None:
+            return ended
+        if not self.graph.watch.ended():
+            # a node's ros::shutdown closes its connections: ask the master (some ms) only in
+            # a tick in which a connection closed
+            assert self.quiet is not None
+            closed = self._connected - self.quiet.connected
+            self._connected = self.quiet.connected
+            nodes = self._package_nodes
+            if not closed or not nodes or registered_nodes(self._master, NODE) & nodes:
+                return None
+            # every node of the package unregistered in this tick (ros::shutdown): its
+            # processes take a wall-clock while to exit (roscpp joins threads that wake on
+            # 100 ms timeouts), so /clock holds until the process table shows them gone
+            deadline = time.monotonic() + 10.0
+            while not self.graph.watch.ended() and time.monotonic() < deadline:
+                if self.graph.exit_status() is not None:
+                    break
+                time.sleep(0.002)
+        failures = self.graph.watch.failures()
+        if failures:
+            return 1, failures[0]
+        # all exited cleanly as far as the table showed (a zombie collected before it was
+        # seen shows no status): roslaunch's report of a death, once it has seen it, decides
+        deadline = time.monotonic() + 3.0
+        while time.monotonic() < deadline and self.graph.exit_status() is None:
+            time.sleep(0.02)
+        return self.graph.exit_status() or (0, "")
+
     def _crash(self, text: str) -> None:
         with contextlib.suppress(OSError, ValueError):
             send_within(self.conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
 
     def stop(self) -> None:
+        if self.quiet is not None:
+            print(
+                f"usar pacing: {self.quiet.samples} samples, {self.capped} ticks capped, "
+                f"{self.waited_s:.1f} s waiting for the graph",
+                flush=True,
+            )
+            self.quiet.close()
         if self.graph is not None:
             self.graph.stop()
-        with contextlib.suppress(Exception):
-            import rospy
-
-            rospy.signal_shutdown("usar: run over")
+        # no rospy.signal_shutdown(): it unregisters every topic with the master, call by
+        # call, for a second or two; the master goes, and main() ends the process
         if self.master is not None and self.master.poll() is None:
-            self.master.terminate()
-            try:
-                self.master.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                self.master.kill()
+            self.master.kill()  # it keeps nothing: the run's folder goes with it
+            self.master.wait()
+
+
+def _caller(msg: Any) -> str:
+    """The node that published ``msg`` (its connection header's ``callerid``)."""
+    header = getattr(msg, "_connection_header", None) or {}
+    return str(header.get("callerid", ""))
 
 
 def _genpy_time(t_ns: int) -> Any:
@@ -503,6 +634,10 @@ def main(argv: list[str]) -> None:
             send_within(conn, _CRASH + text.encode("utf-8", errors="replace"), 1.0)
     finally:
         bridge.stop()
+        # rospy's and actionlib's threads would keep the interpreter up until the recorder's
+        # kill, 2 s later: the run is over, so end now
+        sys.stdout.flush()
+        os._exit(0)
 
 
 if __name__ == "__main__":

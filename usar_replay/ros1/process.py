@@ -26,13 +26,14 @@ from typing import Any
 
 from usar_replay.core import contract
 from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
-from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
+from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget, Wire
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.buildjail import BUILD_WALL_S
 from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
+from usar_replay.ros1.scheduling import OneCpu
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 
@@ -45,11 +46,12 @@ class Ros1Options:
     """A launch file of the package (name or path inside it): ``roslaunch PKG FILE``."""
     node: str = ""
     """An executable of the package: ``rosrun PKG NODE`` (when no launch file is given)."""
-    rtf: float = 4.0
-    """Real-time factor cap: each tick gets at least ``dt / rtf`` of wall time for the graph to
-    react (0: no cap, a fixed short settle only)."""
+    rtf: float = 0.5
+    """The slowest pace, a safety net: a tick waits at most ``dt / rtf`` of wall time for the
+    graph to go idle (docs/ros1.md, "Pacing"; 0: no cap). The graph sets the pace: a tick ends
+    as soon as it is idle."""
     settle_ms: float = 3.0
-    """Wall milliseconds the bridge waits at least after each tick, whatever ``rtf``."""
+    """The wall cap is at least this many milliseconds, whatever ``rtf``."""
     connect_timeout_s: float = 60.0
     """Wall seconds the student's graph has to register a node with the master."""
     isolate: bool = True
@@ -62,6 +64,8 @@ class Ros1Options:
     """Wall seconds the build may take (its other limits are the run's: memory, processes,
     file size; CPU seconds per process are the run's ``cpu_s`` when set, else
     :attr:`BuildLimits.cpu_s`)."""
+    one_cpu: bool = True
+    """Run the graph's threads on one CPU under SCHED_RR (:mod:`.scheduling`; needs root)."""
 
 
 _ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
@@ -125,6 +129,7 @@ class Ros1Process(MissionProcess):
         self.package = package
         self.parameters = dict(parameters)
         self._kept: list[tuple[str, str, bytes]] = []
+        self._one_cpu: OneCpu | None = None
         self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
         self.built = built
         try:
@@ -171,6 +176,14 @@ class Ros1Process(MissionProcess):
         if self._jail is not None:
             return cmd
         return isolated_command(cmd, isolate=self.options.isolate)
+
+    def send(self, t_ns: int, inputs: Sequence[Wire]) -> None:
+        """Before each tick, the run's new threads go onto the graph's CPU (:mod:`.scheduling`)."""
+        if self.options.one_cpu:
+            if self._one_cpu is None:
+                self._one_cpu = OneCpu(self._proc.pid, self._jail.cgroup if self._jail else None)
+            self._one_cpu.apply()
+        super().send(t_ns, inputs)
 
     def close(self) -> None:
         try:

@@ -19,6 +19,7 @@ kept within one node's topic, so the order does not depend on rospy's threads.
 from __future__ import annotations
 
 import threading
+import time
 import xmlrpc.client
 from typing import Any
 
@@ -47,15 +48,19 @@ class TopicRecorder:
         self._subs: dict[str, Any] = {}
         self._arrived: list[tuple[str, str, int, msgs.Message]] = []
         self._count = 0
+        self._publishers: dict[str, int] = {}
 
     @property
     def topics(self) -> list[str]:
         """The topics subscribed so far, sorted."""
         return sorted(self._subs)
 
-    def discover(self) -> None:
-        """Subscribe to every topic the graph publishes that is not usar's own."""
+    def discover(self) -> list[str]:
+        """Subscribe to every topic the graph publishes that is not usar's own; the topics
+        subscribed now (their connections are made by rospy's threads: :meth:`wait_connected`)."""
         import rospy
+
+        new: list[str] = []
 
         reply: Any = self._master.getSystemState(self.node)
         state = reply[2]
@@ -69,6 +74,22 @@ class TopicRecorder:
             self._subs[topic] = rospy.Subscriber(
                 topic, rospy.AnyMsg, self._on_message, callback_args=topic, tcp_nodelay=True
             )
+            self._publishers[topic] = sum(1 for n in names if n != self.node)
+            new.append(topic)
+        return new
+
+    def wait_connected(self, cap_s: float) -> bool:
+        """Until every subscription is connected to each publisher the master named when it was
+        made, or ``cap_s`` wall seconds (pacing only: never part of a message); False then."""
+        deadline = time.monotonic() + cap_s
+        while time.monotonic() < deadline:
+            if all(
+                sub.get_num_connections() >= self._publishers.get(topic, 1)
+                for topic, sub in self._subs.items()
+            ):
+                return True
+            time.sleep(0.001)
+        return False
 
     def _on_message(self, raw: Any, topic: str) -> None:
         header = getattr(raw, "_connection_header", None) or {}
@@ -81,12 +102,13 @@ class TopicRecorder:
             self._count += 1
             self._arrived.append((topic, str(header.get("callerid", "")), self._count, value))
 
-    def take(self) -> list[tuple[str, msgs.Message]]:
-        """What arrived since the last call, sorted by (topic, node, arrival)."""
+    def take(self) -> list[tuple[str, str, msgs.Message]]:
+        """What arrived since the last call as (topic, node, value), sorted by (topic, node,
+        arrival)."""
         with self._lock:
             got, self._arrived = self._arrived, []
         got.sort(key=lambda item: item[:3])
-        return [(topic, value) for topic, _node, _n, value in got]
+        return [(topic, node, value) for topic, node, _n, value in got]
 
     def close(self) -> None:
         for sub in self._subs.values():

@@ -49,9 +49,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     ros1.add_argument(
         "--rtf",
         type=float,
-        default=4.0,
+        default=0.5,
         metavar="R",
-        help="with --ros1: real-time factor cap (wall time per tick >= dt/R; 0: none)",
+        help="with --ros1: the slowest pace: a tick waits at most dt/R of wall time for the "
+        "graph to go idle (default 0.5; 0: no cap)",
     )
     ros1.add_argument(
         "--build-timeout",

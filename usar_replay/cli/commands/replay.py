@@ -15,7 +15,6 @@ from usar_replay.core.errors import UsageError
 if TYPE_CHECKING:
     from usar_replay.grading.delta import RubricDelta
     from usar_replay.grading.verdict import GradeReport
-    from usar_replay.log.run import Run
     from usar_replay.pipeline.replay import ReplayReport
 
 __all__ = ["add_parser", "run"]
@@ -32,6 +31,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="report differences without failing (regression runs of changed code or settings)",
     )
     parser_parts.mission_options(p, replay=True)
+    ros1 = p.add_argument_group("a ROS 1 log (docs/ros1.md)")
+    ros1.add_argument(
+        "--ros1", metavar="PKG", help="re-run this catkin package (default: the recorded one)"
+    )
+    ros1.add_argument("--launch", metavar="FILE", help="with --ros1: roslaunch this launch file")
+    ros1.add_argument("--node", metavar="EXE", help="with --ros1: rosrun this executable")
     parser_parts.grade_outputs(p)
     p.set_defaults(func=run)
 
@@ -47,15 +52,21 @@ def run(args: argparse.Namespace) -> int:
 
     options.check_outputs(args, [args.file])  # before minutes of work, not after
     run = open_run(args.file)
+    target = process = None
     if not args.mission and run.mission.target.startswith("ros1:"):
-        return _ros1_as_recorded(args, run)
+        from usar_replay.ros1.replay import ros1_process
+
+        target, process = ros1_process(run, args.ros1, args.launch, args.node)
+    elif args.ros1 or args.launch or args.node:
+        raise UsageError("--ros1, --launch and --node replay a ROS 1 log")
     changed = bool(args.set or args.settings)
     settings = options.run_settings(args, run.settings) if changed else None
     thresholds = options.thresholds(args)  # a bad thresholds file is a usage error before any work
     grader: RubricGrader | None = None
     rubric = rubric_for(run.require_scenario())
     # other code or settings on a log with ground truth: grade both sides and show the delta
-    want_delta = bool(args.mission or changed) and all(
+    other_package = target is not None and target.sha256 != run.mission.sha256
+    want_delta = bool(args.mission or changed or other_package) and all(
         t in run.topics for t in rubric.required_topics
     )
     if args.grade or want_delta:
@@ -68,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
         grade_topics=rubric.grade_topics,
         required_topics=rubric.required_topics if args.grade else (),
         limits=options.limits(args),
+        target=target,
+        process=process,
     )
     check_not_damaged(report)
     replayed: GradeReport | None = None
@@ -103,30 +116,6 @@ def run(args: argparse.Namespace) -> int:
         print(incomplete_note(args.file, report.log_problem, "replayed"), file=sys.stderr)
         return EXIT_INCOMPLETE
     return code
-
-
-def _ros1_as_recorded(args: argparse.Namespace, run: Run) -> int:
-    """A ROS 1 run is not re-run: live ROS code is not deterministic (docs/ros1.md), so there
-    is nothing to compare bit for bit. ``--grade`` grades its recorded outputs, as ``usar
-    grade`` does, and says so; without it, one line says what to do."""
-    from usar_replay.grading.grade import grade_run
-    from usar_replay.grading.reports import to_table
-
-    if not args.grade:
-        raise UsageError(
-            f"{args.file} is a ROS 1 run ({run.mission.target.split()[0]}): live ROS code is "
-            "not re-run; `usar replay --grade` or `usar grade` grades its recorded outputs"
-        )
-    print(f"{args.file}: a ROS 1 run is not re-run (live ROS code is not deterministic);")
-    print("graded as recorded")
-    print()
-    report = grade_run(run, options.thresholds(args))
-    print(to_table(report))
-    options.reports_out(args, [report], (), [args.file])
-    if not report.log_complete:
-        print(incomplete_note(args.file, report.log_problem, "graded"), file=sys.stderr)
-        return EXIT_INCOMPLETE
-    return EXIT_OK if report.passed else EXIT_FAIL
 
 
 def _replay_reports_out(

@@ -1,0 +1,58 @@
+"""ros1/quiescence: when the graph has finished reacting to a tick, on real processes."""
+
+from __future__ import annotations
+
+import threading
+
+from proctools import child as start_child
+from proctools import wait_for
+
+from usar_replay.ros1.quiescence import Quiescence
+
+
+def test_a_thread_polling_the_clock_must_wake_before_the_graph_is_idle() -> None:
+    # 10 ms naps, as roscpp's ros::Time::waitForValid: idle only once it woke and slept again
+    child = start_child("import time\nwhile True: time.sleep(0.01)")
+    try:
+        quiet = Quiescence(own_tid=threading.get_native_id())
+        wait_for(lambda: len(quiet.refresh()) > 1, "the child")
+        quiet.refresh(package=[child.pid])
+        wait_for(lambda: quiet.threads()[child.pid].polling, "the child's nap")
+        before = quiet.threads()[child.pid].runs
+        assert quiet.wait(5.0)
+        assert quiet.threads()[child.pid].runs > before
+    finally:
+        child.kill()
+        child.wait()
+
+
+def test_a_busy_graph_is_not_idle_and_the_cap_ends_the_wait() -> None:
+    child = start_child("while True: pass")
+    try:
+        quiet = Quiescence(own_tid=threading.get_native_id())
+        wait_for(lambda: len(quiet.refresh()) > 1, "the child")
+        quiet.refresh(package=[child.pid])
+        assert not quiet.wait(0.05)
+    finally:
+        child.kill()
+        child.wait()
+
+
+def test_bytes_in_a_socket_of_the_graph_keep_it_busy() -> None:
+    import socket
+
+    a, b = socket.socketpair()
+    with a, b:
+        quiet = Quiescence(own_tid=threading.get_native_id())
+        quiet.refresh()
+        a.sendall(b"x")  # an unknown socket with bytes: the tree's sockets are looked up
+        assert quiet.sockets_waiting() >= 1
+        b.recv(1)
+        already = quiet.sockets_waiting()  # what this test process has waiting elsewhere
+        a.sendall(b"unread")
+        assert quiet.sockets_waiting() == already + 6
+        assert not quiet.wait(0.02)
+        b.recv(16)
+        assert quiet.sockets_waiting() == already
+
+

@@ -1,0 +1,27 @@
+"""ros1/scheduling: the graph's threads on one CPU under SCHED_RR."""
+
+from __future__ import annotations
+
+import os
+
+from proctools import child as start_child
+from proctools import wait_for
+
+from usar_replay.ros1.scheduling import OneCpu
+
+
+def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
+    child = start_child("import time\ntime.sleep(60)")
+    try:
+        pin = OneCpu(child.pid)
+        wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
+        assert os.sched_getaffinity(child.pid) == {pin.cpu}
+        if os.geteuid() == 0:
+            assert os.sched_getscheduler(child.pid) == os.SCHED_RR
+        else:
+            assert pin.refused
+    finally:
+        child.kill()
+        child.wait()
+
+

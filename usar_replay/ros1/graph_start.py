@@ -1,0 +1,123 @@
+"""When ``/clock`` may start: every node up, every subscription connected, the graph idle.
+
+Why: a node that is still connecting when the first ``/clock`` arrives misses the first ticks'
+messages, and how many it misses depends on the machine (the issue measured 4 to 8 ticks of
+difference between two recordings). So the bridge holds ``/clock`` until
+
+1. every node of the launch file (``roslaunch --nodes``; with ``rosrun``, at least one node)
+   has registered with the master;
+2. every subscriber of every topic (the bridge's own subscriptions and the action clients'
+   status, feedback and result included) is connected to every publisher of it, asked of each
+   node through its slave API (``getBusInfo``: inbound connections per topic);
+3. the graph has gone idle (:class:`.quiescence.Quiescence`).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import time
+import xmlrpc.client
+from collections.abc import Callable, Sequence
+from typing import Any
+
+__all__ = ["launch_nodes", "missing_connections", "registered_nodes", "wait_until_ready"]
+
+
+def launch_nodes(script_prefix: str, package: str, launch: str, env: dict[str, str]) -> list[str]:
+    """The node names a launch file starts (``roslaunch --nodes``), [] where it cannot say."""
+    try:
+        done = subprocess.run(
+            ["bash", "-c", f'{script_prefix} && exec roslaunch --nodes "$0" "$1"', package, launch],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return []
+    if done.returncode != 0:
+        return []
+    return sorted(n.strip() for n in done.stdout.splitlines() if n.strip().startswith("/"))
+
+
+def registered_nodes(master: Any, caller: str) -> set[str]:
+    """The nodes with a publication, subscription or service at the master, but ``caller``
+    and ``/rosout``."""
+    _code, _msg, state = master.getSystemState(caller)
+    nodes = {str(n) for group in state for _topic, names in group for n in names}
+    return nodes - {caller, "/rosout"}
+
+
+def _inbound(uri: str, caller: str) -> dict[str, set[str]]:
+    """topic -> the publishers a node's subscriptions are connected to (its ``getBusInfo``)."""
+    proxy: Any = xmlrpc.client.ServerProxy(uri)
+    code, _msg, info = proxy.getBusInfo(caller)
+    out: dict[str, set[str]] = {}
+    if code != 1:
+        return out
+    for conn in info:
+        if len(conn) >= 5 and conn[2] == "i" and (len(conn) < 6 or conn[5]):
+            out.setdefault(str(conn[4]), set()).add(str(conn[1]))
+    return out
+
+
+def missing_connections(master: Any, caller: str) -> list[str]:
+    """``node topic: n of m publishers`` for each subscription not yet connected to every
+    publisher of its topic (empty: all connected)."""
+    _code, _msg, (pubs, subs, _srvs) = master.getSystemState(caller)
+    publishers = {topic: set(names) for topic, names in pubs}
+    missing: list[str] = []
+    inbound: dict[str, dict[str, set[str]]] = {}
+    for topic, names in sorted(subs):
+        for node in sorted(names):
+            want = len(publishers.get(topic, set()) - {node})
+            if want == 0:
+                continue
+            if node not in inbound:
+                code, _m, uri = master.lookupNode(caller, node)
+                try:
+                    inbound[node] = _inbound(uri, caller) if code == 1 else {}
+                except OSError:
+                    inbound[node] = {}
+            have = len(inbound[node].get(topic, set()))
+            if have < want:
+                missing.append(f"{node} {topic}: {have} of {want} publishers")
+    return missing
+
+
+def wait_until_ready(
+    master: Any,
+    caller: str,
+    expected: Sequence[str],
+    idle: Callable[[float], bool],
+    alive: Callable[[], None],
+    timeout_s: float,
+) -> None:
+    """Return once the graph is ready for the first ``/clock`` (see the module docstring);
+    ``alive`` raises when the graph ended, ``idle(cap)`` waits for quiescence. Raises
+    RuntimeError naming what is missing after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    why = "registered no node with the master"
+    while time.monotonic() < deadline:
+        alive()
+        nodes = registered_nodes(master, caller)
+        absent = sorted(set(expected) - nodes)
+        if not nodes or absent:
+            why = "registered no node with the master"
+            if absent and nodes:
+                why = f"not registered: {', '.join(absent)}"
+            time.sleep(0.05)
+            continue
+        missing = missing_connections(master, caller)
+        if missing:
+            why = "not connected: " + "; ".join(missing[:4])
+            time.sleep(0.02)
+            continue
+        if not idle(2.0):
+            why = "the graph did not go idle"
+            continue
+        if not missing_connections(master, caller):  # nothing connected or left meanwhile
+            return
+    raise RuntimeError(f"the ROS graph was not ready within {timeout_s:g} s ({why})")

@@ -1,0 +1,88 @@
+"""Has the package ended? Seen from the process table, not from roslaunch's polling.
+
+Why: roslaunch notices that a node exited by polling every 0.1 s of wall time, so a run that
+ended when roslaunch said so ended up to a few ticks later on one recording than on another
+(the issue measured 9). The bridge asks the process table instead, right after the graph went
+idle in a tick: the package has ended in the tick in which its last node process is gone or a
+zombie (its parent, roslaunch, has not collected it yet). A zombie's exit status is in its
+``/proc/<pid>/stat`` (field 52), so a node that died with an error is seen as such without
+waiting for roslaunch's report.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass, field
+
+from usar_replay.ros1.quiescence import descendants
+
+__all__ = ["ProcWatch"]
+
+
+def _stat(pid: int) -> tuple[str, int | None] | None:
+    """(state, exit status where shown) of a process, None once it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            raw = f.read()
+    except OSError:
+        return None
+    fields = raw[raw.rfind(b")") + 2 :].split()
+    state = fields[0].decode()
+    code = int(fields[49]) if len(fields) > 49 else None  # field 52 of the whole line
+    return state, code
+
+
+@dataclass
+class ProcWatch:
+    """The processes started under ``launcher`` (the ``roslaunch``/``rosrun`` process);
+    ``roslaunch`` itself is not one of the package's (it outlives its nodes)."""
+
+    launcher: int
+    launcher_is_package: bool = False
+    """True for ``rosrun``: the launcher process is the node."""
+    seen: dict[int, str] = field(default_factory=dict)
+    """pid -> its command name, every package process seen so far."""
+    codes: dict[int, int] = field(default_factory=dict)
+    """pid -> exit status (waitpid's encoding) of the ones seen as zombies."""
+
+    def package(self) -> list[int]:
+        """The package's processes now (the launcher's descendants; with roslaunch, not
+        roslaunch itself)."""
+        pids = descendants(self.launcher)
+        return pids if self.launcher_is_package else pids[1:]
+
+    def update(self) -> None:
+        """Note the package's processes running now (call once per tick)."""
+        for pid in self.package():
+            if pid not in self.seen:
+                with contextlib.suppress(OSError), open(f"/proc/{pid}/comm") as f:
+                    self.seen[pid] = f.read().strip()
+
+    def ended(self) -> bool:
+        """True once every package process seen has exited (at least one was seen)."""
+        self.update()
+        if not self.seen:
+            return False
+        done = True
+        for pid in self.seen:
+            st = _stat(pid)
+            if st is None:
+                continue
+            state, code = st
+            if state in ("Z", "X"):
+                if code is not None:
+                    self.codes.setdefault(pid, code)
+                continue
+            done = False
+        return done
+
+    def failures(self) -> list[str]:
+        """``name exit N`` (or ``killed by signal N``) for the processes that ended badly."""
+        out = []
+        for pid, status in sorted(self.codes.items()):
+            name = self.seen.get(pid, str(pid))
+            if status & 0x7F:
+                out.append(f"{name} [pid {pid}] killed by signal {status & 0x7F}")
+            elif status >> 8:
+                out.append(f"{name} [pid {pid}] exit code {status >> 8}")
+        return out

@@ -1,0 +1,67 @@
+"""``usar replay`` of a ROS 1 log: the recorded package, re-run against the recorded inputs.
+
+Why it can: the bridge's pacing makes a package's run repeatable (docs/ros1.md, "Pacing"), so
+feeding the log's ticks to the same package again gives the same outputs, bit for bit, and
+the replay compares them as a Python mission's replay does (:mod:`usar_replay.pipeline.replay`:
+the first differing message, the rubric delta with ``--grade``). Where a package is not
+repeatable (it reads the wall clock, an unseeded ``rand()``), the comparison names the topic
+that diverged first and its sim time.
+
+Which package: the one the log names (``mission.toml``: ``ros1:PATH --launch FILE``), if it is
+here; or ``--ros1 PKG`` (``--launch``/``--node`` as for ``usar record``). Its sha256 against the
+recorded one says whether the code changed (a regression run then).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable
+from typing import Any
+
+from usar_replay.core.errors import UsageError
+from usar_replay.log.run import Run
+from usar_replay.node.worker import MissionProcess, MissionTarget
+from usar_replay.ros1 import debian
+from usar_replay.ros1.build import find_package
+from usar_replay.ros1.process import Ros1Options, Ros1Process, ros1_target
+from usar_replay.ros1.record import choose_entry
+
+__all__ = ["recorded_entry", "ros1_process"]
+
+
+def recorded_entry(target: str) -> tuple[str, str, str]:
+    """(package path, launch file, executable) from a log's ``ros1:PATH --launch FILE``."""
+    rest = target.removeprefix("ros1:")
+    for flag in (" --launch ", " --node "):
+        path, found, entry = rest.rpartition(flag)
+        if found:
+            return (path, entry, "") if flag == " --launch " else (path, "", entry)
+    return rest.strip(), "", ""
+
+
+def ros1_process(
+    run: Run, package: str | None = None, launch: str | None = None, node: str | None = None
+) -> tuple[MissionTarget, Callable[..., MissionProcess]]:
+    """The package to replay (the recorded one, or ``package``) and a process factory for
+    :func:`usar_replay.pipeline.replay.replay`. Usage errors (one line) when it is not here."""
+    debian.check()
+    path, rec_launch, rec_node = recorded_entry(run.mission.target)
+    if package is None:
+        try:
+            pkg = find_package(path)
+        except UsageError:
+            raise UsageError(
+                f"{run.path} was recorded from the ROS 1 package {path}, which is not here; "
+                "give it with --ros1 PKG"
+            ) from None
+    else:
+        pkg = find_package(package)
+    if launch or node:
+        options = Ros1Options(launch=launch or "", node=node or "")
+    else:
+        options = Ros1Options(launch=rec_launch, node=rec_node)
+    options = choose_entry(pkg, options)
+    target = ros1_target(pkg, options)
+    factory: Any = functools.partial(Ros1Process, package=pkg, options=options)
+    return dataclasses.replace(target), factory
