@@ -21,10 +21,10 @@ from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.log.run import Run
-from usar_replay.node.worker import MissionProcess, MissionTarget
+from usar_replay.node.worker import MissionLimits, MissionProcess, MissionTarget
 from usar_replay.ros1 import debian
-from usar_replay.ros1.build import find_package
-from usar_replay.ros1.process import Ros1Options, Ros1Process, ros1_target
+from usar_replay.ros1.build import cached_build, find_package
+from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
 from usar_replay.ros1.record import choose_entry
 
 __all__ = ["recorded_entry", "ros1_process"]
@@ -41,10 +41,16 @@ def recorded_entry(target: str) -> tuple[str, str, str]:
 
 
 def ros1_process(
-    run: Run, package: str | None = None, launch: str | None = None, node: str | None = None
+    run: Run,
+    package: str | None = None,
+    launch: str | None = None,
+    node: str | None = None,
+    limits: MissionLimits | None = None,
 ) -> tuple[MissionTarget, Callable[..., MissionProcess]]:
-    """The package to replay (the recorded one, or ``package``) and a process factory for
-    :func:`usar_replay.pipeline.replay.replay`. Usage errors (one line) when it is not here."""
+    """The package to replay (the recorded one, or ``package``), built (from the verified
+    cache, under the build's limits, as ``usar record --ros1`` builds it), and a process factory
+    for :func:`usar_replay.pipeline.replay.replay`. Usage errors (one line) when it is not
+    here; a package that does not build is :class:`MissionEnded` (``build_failed``, exit 4)."""
     debian.check()
     path, rec_launch, rec_node = recorded_entry(run.mission.target)
     if package is None:
@@ -63,5 +69,6 @@ def ros1_process(
         options = Ros1Options(launch=rec_launch, node=rec_node)
     options = choose_entry(pkg, options)
     target = ros1_target(pkg, options)
-    factory: Any = functools.partial(Ros1Process, package=pkg, options=options)
+    built = cached_build(pkg, limits=build_limits_for(limits or MissionLimits(), options))
+    factory: Any = functools.partial(Ros1Process, package=pkg, options=options, built=built)
     return dataclasses.replace(target), factory

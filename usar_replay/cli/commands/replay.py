@@ -56,7 +56,9 @@ def run(args: argparse.Namespace) -> int:
     if not args.mission and run.mission.target.startswith("ros1:"):
         from usar_replay.ros1.replay import ros1_process
 
-        target, process = ros1_process(run, args.ros1, args.launch, args.node)
+        target, process = ros1_process(
+            run, args.ros1, args.launch, args.node, options.limits(args)
+        )
     elif args.ros1 or args.launch or args.node:
         raise UsageError("--ros1, --launch and --node replay a ROS 1 log")
     changed = bool(args.set or args.settings)
