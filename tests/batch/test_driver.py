@@ -32,8 +32,6 @@ from usar_replay.batch.plan import (
     discover,
     make_plan,
     make_worlds,
-    parse_seeds,
-    submission_digest,
 )
 from usar_replay.core.errors import UsageError
 from usar_replay.world.scenario_toml import to_toml
@@ -330,55 +328,6 @@ def test_ctrl_c_cuts_runs_that_are_redone(tmp_path: Path) -> None:
 
 
 # -- the parts ---------------------------------------------------------------------------------
-
-
-def test_discover_submissions(tmp_path: Path) -> None:
-    subs = tmp_path / "subs"
-    (subs / "a_team").mkdir(parents=True)
-    (subs / "a_team" / "mission.py").write_text("def main(): pass\n")
-    (subs / "b team").mkdir()
-    (subs / "b team" / "usar.toml").write_text('[mission]\ntarget = "src/run.py:make"\n')
-    (subs / "b team" / "src").mkdir()
-    (subs / "b team" / "src" / "run.py").write_text("def make(): pass\n")
-    (subs / "c.py").write_text("def main(): pass\n")
-    (subs / "d").mkdir()
-    (subs / "e").mkdir()
-    (subs / "e" / "usar.toml").write_text('[mission]\ntarget = "../c.py"\n')
-    (subs / ".hidden").mkdir()
-    (subs / "__pycache__").mkdir()
-    (subs / "notes.txt").write_text("x")
-    found = {s.team: s for s in discover(subs)}
-    assert sorted(found) == ["a_team", "b_team", "c", "d", "e"]
-    assert found["a_team"].target == str((subs / "a_team" / "mission.py").resolve())
-    assert found["b_team"].target == str((subs / "b team" / "src" / "run.py").resolve()) + ":make"
-    assert found["c"].target.endswith("c.py") and not found["c"].problem
-    assert "no mission.py" in found["d"].problem and not found["d"].target
-    assert "outside the team's folder" in found["e"].problem
-    (subs / "c").mkdir()
-    (subs / "c" / "mission.py").write_text("")
-    with pytest.raises(UsageError, match="both team 'c'"):
-        discover(subs)
-
-
-def test_submission_digest_covers_helpers_not_caches(tmp_path: Path) -> None:
-    team = tmp_path / "t"
-    team.mkdir()
-    (team / "mission.py").write_text("import helper\n")
-    (team / "helper.py").write_text("X = 1\n")
-    first = submission_digest(team)
-    (team / "__pycache__").mkdir()
-    (team / "__pycache__" / "helper.cpython-311.pyc").write_bytes(b"\0")
-    assert submission_digest(team) == first
-    (team / "helper.py").write_text("X = 2\n")
-    assert submission_digest(team) != first
-
-
-def test_parse_seeds() -> None:
-    assert parse_seeds("0-4") == [0, 1, 2, 3, 4]
-    assert parse_seeds("7,0-1,1") == [0, 1, 7]
-    for bad in ("", "a", "4-0", "1-"):
-        with pytest.raises(UsageError):
-            parse_seeds(bad)
 
 
 def test_table_fits_100_columns_with_many_worlds(tmp_path: Path) -> None:

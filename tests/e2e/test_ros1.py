@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -19,7 +18,6 @@ from clitools import usar
 from conftest import one_room
 
 from usar_replay.cli.main import main
-from usar_replay.core import msgs
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
 from usar_replay.ros1 import debian
@@ -46,54 +44,6 @@ def test_debian_ros1_is_installed() -> None:
     """The README's test command installs ROS 1; without it every other test here fails, so
     this one says exactly what to install."""
     assert debian.missing() == [], debian.install_line(debian.missing())
-
-
-def test_missing_packages_are_named_in_one_apt_line() -> None:
-    line = debian.install_line(["catkin", "python3-rospy"])
-    assert line == "apt-get install -y --no-install-recommends catkin python3-rospy"
-    assert set(debian.APT_PACKAGES) >= {"catkin", "python3-rosmaster", "libtf2-ros-dev"}
-
-
-def _ros1() -> None:
-    if str(debian.DIST_PACKAGES) not in sys.path:
-        sys.path.append(str(debian.DIST_PACKAGES))
-
-
-def test_messages_convert_both_ways() -> None:
-    """usar's values -> rospy's -> usar's is the identity (Time's secs/nsecs, CameraInfo's
-    D/K/R/P, a header's seq are the spellings that differ)."""
-    _ros1()
-    from usar_replay.ros1.convert import from_ros1, to_ros1
-
-    stamp = msgs.Time(sec=12, nanosec=500_000_000)
-    values: list[msgs.Message] = [
-        msgs.TFMessage(
-            transforms=(
-                msgs.TransformStamped(
-                    header=msgs.Header(stamp=stamp, frame_id="map"),
-                    child_frame_id="marker_frame",
-                    transform=msgs.Transform(
-                        translation=msgs.Vector3(x=1.0, y=-2.0, z=0.5),
-                        rotation=msgs.Quaternion(z=0.6, w=0.8),
-                    ),
-                ),
-            )
-        ),
-        msgs.CameraInfo(
-            header=msgs.Header(stamp=stamp, frame_id="cam"),
-            height=240,
-            width=320,
-            distortion_model="plumb_bob",
-            d=(0.0,) * 5,
-            k=tuple(float(i) for i in range(9)),
-        ),
-        msgs.Twist(angular=msgs.Vector3(z=0.1)),
-    ]
-    for value in values:
-        ros1 = to_ros1(value)
-        assert from_ros1(type(value), ros1) == value
-    assert to_ros1(values[1]).K[4] == 4.0
-    assert to_ros1(values[0]).transforms[0].header.stamp.nsecs == 500_000_000
 
 
 def test_usage_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -7,8 +7,6 @@ import re
 from html.parser import HTMLParser
 from pathlib import Path
 
-from clitools import one_error_line, usar
-
 from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.grading.grade import grade_file
@@ -104,19 +102,3 @@ def test_report_writes_a_self_contained_page_and_an_index(
     index = _parse(out / "index.html")
     assert index.links == ["room.html"]
     assert "1/1 recordings pass" in " ".join(index.text)
-
-
-def test_report_refuses_existing_pages_and_lists_a_bad_file(
-    room_log: tuple[Path, RecordResult], tmp_path: Path
-) -> None:
-    out = tmp_path / "pages"
-    out.mkdir()
-    (out / "index.html").write_text("keep")
-    one_error_line(usar("report", str(room_log[0]), "-o", str(out)), 2, "--overwrite")
-    assert (out / "index.html").read_text() == "keep"
-    bad = tmp_path / "bad.mcap"
-    bad.write_text("not a log")
-    run = usar("report", str(room_log[0]), str(bad), "-o", str(out), "--overwrite")
-    assert run.returncode == 3 and "Traceback" not in run.stderr
-    index = _parse(out / "index.html")
-    assert index.links == ["room.html"] and any("ERROR" in c for c in index.cells)

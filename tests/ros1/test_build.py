@@ -18,7 +18,6 @@ from conftest import one_room
 
 from usar_replay.cli.main import main
 from usar_replay.log.run import open_run
-from usar_replay.ros1 import buildmsg
 from usar_replay.world.scenario_toml import save
 
 NODE = """
@@ -122,23 +121,3 @@ def test_a_missing_find_package_component_says_what_to_change(
     hint = "hint: add fiducial_msgs to find_package(catkin REQUIRED COMPONENTS ...) and package.xml"
     assert hint in text.splitlines(), text
     assert open_run(out).outcome == "build_failed"
-
-
-def test_hints_and_paths_for_a_missing_dependency_and_an_own_message() -> None:
-    missing = 'Could not find a package configuration file provided by "tf3_ros" with any'
-    assert "'tf3_ros' is not installed here" in buildmsg.hint(missing, "pkg")
-    own = "src/a.cpp:2:10: fatal error: pkg/Thing.h: No such file or directory"
-    assert "add_dependencies(TARGET ${${PROJECT_NAME}_EXPORTED_TARGETS})" in buildmsg.hint(
-        own, "pkg"
-    )
-    unlinked = "a.cpp:(.text+0x1): undefined reference to `tf2_ros::TransformBroadcaster::X()'"
-    assert "link tf2_ros: add it to find_package" in buildmsg.hint(unlinked, "pkg")
-    said = "CMake Error at pkg/CMakeLists.txt:6 (message):\n/ws/src/pkg/a.cpp:1: error"
-    mapped = buildmsg.student_paths(said, Path("/ws/src/pkg"), Path("/home/me/pkg"))
-    assert (
-        mapped
-        == "CMake Error at /home/me/pkg/CMakeLists.txt:6 (message):\n/home/me/pkg/a.cpp:1: error"
-    )
-    assert buildmsg.hint("all fine", "pkg") == ""
-    for said in (missing, own, unlinked):
-        assert len(buildmsg.hint(said, "a_package_name")) <= 100

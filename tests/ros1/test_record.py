@@ -20,10 +20,9 @@ import pytest
 from clitools import usar
 from conftest import one_room
 
-from usar_replay.core import msgs, ros1msg
+from usar_replay.core import msgs
 from usar_replay.grading.htmlreport import collect
 from usar_replay.log.run import open_run
-from usar_replay.ros1 import run_files
 from usar_replay.ros1.build import find_package, package_sha256
 from usar_replay.viewer.scene import Scene
 from usar_replay.world.scenario_toml import save
@@ -80,17 +79,6 @@ def test_echo_reads_both_encodings(recorded: tuple[Path, str]) -> None:
     assert count.stdout.splitlines()[1:] == ["data: 1", "---"]
 
 
-def test_a_ros1_message_decodes_only_as_its_definition() -> None:
-    value = ros1msg.Ros1Message(
-        msgtype="std_msgs/Int32", definition="int32 data\n", data=b"\x07\0\0\0"
-    )
-    wire_type, data = ros1msg.pack(value)
-    assert ros1msg.unpack(wire_type, data) == value
-    assert ros1msg.decode(value.msgtype, value.definition, value.data).data == 7
-    with pytest.raises(Exception, match="size mismatch"):
-        ros1msg.decode(value.msgtype, value.definition, value.data + b"\0")
-
-
 def test_the_stored_markers_are_shown(recorded: tuple[Path, str]) -> None:
     out, printed = recorded
     assert "stored on /explorer/marker_poses at (1.99" in printed
@@ -107,18 +95,6 @@ def test_log_by_node_finds_each_node(recorded: tuple[Path, str]) -> None:
         assert "[follower]" not in got.stdout
     follower = usar("log", str(out), "--node", "follower").stdout
     assert "waiting for the explorer's markers" in follower
-
-
-def test_a_repeated_line_does_not_take_the_status_line() -> None:
-    from usar_replay.pipeline.status_line import NodeLines
-
-    lines = NodeLines()
-    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
-    lines.note(msgs.Log(name="/explorer", msg="explorer: at target_1"))
-    lines.note(msgs.Log(name="follower", msg="follower: waiting"))
-    assert lines.status() == "[explorer] explorer: at target_1"
-    lines.note(msgs.Log(name="follower", msg="follower: to marker 0"))
-    assert lines.status() == "[follower] follower: to marker 0"
 
 
 def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, str]) -> None:
@@ -174,68 +150,3 @@ def test_view_shows_the_stored_pose_array(recorded: tuple[Path, str]) -> None:
     rows = scene.stored_markers
     assert rows.lengths == [1] and rows.labels == ["stored 0"]
     assert abs(rows.items[0][0] - 1.994) < 0.01 and abs(rows.items[0][1] - 0.401) < 0.01
-
-
-def test_the_run_folder_is_read_as_untrusted(tmp_path: Path) -> None:
-    """A node's output is bounded (its start and end kept, the cut said); a symlink or a hard
-    link planted in the run's folder is not followed, a bad name not taken."""
-    secret = tmp_path / "secret"
-    secret.write_text("not the node's\n")
-    output = tmp_path / "run" / run_files.OUTPUT_DIR
-    output.mkdir(parents=True)
-    big = b"first line\n" + b"x" * 1_000_000 + b"\nlast\n"
-    (output / "explorer.out").write_bytes(big)
-    (output / "planted.out").symlink_to(secret)
-    os.link(secret, output / "linked.out")
-    (output / "bad name.out").write_text("x")
-    kept = dict(run_files.node_outputs(tmp_path / "run"))
-    assert list(kept) == ["explorer"]
-    text = kept["explorer"]
-    assert text.startswith(b"first line\n") and text.endswith(b"\nlast\n")
-    assert len(text) < run_files.OUTPUT_HEAD + run_files.OUTPUT_TAIL + 200
-    assert b"[usar: 934481 bytes of this node's output left out here" in text
-    # the whole output folder replaced by a symlink: nothing is read through it
-    os.rename(output, tmp_path / "elsewhere")
-    output.symlink_to(tmp_path / "elsewhere")
-    assert run_files.node_outputs(tmp_path / "run") == []
-
-
-def test_a_crash_reason_shows_the_nodes_lines_without_usars_prefix(tmp_path: Path) -> None:
-    """roslaunch reports a dead node with its command, usar's prefix included: the reason
-    shows the student's command, and each node's last lines from its own file."""
-    from usar_replay.ros1.launch_output import _prefix, without_prefix
-
-    out = tmp_path / run_files.OUTPUT_DIR
-    out.mkdir()
-    (out / "follower.out").write_text("follower: starting\nfollower: cannot go on\n")
-    cmd = " ".join([*_prefix(str(out / "follower.out")), "/ws/follower_node", "__name:=follower"])
-    died = f"process has died [pid 46, exit code 3, cmd {cmd}]."
-    assert without_prefix(died) == (
-        "process has died [pid 46, exit code 3, cmd /ws/follower_node __name:=follower]."
-    )
-    assert (
-        run_files.node_tails(out)
-        == "[follower] follower: starting\n[follower] follower: cannot go on\n"
-    )
-
-
-def test_the_masters_log_gives_the_parameters_read_and_the_nodes(tmp_path: Path) -> None:
-    """From the master's API log: the parameters the package's nodes read (not usar's own
-    node's, not those every roscpp node reads) and the nodes that registered (for rosrun)."""
-    head = "[rosmaster.master][DEBUG] 2026-11-24 05:40:00,123: "
-    calls = [
-        "setParam('/usar_sim', '/mission/spin_speed', 0.1)",
-        "getParam('/usar_sim', '/mission/xy_tolerance')",
-        "getParam('/explorer', '/use_sim_time')",
-        "getParam('/explorer', '/mission/spin_speed')",
-        "hasParam('/follower', '/mission/spin_speed')",
-        "getParam('/follower', '/follower/move_base/actionlib_client_sub_queue_size')",
-        "registerPublisher('/explorer', '/explorer/cmd_vel', 'geometry_msgs/Twist', 'http://x/')",
-        "registerSubscriber('/usar_sim', '/tf', 'tf2_msgs/TFMessage', 'http://y/')",
-        "getSystemState('/usar_sim',)",
-    ]
-    (tmp_path / run_files.MASTER_LOG).write_text("".join(head + c + "\n" for c in calls))
-    assert run_files.parameters_read(tmp_path) == {
-        "/mission/spin_speed": ["/explorer", "/follower"]
-    }
-    assert run_files.registered_nodes(tmp_path) == ["/explorer"]

@@ -40,8 +40,6 @@ from usar_replay.viewer.scene import escape_path_part, frame_entity_path, frame_
 from usar_replay.viewer.view import ViewResult, view_run
 from usar_replay.viewer.viewer_process import (
     Output,
-    choose_output,
-    default_rrd_path,
     open_command,
 )
 from usar_replay.world.detect import DetectorParams, detect_with_corners
@@ -325,17 +323,6 @@ def test_escape_path_part_is_rerun_own_escaping() -> None:
         assert escape_path_part(frame) == rr.escape_entity_path_part(frame)
 
 
-def test_choose_output_rules(tmp_path: Path) -> None:
-    log = tmp_path / "run.mcap"
-    assert choose_output(log, save=None, web=False, env={"DISPLAY": ":0"}) == Output(spawn=True)
-    assert choose_output(log, save=None, web=False, env={"WAYLAND_DISPLAY": "w"}).spawn
-    assert choose_output(log, save=None, web=False, env={}) == Output(rrd=tmp_path / "run.rrd")
-    out = tmp_path / "o.rrd"
-    assert choose_output(log, save=out, web=False, env={"DISPLAY": ":0"}) == Output(rrd=out)
-    assert choose_output(log, save=None, web=True, env={"DISPLAY": ":0"}) == Output(web=True)
-    assert default_rrd_path("runs/course.mcap") == Path("runs/course.rrd")
-
-
 # --- rerun's own MCAP loader --------------------------------------------------------------------
 
 
@@ -432,16 +419,6 @@ def test_cli_truncated_log_writes_what_it_read_and_exits_3(
     assert "incomplete" in str(note[0])
 
 
-def test_cli_missing_file_is_one_line_exit_2(tmp_path: Path) -> None:
-    out = tmp_path / "never.rrd"
-    done = _usar("view", str(tmp_path / "missing.mcap"), "--save", str(out), env=_no_display())
-    assert done.returncode == 2  # a wrong path is a usage error
-    assert done.stderr.count("\n") == 1 and "no such file" in done.stderr
-    assert "Traceback" not in done.stderr
-    assert not out.exists() and not out.with_name("never.rrd.part").exists()
-    assert list(tmp_path.iterdir()) == []
-
-
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -494,19 +471,6 @@ def _listening_on(port: int) -> set[str]:
 # --- outputs are never lost or left half-written (issue 13) --------------------------------------
 
 
-def test_cli_never_writes_over_the_log(room_log: tuple[Path, RecordResult], tmp_path: Path) -> None:
-    log = tmp_path / "a.mcap"
-    log.write_bytes(room_log[0].read_bytes())
-    before = log.read_bytes()
-    for extra in ([], ["--overwrite"]):
-        done = usar("view", str(log), "--save", str(log), *extra)
-        one_error_line(done, 2, "--save", "input")
-    same = usar("view", str(log), "--save", str(tmp_path / "." / "a.mcap"))
-    one_error_line(same, 2, "input")
-    assert log.read_bytes() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mcap"]
-
-
 def test_cli_existing_output_needs_overwrite(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
@@ -519,46 +483,6 @@ def test_cli_existing_output_needs_overwrite(
     assert done.returncode == 0, done.stderr
     assert read_rrd(out)[IMAGE].rows("EncodedImage:blob") > 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.rrd"]
-
-
-def test_cli_default_output_next_to_the_log_is_not_replaced(
-    room_log: tuple[Path, RecordResult], tmp_path: Path
-) -> None:
-    log = tmp_path / "run.mcap"
-    log.write_bytes(room_log[0].read_bytes())
-    (tmp_path / "run.rrd").write_bytes(b"kept")
-    done = _usar("view", str(log), env=_no_display())
-    one_error_line(done, 2, "run.rrd", "exists", "--overwrite")
-    assert (tmp_path / "run.rrd").read_bytes() == b"kept"
-
-
-def test_cli_save_to_a_directory_is_one_line(
-    room_log: tuple[Path, RecordResult], tmp_path: Path
-) -> None:
-    target = tmp_path / "views"
-    target.mkdir()
-    done = usar("view", str(room_log[0]), "--save", str(target))
-    one_error_line(done, 2, "--save", "directory")
-    assert list(target.iterdir()) == [] and sorted(tmp_path.iterdir()) == [target]
-
-
-@pytest.mark.parametrize(
-    "option", [["--web-port", "99999"], ["--grpc-port", "0"], ["--web-port", "http"]]
-)
-def test_cli_ports_are_checked_by_the_parser(
-    room_log: tuple[Path, RecordResult], option: list[str]
-) -> None:
-    done = usar("view", str(room_log[0]), "--web", *option)
-    assert done.returncode == 2
-    assert "Traceback" not in done.stderr
-    last = done.stderr.strip().splitlines()[-1]
-    assert option[0] in last and "1-65535" in last
-
-
-def test_cli_bind_takes_an_ip_address(room_log: tuple[Path, RecordResult]) -> None:
-    done = usar("view", str(room_log[0]), "--web", "--bind", "example.org")
-    assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert "--bind" in done.stderr.strip().splitlines()[-1]
 
 
 def _limit_file_size() -> None:

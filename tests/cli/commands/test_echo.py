@@ -1,4 +1,4 @@
-"""`usar echo` and `usar log`: a log's messages and its /rosout lines, as ROS 2 prints them.
+"""`usar echo`: a log's messages, as ROS 2 prints them (`usar log`: tests/cli/commands/test_log.py).
 
 Why: a student reading their mission's own log lines, or the command a robot was sent at the
 time a grade line names, must not need the mcap library. The blocks follow ``ros2 topic echo``
@@ -16,9 +16,8 @@ from pathlib import Path
 import pytest
 
 from tests.clitools import one_error_line, usar
-from tests.logtools import rewrite
 from usar_replay.cli.main import main
-from usar_replay.core import msg_text, msgs
+from usar_replay.core import msgs
 from usar_replay.log import bag
 from usar_replay.pipeline.record import RecordResult
 
@@ -208,138 +207,3 @@ def test_a_closed_pipe_ends_quietly(room_log: Room) -> None:
     proc.stdout.close()  # the reader goes away with most of the output unread
     err = proc.stderr.read().decode()
     assert proc.wait() == 0 and err == ""
-
-
-# -- usar log ----------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def leveled_log(room_log: Room, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The room log with its /rosout entries at every level in turn, and one long entry of
-    several lines (a traceback's shape)."""
-    levels = iter([msgs.Log.DEBUG, msgs.Log.INFO, msgs.Log.WARN, msgs.Log.ERROR, msgs.Log.FATAL]
-                  * 10)  # fmt: skip
-    first = [True]
-
-    def edit(m: bag.BagMessage) -> msgs.Message | None:
-        if m.topic != "/rosout" or not isinstance(m.msg, msgs.Log):
-            return None
-        text = m.msg.msg
-        if first[0]:
-            first[0] = False
-            text = "Traceback (most recent call last):\n  " + "word " * 40 + "\nValueError: x"
-        return msgs.Log(stamp=m.msg.stamp, level=next(levels), name=m.msg.name, msg=text)
-
-    out = tmp_path_factory.mktemp("leveled") / "leveled.mcap"
-    rewrite(room_log[0], out, edit)
-    return out
-
-
-def _entries(path: Path) -> list[tuple[int, msgs.Log]]:
-    got = [(m.log_time_ns, m.msg) for m in bag.BagReader(path).messages(["/rosout"])]
-    return [(t, m) for t, m in got if isinstance(m, msgs.Log)]
-
-
-def test_log_prints_time_level_node_and_text(
-    room_log: Room, capsys: pytest.CaptureFixture[str]
-) -> None:
-    code, lines = _echo(capsys, "log", str(room_log[0]))
-    assert code == 0
-    entries = _entries(room_log[0])
-    assert len(entries) > 5
-    assert lines == [f"[INFO] [{_t(t)}] [{m.name}]: {m.msg}" for t, m in entries]
-
-
-def test_log_filters_by_level_node_and_time(
-    leveled_log: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    entries = _entries(leveled_log)
-    heads = [line for line in _echo(capsys, "log", str(leveled_log))[1] if line.startswith("[")]
-    assert [h.split("]")[0] for h in heads[:5]] == ["[DEBUG", "[INFO", "[WARN", "[ERROR", "[FATAL"]
-    code, lines = _echo(capsys, "log", str(leveled_log), "--level", "warn")
-    assert code == 0
-    assert len(lines) == sum(m.level >= msgs.Log.WARN for _, m in entries)
-    assert all(line.startswith(("[WARN]", "[ERROR]", "[FATAL]")) for line in lines)
-    code, lines = _echo(capsys, "log", str(leveled_log), "--node", "follower", "--since", "40")
-    want = [(t, m) for t, m in entries if m.name == "follower" and t >= 40_000_000_000]
-    assert code == 0 and len(lines) == len(want) > 0
-    assert all(f"[{_t(t)}] [follower]: " in line for (t, _), line in zip(want, lines, strict=True))
-
-
-def test_a_long_entry_goes_on_over_indented_lines(
-    leveled_log: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    code, lines = _echo(capsys, "log", str(leveled_log), "--until", "1")
-    assert code == 0
-    assert lines[0].startswith("[DEBUG] [1.000] [explorer]: Traceback (most recent call last):")
-    assert all(len(line) <= 100 for line in lines)
-    body = lines[1 : lines.index("    ValueError: x") + 1]
-    assert len(body) > 2 and all(line.startswith("    ") for line in body)
-    assert " ".join(line.strip() for line in body[:-1]) == ("word " * 40).strip()
-
-
-def test_log_errors_are_one_line(room_log: Room) -> None:
-    out = usar("log", str(room_log[0]), "--node", "folower")
-    one_error_line(out, 2, "no node folower", "explorer, follower")
-    out = usar("log", str(room_log[0]), "--level", "loud")
-    one_error_line(out, 2, "'loud' is not a level", "WARN")
-
-
-# -- the printer -------------------------------------------------------------------------------
-
-
-def _read_double_quoted(lines: list[str]) -> str:
-    """A YAML double-quoted scalar continued with ``\\`` (what the printer writes), read back
-    by YAML's rules: an escaped line break and the next line's indent are dropped."""
-    text = lines[0].split(': "', 1)[1]
-    for line in lines[1:]:
-        assert text.endswith("\\")
-        text = text[:-1] + line.lstrip(" ")
-    assert text.endswith('"')
-    escapes = {"n": "\n", "t": "\t", "\\": "\\", '"': '"', " ": " "}
-    out, i = [], 0
-    body = text[:-1]
-    while i < len(body):
-        if body[i] == "\\":
-            out.append(escapes[body[i + 1]])
-            i += 2
-        else:
-            out.append(body[i])
-            i += 1
-    return "".join(out)
-
-
-@pytest.mark.parametrize(
-    "text",
-    [
-        "a long line of words, " * 9,
-        "x" * 250,
-        'quotes " and \\ backslashes,  double  spaces ' * 4 + "\nand\ta traceback's lines",
-    ],
-)
-def test_a_long_string_is_continued_and_reads_back_unchanged(text: str) -> None:
-    lines = msg_text.message_lines(msgs.Log(name="n", msg=text))
-    start = next(i for i, line in enumerate(lines) if line.startswith('msg: "'))
-    end = next(i for i in range(start, len(lines)) if lines[i].endswith('"'))
-    assert max(map(len, lines)) <= 100
-    assert _read_double_quoted(lines[start : end + 1]) == text
-
-
-def test_a_long_array_is_elided_with_its_count() -> None:
-    info = msgs.CameraInfo(d=tuple(float(i) for i in range(1000)))
-    lines = msg_text.message_lines(info)
-    d = next(line for line in lines if line.startswith("d: "))
-    assert d.startswith("d: [0.0, 1.0, 2.0,")
-    assert any(line.endswith(f"... {1000 - msg_text.MAX_ITEMS} more]") for line in lines)
-    assert max(map(len, lines)) <= 100
-    assert len(msg_text.message_lines(info, full=True)) > len(lines)
-
-
-def test_a_field_path_is_checked_against_the_type() -> None:
-    path = msg_text.field_path(msgs.Odometry, "pose.pose.position.x")
-    odom = msgs.Odometry(pose=msgs.PoseWithCovariance(pose=msgs.Pose(position=msgs.Point(x=1.5))))
-    assert msg_text.path_lines(path, odom) == ["pose.pose.position.x: 1.5"]
-    with pytest.raises(msg_text.FieldPathError, match="its fields: pose, covariance"):
-        msg_text.field_path(msgs.Odometry, "pose.position")
-    with pytest.raises(msg_text.FieldPathError, match="single value"):
-        msg_text.field_path(msgs.Odometry, "child_frame_id.x")

@@ -1,0 +1,99 @@
+"""node/kernel_sandbox: the bubblewrap command line, run for real on a shell script: who it
+runs as, what it sees, where it may write, what is hidden, and the run's limits. (The attacks
+on it, from a mission: tests/redteam/test_kernel_sandbox.py.)"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from usar_replay.node.kernel_sandbox import (
+    SANDBOX_UID,
+    KernelSandbox,
+    SandboxLimits,
+    bwrap_available,
+    sandbox_argv,
+    signal_of_exit,
+)
+
+SCRIPT = """
+id -u
+hostname
+cat {ro}/visible.txt
+cat {ro}/secret.txt; echo "secret:$?"
+ls {ro}/grader | wc -l
+echo x > {ro}/new.txt 2>/dev/null; echo "ro-write:$?"
+echo x > {outside}/new.txt 2>/dev/null; echo "outside-write:$?"
+echo kept > {work}/out.txt; echo "work-write:$?"
+echo "env:$MINE:${{HOME:-unset}}"
+"""
+
+
+def test_signal_of_exit() -> None:
+    assert signal_of_exit(None) is None
+    assert signal_of_exit(-int(signal.SIGKILL)) == signal.SIGKILL  # bwrap itself killed
+    assert signal_of_exit(128 + int(signal.SIGXCPU)) == signal.SIGXCPU  # the process inside
+    assert signal_of_exit(0) is None and signal_of_exit(1) is None and signal_of_exit(200) is None
+
+
+def test_limits_become_rlimits() -> None:
+    limits = SandboxLimits(memory_mb=100, cpu_s=7, file_mb=2, open_files=64, processes=0)
+    with KernelSandbox(limits) as jail:
+        assert jail.cgroup is None
+        assert jail.rlimits() == {
+            "AS": 100 * 1024 * 1024,
+            "CPU": 7,
+            "FSIZE": 2 * 1024 * 1024,
+            "NOFILE": 64,
+            "NPROC": 0,  # 0: leave it: with no pids cgroup and processes=0 there is no limit
+            "CORE": 0,
+        }
+
+
+@pytest.fixture
+def folders(tmp_path: Path) -> dict[str, Path]:
+    ro, work, outside = tmp_path / "ro", tmp_path / "work", tmp_path / "outside"
+    for folder in (ro, ro / "grader", work, outside):
+        folder.mkdir()
+    (ro / "visible.txt").write_text("the mission's file\n", encoding="utf-8")
+    (ro / "secret.txt").write_text("the grader's world\n", encoding="utf-8")
+    (ro / "grader" / "key").write_text("k", encoding="utf-8")
+    return {"ro": ro, "work": work, "outside": outside}
+
+
+def test_a_jailed_script_sees_and_writes_only_what_it_is_given(folders: dict[str, Path]) -> None:
+    ok, why = bwrap_available()
+    if not ok:
+        pytest.skip(why)
+    ro, work = folders["ro"], folders["work"]
+    script = SCRIPT.format(ro=ro, work=work, outside=folders["outside"])
+    argv = sandbox_argv(
+        ["/bin/sh", "-c", script],
+        ro_binds=[str(ro)],
+        work_dir=str(work),
+        env={"MINE": "yes", "PATH": "/usr/bin:/bin"},
+        hidden=[str(ro / "secret.txt"), str(ro / "grader"), str(folders["outside"])],
+    )
+    assert argv[-3:] == ["/bin/sh", "-c", script] and argv[-4] == "--"
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == str(SANDBOX_UID) and lines[1] == "mission"
+    assert lines[2] == "the mission's file"
+    assert lines[3] in ("secret:0", "secret:1")  # /dev/null over it: empty, or refused
+    assert "the grader's world" not in done.stdout
+    assert lines[4].strip() == "0"  # an empty folder over the grader's
+    assert lines[5] != "ro-write:0" and lines[6] != "outside-write:0"
+    assert lines[7] == "work-write:0" and (work / "out.txt").read_text() == "kept\n"
+    assert lines[8] == "env:yes:unset"  # only the environment given
+    assert not (ro / "new.txt").exists() and not (folders["outside"] / "new.txt").exists()
+
+
+def test_a_bad_network_is_refused(folders: dict[str, Path]) -> None:
+    if not bwrap_available()[0]:
+        pytest.skip("no bwrap here")
+    with pytest.raises(ValueError, match="network='host'"):
+        sandbox_argv(["true"], ro_binds=[], work_dir=str(folders["work"]), env={}, network="host")  # type: ignore[arg-type]

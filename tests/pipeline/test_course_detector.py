@@ -1,0 +1,108 @@
+"""pipeline/course_detector: the course's detector on the recorder's side, fed real encoded
+frames of an ArUco marker (drawn with OpenCV) tick by tick."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.settings import DetectorParams
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.sim.camera import encode_image
+from usar_replay.world.assignment import ROS2_FINAL, USAR, Assignment
+
+INFO = msgs.CameraInfo(
+    height=480,
+    width=640,
+    distortion_model="plumb_bob",
+    d=(0.0,) * 5,
+    k=(500.0, 0.0, 320.0, 0.0, 500.0, 240.0, 0.0, 0.0, 1.0),
+    r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+    p=(500.0, 0.0, 320.0, 0.0, 0.0, 500.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0),
+)
+
+
+def _frame(marker_id: int | None) -> bytes:
+    canvas = np.full((480, 640, 3), 255, np.uint8)
+    if marker_id is not None:
+        dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+        tile = cv2.aruco.generateImageMarker(dictionary, marker_id, 120)
+        canvas[180:300, 260:380] = cv2.cvtColor(tile, cv2.COLOR_GRAY2BGR)
+    return cdr.encode(msgs.CompressedImage(format="png", data=encode_image(canvas)))
+
+
+def _tick(
+    asg: Assignment, marker_id: int | None, *, info: bool = True
+) -> list[tuple[str, str, bytes]]:
+    image_topic, info_topic = asg.image_topic, asg.camera_info_topic
+    odom = ("/x/odom", msgs.Odometry.__msgtype__, cdr.encode(msgs.Odometry()))
+    items = [(image_topic, msgs.CompressedImage.__msgtype__, _frame(marker_id)), odom]
+    if info:
+        items.insert(0, (info_topic, msgs.CameraInfo.__msgtype__, cdr.encode(INFO)))
+    return items
+
+
+def test_the_inputs_a_mission_gets() -> None:
+    assert mission_inputs(USAR, True)[-1] == contract.FIDUCIALS
+    assert contract.FIDUCIALS not in mission_inputs(USAR, False)
+    assert mission_inputs(ROS2_FINAL, True)[-1] == contract.ARUCO_MARKERS
+
+
+def test_detections_come_right_after_the_frame() -> None:
+    det = CourseDetector.for_run(DetectorParams(), USAR)
+    assert det is not None
+    assert det.add_detections(_tick(USAR, 7, info=False)) == _tick(USAR, 7, info=False)
+    out = det.add_detections(_tick(USAR, 7))
+    assert [w[0] for w in out] == [
+        contract.CAMERA_INFO,
+        contract.IMAGE,
+        contract.FIDUCIALS,
+        "/x/odom",
+    ]
+    found = cdr.decode(out[2][2], out[2][1])
+    assert isinstance(found, msgs.FiducialTransformArray)
+    assert [f.fiducial_id for f in found.transforms] == [7] and found.image_seq == 0
+    empty = det.add_detections(_tick(USAR, None))  # aruco_detect: a message per searched frame
+    assert cdr.decode(empty[2][2], empty[2][1]) == msgs.FiducialTransformArray(image_seq=1)
+
+
+def test_the_missions_switch_acts_from_the_next_frame() -> None:
+    det = CourseDetector(DetectorParams(), USAR)
+    det.note_outputs([(contract.ENABLE_DETECTIONS, msgs.Bool(data=False))])
+    assert det.add_detections(_tick(USAR, 7)) == _tick(USAR, 7)
+    det.note_outputs([(contract.ENABLE_DETECTIONS, msgs.Bool(data=True))])
+    assert len(det.add_detections(_tick(USAR, 7))) == 4
+
+
+def test_ros2_aruco_publishes_only_frames_with_a_marker_and_has_no_switch() -> None:
+    det = CourseDetector(DetectorParams(), ROS2_FINAL)
+    assert det.add_detections(_tick(ROS2_FINAL, None)) == _tick(ROS2_FINAL, None)
+    det.note_outputs([(contract.ENABLE_DETECTIONS, msgs.Bool(data=False))])
+    out = det.add_detections(_tick(ROS2_FINAL, 2))
+    assert out[2][0] == contract.ARUCO_MARKERS
+    markers = cdr.decode(out[2][2], out[2][1])
+    assert isinstance(markers, msgs.ArucoMarkers) and markers.marker_ids == (2,)
+
+
+def test_replay_puts_its_own_detections_in_place_of_the_recorded() -> None:
+    det = CourseDetector(DetectorParams(), USAR)
+    forged = (
+        contract.FIDUCIALS,
+        msgs.FiducialTransformArray.__msgtype__,
+        cdr.encode(
+            msgs.FiducialTransformArray(transforms=(msgs.FiducialTransform(fiducial_id=9),))
+        ),
+    )
+    tick = _tick(USAR, 7)
+    inputs = [*tick[:2], forged, tick[2]]
+    switch_off = [(contract.ENABLE_DETECTIONS, msgs.Bool.__msgtype__, cdr.encode(msgs.Bool()))]
+    out, recorded, redone = det.replay_tick(inputs, switch_off)
+    assert recorded == [forged] and len(redone) == 1 and redone[0] != forged
+    assert [w[0] for w in out] == [
+        contract.CAMERA_INFO,
+        contract.IMAGE,
+        contract.FIDUCIALS,
+        "/x/odom",
+    ]
+    assert not det.enabled  # the recorded switch, for the next frame

@@ -1,0 +1,32 @@
+"""ros1/debian: the Debian 12 packages a ROS 1 run needs, and the one line that names them."""
+
+from __future__ import annotations
+
+import pytest
+
+from usar_replay.ros1 import debian
+
+
+def test_missing_packages_are_named_in_one_apt_line() -> None:
+    line = debian.install_line(["catkin", "python3-rospy"])
+    assert line == "apt-get install -y --no-install-recommends catkin python3-rospy"
+    assert set(debian.APT_PACKAGES) >= {"catkin", "python3-rosmaster", "libtf2-ros-dev"}
+
+
+def test_every_package_has_a_reason_and_a_file_to_look_for() -> None:
+    assert set(debian._PROBES) == set(debian.APT_PACKAGES)
+    assert all(debian.APT_PACKAGES.values())
+    assert all(probe.startswith("/usr/") for probe in debian._PROBES.values())
+    assert debian.install_line([]) == "apt-get install -y --no-install-recommends "
+    assert debian.install_line().split()[4:] == list(debian.APT_PACKAGES)
+
+
+def test_check_names_exactly_what_is_missing() -> None:
+    gone = debian.missing()
+    assert set(gone) <= set(debian.APT_PACKAGES)
+    if not gone:
+        debian.check()  # all installed: no error
+        return
+    with pytest.raises(debian.MissingRos1) as caught:
+        debian.check()
+    assert str(caught.value).endswith(f"apt-get update && {debian.install_line(gone)}")
