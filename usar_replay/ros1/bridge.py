@@ -19,8 +19,9 @@ on socket FD; to the student's graph it is what the course's ``multiple_robots.l
 What the graph publishes on ``/tf``, ``/tf_static``, ``/explorer/cmd_vel``, ``/follower/cmd_vel``
 and ``/rosout`` goes back to the recorder as the mission's outputs of the tick it reacted to.
 
-Pacing: the graph paces the clock. One tick is: publish its messages, then ``/clock`` (so a
-node woken by the clock finds the tick's data already queued), then wait until the graph is
+Pacing: the graph paces the clock. One tick is: publish its messages, wait until the graph
+has taken them in (actionlib's publishers write from rospy's queue threads), then ``/clock`` (so
+a node woken by the clock finds the tick's data already there), then wait until the graph is
 idle (:mod:`.quiescence`; at most ``dt / rtf`` of wall time, a safety net), then hand back what
 arrived, sorted by (topic, node). ``/clock`` never runs ahead: the next tick starts only after
 the recorder has the outputs. It starts only once the graph is connected and idle
