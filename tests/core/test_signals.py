@@ -15,6 +15,11 @@ from usar_replay.core.signals import HANDLED, Terminated, exit_code, handled
 @pytest.fixture(autouse=True)
 def _restore_handlers() -> Iterator[None]:
     before = {s: signal.getsignal(s) for s in HANDLED}
+    # a test run started in the background (`&`, nohup) inherits ignored signals, which
+    # handled() rightly leaves ignored: these tests want them as a terminal delivers them
+    for s in HANDLED:
+        if before[s] is signal.SIG_IGN:
+            signal.signal(s, signal.default_int_handler if s == signal.SIGINT else signal.SIG_DFL)
     yield
     for s, h in before.items():
         signal.signal(s, h)
