@@ -10,7 +10,9 @@ and this module's ``one_room``) import the same way from every folder.
 from __future__ import annotations
 
 import math
+import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -52,3 +54,17 @@ def room_log(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, RecordResu
     path = tmp_path_factory.mktemp("room") / "room.mcap"
     result = record(one_room(), path, RunSettings())
     return path, result
+
+
+@pytest.fixture(scope="module")
+def module_build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """A ROS 1 build cache of the test module's own (``XDG_CACHE_HOME``): its packages are built
+    once and its variants reuse them, and no other module's or user's cache is touched."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    home = tmp_path_factory.mktemp("cache")
+    os.environ["XDG_CACHE_HOME"] = str(home)
+    yield home
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before

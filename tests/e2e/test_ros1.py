@@ -8,9 +8,7 @@ world's 60/60 is slow.
 
 from __future__ import annotations
 
-import os
 import shutil
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -29,15 +27,8 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_cour
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+def _build_cache(module_build_cache: Path) -> None:
     """One build cache for this module: the example is built once, its variants reuse it."""
-    before = os.environ.get("XDG_CACHE_HOME")
-    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))
-    yield
-    if before is None:
-        del os.environ["XDG_CACHE_HOME"]
-    else:
-        os.environ["XDG_CACHE_HOME"] = before
 
 
 def test_debian_ros1_is_installed() -> None:

@@ -8,9 +8,7 @@ Real catkin builds of a one-file C++ node (Debian 12's ROS 1 and bubblewrap: CI 
 
 from __future__ import annotations
 
-import os
 import re
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -50,14 +48,8 @@ target_link_libraries(plain_node ${{catkin_LIBRARIES}})
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    before = os.environ.get("XDG_CACHE_HOME")
-    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))
-    yield
-    if before is None:
-        del os.environ["XDG_CACHE_HOME"]
-    else:
-        os.environ["XDG_CACHE_HOME"] = before
+def _cache(module_build_cache: Path) -> None:
+    """One build cache for this module (tests/conftest.py)."""
 
 
 def plain(folder: Path, components: str) -> Path:
