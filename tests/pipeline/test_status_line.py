@@ -24,3 +24,14 @@ def test_one_node_shows_its_line_without_a_name_and_only_the_first_line() -> Non
     lines.note(msgs.Log(name="explorer", msg=""))
     assert lines.status() == ""
     assert lines.last == {"explorer": ""}  # "/explorer" and "explorer" are one node
+
+
+def test_per_node_keeps_each_nodes_last_line_in_first_logged_order() -> None:
+    lines = NodeLines()
+    lines.note(msgs.Log(name="/follower", msg="follower: waiting"))
+    lines.note(msgs.Log(name="/explorer", msg="explorer: at target_1"))
+    lines.note(msgs.Log(name="/follower", msg="follower: to marker 0"))
+    assert lines.per_node() == (
+        ("follower", "follower: to marker 0"),
+        ("explorer", "explorer: at target_1"),
+    )

@@ -95,6 +95,8 @@ class Progress:
     markers_total: int
     frames: int
     last_log: str
+    node_lines: tuple[tuple[str, str], ...] = ()
+    """(node, its last ``/rosout`` line) per node, in the order the nodes first logged."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -493,7 +495,14 @@ def _take_outputs(
 def _progress(run: _Run, t: int, scenario: Scenario) -> Progress:
     """The status line's facts; markers as the rubric counts them (any mission's)."""
     found = len(run.live.found_markers()) if run.live is not None else len(run.markers)
-    return Progress((t - run.t0) / 1e9, found, len(scenario.markers), run.frames, run.last_log)
+    return Progress(
+        (t - run.t0) / 1e9,
+        found,
+        len(scenario.markers),
+        run.frames,
+        run.last_log,
+        run.node_lines.per_node(),
+    )
 
 
 def _close_run(writer: bag.BagWriter, run: _Run) -> None:

@@ -4,7 +4,9 @@ Why not simply the last ``/rosout`` line: a node that waits says so again and ag
 follower's throttled "waiting for the explorer's markers" every second), and each repeat hid
 the other node's progress for the whole search. So a line that only repeats its node's
 previous line does not take the status line over: it shows the most recent *new* line of any
-node, prefixed with the node's name once more than one node has logged.
+node, prefixed with the node's name once more than one node has logged. A terminal shows more:
+one line per node under the status line (:meth:`NodeLines.per_node`,
+:mod:`usar_replay.cli.status_display`), so each node's progress stays in view.
 """
 
 from __future__ import annotations
@@ -31,6 +33,10 @@ class NodeLines:
         if self.last.get(node) != text:
             self.shown = (node, text)
         self.last[node] = text
+
+    def per_node(self) -> tuple[tuple[str, str], ...]:
+        """(node, its last line) for every node that logged, in the order they first did."""
+        return tuple(self.last.items())
 
     def status(self) -> str:
         node, text = self.shown

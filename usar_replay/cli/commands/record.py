@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_MISSION, EXIT_OK
+from usar_replay.cli.status_display import StatusDisplay
 from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
-from usar_replay.core.safe_text import safe_line
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -64,34 +64,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.set_defaults(func=run)
 
 
-class _StatusLine:
-    """One self-rewriting progress line on stderr (a plain line every 30 sim-s when not a tty)."""
-
-    def __init__(self) -> None:
-        import shutil
-
-        self.tty = sys.stderr.isatty()
-        self.width = min(shutil.get_terminal_size((100, 24)).columns, 100) - 1
-        self.last_print = -1e9
-
-    def __call__(self, p: Progress) -> None:
-        text = (
-            f"sim {p.sim_time_s:7.1f} s | markers {p.markers_found}/{p.markers_total} | "
-            f"frames {p.frames} | {safe_line(p.last_log)}"
-        )[: self.width]
-        if self.tty:
-            if p.sim_time_s - self.last_print >= 0.5:
-                print("\r" + text.ljust(self.width), end="", file=sys.stderr, flush=True)
-                self.last_print = p.sim_time_s
-        elif p.sim_time_s - self.last_print >= 30.0:
-            print(text, file=sys.stderr, flush=True)
-            self.last_print = p.sim_time_s
-
-    def close(self) -> None:
-        if self.tty:
-            print(file=sys.stderr)
-
-
 def run(args: argparse.Namespace) -> int:
     from usar_replay.core.settings import RunSettings
     from usar_replay.pipeline.record import default_output, print_summary, record
@@ -108,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         ),
     )
     settings = options.run_settings(args, base)
-    status = _StatusLine()
+    status = StatusDisplay()
     before = options.identity(out)
     try:
         progress = None if args.quiet else status
