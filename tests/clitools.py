@@ -8,15 +8,18 @@ import sys
 from pathlib import Path
 
 
-def usar(*args: str, cwd: str | os.PathLike[str] | None = None) -> subprocess.CompletedProcess[str]:
+def usar(
+    *args: str, cwd: str | os.PathLike[str] | None = None, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     """``usar ARGS...`` in a fresh interpreter (what a shell user sees, tracebacks included),
-    in ``cwd`` when given (the package must then be importable from the environment)."""
-    env = None
+    in ``cwd`` when given (the package must then be importable from the environment), with
+    ``env`` as its environment when given."""
     if cwd is not None:  # the tests may import the package from the checkout, not an install
         root = str(Path(__file__).resolve().parents[1])
+        base = env if env is not None else dict(os.environ)
         env = {
-            **os.environ,
-            "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH", "")) if p),
+            **base,
+            "PYTHONPATH": os.pathsep.join(p for p in (root, base.get("PYTHONPATH", "")) if p),
         }
     return subprocess.run(
         [sys.executable, "-m", "usar_replay.cli", *args],
@@ -26,6 +29,11 @@ def usar(*args: str, cwd: str | os.PathLike[str] | None = None) -> subprocess.Co
         cwd=cwd,
         env=env,
     )
+
+
+def no_display() -> dict[str, str]:
+    """The environment without a display: ``usar view`` then saves or says how to open."""
+    return {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
 
 
 def one_error_line(out: subprocess.CompletedProcess[str], code: int, *needles: str) -> None:

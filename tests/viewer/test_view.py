@@ -8,7 +8,6 @@ window or blocks: views go to files, the web server test runs in a subprocess wi
 from __future__ import annotations
 
 import math
-import os
 import re
 import resource
 import signal
@@ -25,7 +24,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 import rerun as rr
-from clitools import default_signals, one_error_line, usar
+from clitools import default_signals, no_display, one_error_line, usar
 
 from usar_replay.cli.main import main
 from usar_replay.core import msgs
@@ -361,21 +360,6 @@ def _flat(batch: pa.RecordBatch, suffix: str) -> list[str]:
 # --- the command ---------------------------------------------------------------------------------
 
 
-def _usar(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-        env=env,
-    )
-
-
-def _no_display() -> dict[str, str]:
-    return {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-
-
 def test_cli_save_prints_the_command_that_opens_it(
     room_log: tuple[Path, RecordResult], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -394,7 +378,7 @@ def test_cli_without_display_writes_next_to_the_log(
 ) -> None:
     log = tmp_path / "copy.mcap"
     log.write_bytes(room_log[0].read_bytes())
-    done = _usar("view", str(log), env=_no_display())
+    done = usar("view", str(log), env=no_display())
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "copy.rrd").exists()
     assert done.stdout.strip().splitlines()[-1].endswith(str(tmp_path / "copy.rrd"))
@@ -407,7 +391,7 @@ def test_cli_truncated_log_writes_what_it_read_and_exits_3(
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(data[: len(data) * 6 // 10])
     out = tmp_path / "cut.rrd"
-    done = _usar("view", str(cut), "--save", str(out), env=_no_display())
+    done = usar("view", str(cut), "--save", str(out), env=no_display())
     assert done.returncode == 3
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"usar: {cut}: the log is incomplete")
@@ -434,7 +418,7 @@ def test_cli_web_serves_until_ctrl_c(room_log: tuple[Path, RecordResult]) -> Non
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=_no_display(),
+        env=no_display(),
     )
     try:
         assert proc.stdout is not None
@@ -535,8 +519,8 @@ def test_cli_unusable_display_falls_back_to_a_file(
         pytest.skip("display :99 exists here")
     log = tmp_path / "shown.mcap"
     log.write_bytes(room_log[0].read_bytes())
-    env = {**_no_display(), "DISPLAY": ":99"}
-    done = _usar("view", str(log), "--grpc-port", str(_free_port()), env=env)
+    env = {**no_display(), "DISPLAY": ":99"}
+    done = usar("view", str(log), "--grpc-port", str(_free_port()), env=env)
     assert done.returncode == 0, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("usar: the rerun viewer did not start")

@@ -4,35 +4,17 @@ view holds and the web server: tests/viewer/test_view.py."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from clitools import one_error_line, usar
+from clitools import no_display, one_error_line, usar
 
 from usar_replay.pipeline.record import RecordResult
 
 
-def _usar(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-        env=env,
-    )
-
-
-def _no_display() -> dict[str, str]:
-    return {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-
-
 def test_cli_missing_file_is_one_line_exit_2(tmp_path: Path) -> None:
     out = tmp_path / "never.rrd"
-    done = _usar("view", str(tmp_path / "missing.mcap"), "--save", str(out), env=_no_display())
+    done = usar("view", str(tmp_path / "missing.mcap"), "--save", str(out), env=no_display())
     assert done.returncode == 2  # a wrong path is a usage error
     assert done.stderr.count("\n") == 1 and "no such file" in done.stderr
     assert "Traceback" not in done.stderr
@@ -59,7 +41,7 @@ def test_cli_default_output_next_to_the_log_is_not_replaced(
     log = tmp_path / "run.mcap"
     log.write_bytes(room_log[0].read_bytes())
     (tmp_path / "run.rrd").write_bytes(b"kept")
-    done = _usar("view", str(log), env=_no_display())
+    done = usar("view", str(log), env=no_display())
     one_error_line(done, 2, "run.rrd", "exists", "--overwrite")
     assert (tmp_path / "run.rrd").read_bytes() == b"kept"
 
