@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 from clitools import usar
-from conftest import one_room
+from example_worlds import quick_room
 
 from usar_replay.core import msgs
 from usar_replay.grading.htmlreport import collect
@@ -32,12 +32,13 @@ PACKAGE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_two_
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Path, str]]:
-    """The two-node package recorded on the one-room world: (log, what `usar record` printed)."""
+    """The two-node package recorded on the quick one-room world: (log, what `usar record`
+    printed)."""
     tmp = tmp_path_factory.mktemp("two_nodes")
     before = os.environ.get("XDG_CACHE_HOME")
     os.environ["XDG_CACHE_HOME"] = str(tmp / "cache")
     world = tmp / "room.toml"
-    save(one_room(), world)
+    save(quick_room(), world)
     out = tmp / "two.mcap"
     try:
         done = usar("record", "--scenario", str(world), "--ros1", str(PACKAGE), "--out", str(out))

@@ -49,10 +49,11 @@ def example_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_an_unchanged_package_replays_bit_for_bit(example_log: Path) -> None:
-    done = _usar("replay", str(example_log))
+    done = _usar("replay", "--grade", str(example_log))
     assert done.returncode == 0, done.stdout + done.stderr
     assert "bit for bit" in done.stdout
     assert "DIFFERENT" not in done.stdout
+    assert "Total: 60 / 60 points: PASS" in done.stdout  # graded again from the replay
 
 
 def test_a_changed_package_shows_the_first_difference_and_the_rubric_delta(

@@ -100,3 +100,17 @@ def test_wire_items_are_cdr_or_packed_ros1() -> None:
     assert wire_item("/cmd", twist) == ("/cmd", twist.__msgtype__, cdr.encode(twist))
     own = ros1msg.Ros1Message(msgtype="p/T", definition="int32 a\n", data=b"\0\0\0\0")
     assert wire_item("/t", own) == ("/t", *ros1msg.pack(own))
+
+
+def test_the_master_is_asked_only_when_its_call_log_grew(tmp_path: Any) -> None:
+    log = tmp_path / "master_api.log"
+    log.write_text("registerPublisher('/explorer', '/stored', ...)\n", encoding="utf-8")
+    rec = TopicRecorder(BRIDGE, "http://127.0.0.1:1/", log)  # nothing listens on port 1
+    with pytest.raises(OSError):
+        rec.discover()  # a first ask always reaches the master
+    rec._log_seen = rec._log_state()  # as after an answered ask
+    assert rec.discover() == []  # the log did not change: the master is not asked
+    with log.open("a", encoding="utf-8") as f:
+        f.write("registerPublisher('/explorer', '/count', ...)\n")
+    with pytest.raises(OSError):
+        rec.discover()  # a call reached the master since: asked again

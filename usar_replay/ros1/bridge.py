@@ -203,7 +203,8 @@ class Bridge:
         self.move_base: dict[str, Any] = {}
         self.last_t: int | None = None
         self.robots = [r for r in contract.ROBOTS if contract.odom(r) in setup["sim_topics"]]
-        self.topics = TopicRecorder(NODE, self.uri)  # the graph's own topics, recorded
+        # the graph's own topics, recorded; asked of the master when its call log grew
+        self.topics = TopicRecorder(NODE, self.uri, run / run_files.MASTER_LOG)
         self.sim_topics: list[str] = list(setup["sim_topics"])
         self.quiet: Quiescence | None = None
         self.capped = 0

@@ -2,10 +2,15 @@
 
 Why: a package's own topics (the explorer's stored markers on ``/explorer/marker_poses``, a
 debug counter) are part of what it did; a log without them cannot show the stored markers or
-let ``usar echo`` read them. Each tick the bridge asks the master which topics exist
-(``getSystemState``) and subscribes with ``rospy.AnyMsg`` (raw bytes and the connection
-header: type, ``message_definition``, ``callerid``) to every topic a node of the graph
-publishes, leaving out usar's own: any topic the bridge's node publishes or subscribes to
+let ``usar echo`` read them. The bridge asks the master which topics exist
+(``getSystemState``) before the first ``/clock`` and then in each tick in which the master's
+call log (``--master-logger-level debug``: every API call is a line, written before the call
+is answered) has grown since the last ask: a topic is advertised by a call to the master, so a
+tick without one has nothing new, and the hot path costs one ``stat`` instead of a round trip
+through the master (a Python process on the graph's CPU). It subscribes with
+``rospy.AnyMsg`` (raw bytes and the connection header: type, ``message_definition``,
+``callerid``) to every topic a node of the graph publishes, leaving out usar's own: any
+topic the bridge's node publishes or subscribes to
 (the simulator's, ``/clock``, ``/tf``, ``cmd_vel``, ``/rosout``, the move_base action topics),
 and ``/rosout_agg``. A latched topic's last message arrives on connecting.
 
@@ -18,9 +23,11 @@ kept within one node's topic, so the order does not depend on rospy's threads.
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 import xmlrpc.client
+from pathlib import Path
 from typing import Any
 
 from usar_replay.core import cdr, msgs, ros1msg
@@ -41,9 +48,12 @@ def wire_item(topic: str, value: msgs.Message) -> tuple[str, str, bytes]:
 class TopicRecorder:
     """The bridge's subscriptions to the graph's own topics (see the module doc)."""
 
-    def __init__(self, node: str, master_uri: str) -> None:
+    def __init__(self, node: str, master_uri: str, master_log: Path | None = None) -> None:
         self.node = node
         self._master = xmlrpc.client.ServerProxy(master_uri)
+        self._log = master_log
+        """The master's call log (None: ask the master every time)."""
+        self._log_seen: tuple[int, int] | None = None
         self._lock = threading.Lock()
         self._subs: dict[str, Any] = {}
         self._arrived: list[tuple[str, str, int, msgs.Message]] = []
@@ -55,14 +65,27 @@ class TopicRecorder:
         """The topics subscribed so far, sorted."""
         return sorted(self._subs)
 
+    def _log_state(self) -> tuple[int, int] | None:
+        if self._log is None:
+            return None
+        try:
+            st = os.stat(self._log)
+        except OSError:
+            return None
+        return st.st_ino, st.st_size
+
     def discover(self) -> list[str]:
         """Subscribe to every topic the graph publishes that is not usar's own; the topics
-        subscribed now (their connections are made by rospy's threads: :meth:`wait_connected`)."""
+        subscribed now (their connections are made by rospy's threads: :meth:`wait_connected`).
+        Asks the master only when its call log changed since the last ask (module doc)."""
         import rospy
 
         new: list[str] = []
-
+        before = self._log_state()
+        if before is not None and before == self._log_seen:
+            return new  # no call reached the master since: no topic was advertised
         reply: Any = self._master.getSystemState(self.node)
+        self._log_seen = self._log_state()  # our own call's line included
         state = reply[2]
         publishers, subscribers = state[0], state[1]
         ours = {t for t, names in (*publishers, *subscribers) if self.node in names}
