@@ -9,7 +9,10 @@ from pathlib import Path
 
 
 def usar(
-    *args: str, cwd: str | os.PathLike[str] | None = None, env: dict[str, str] | None = None
+    *args: str,
+    cwd: str | os.PathLike[str] | None = None,
+    env: dict[str, str] | None = None,
+    timeout: float | None = None,
 ) -> subprocess.CompletedProcess[str]:
     """``usar ARGS...`` in a fresh interpreter (what a shell user sees, tracebacks included),
     in ``cwd`` when given (the package must then be importable from the environment), with
@@ -28,6 +31,7 @@ def usar(
         check=False,
         cwd=cwd,
         env=env,
+        timeout=timeout,
     )
 
 

@@ -230,23 +230,29 @@ time.sleep(30)
 """
 
 
+def _python_node_package(tmp_path: Path, script: str) -> Path:
+    """A catkin package whose one node (launch/kill.launch) is the Python ``script``."""
+    pkg = tmp_path / "bridge_killer"
+    (pkg / "scripts").mkdir(parents=True)
+    (pkg / "CMakeLists.txt").write_text(_CMAKE)
+    (pkg / "package.xml").write_text(_PACKAGE_XML)
+    node = pkg / "scripts" / "kill_bridge.py"
+    node.write_text(script)
+    node.chmod(0o755)
+    (pkg / "launch").mkdir()
+    (pkg / "launch" / "kill.launch").write_text(
+        '<launch><node pkg="bridge_killer" type="kill_bridge.py" name="killer"/></launch>\n'
+    )
+    return pkg
+
+
 def test_a_ros1_node_that_kills_the_bridge_is_crashed_by_signal(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Point 11, ROS 1: a node that SIGKILLs the bridge gets ``crashed (signal 9)``."""
     assert debian.missing() == [], debian.install_line(debian.missing())
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    pkg = tmp_path / "bridge_killer"
-    (pkg / "scripts").mkdir(parents=True)
-    (pkg / "CMakeLists.txt").write_text(_CMAKE)
-    (pkg / "package.xml").write_text(_PACKAGE_XML)
-    node = pkg / "scripts" / "kill_bridge.py"
-    node.write_text(_NODE)
-    node.chmod(0o755)
-    (pkg / "launch").mkdir()
-    (pkg / "launch" / "kill.launch").write_text(
-        '<launch><node pkg="bridge_killer" type="kill_bridge.py" name="killer"/></launch>\n'
-    )
+    pkg = _python_node_package(tmp_path, _NODE)
     world = _world(tmp_path / "w.toml")
     out = tmp_path / "killed.mcap"
     args = ["record", "--ros1", str(pkg), "--launch", "kill.launch", "--scenario", str(world)]
@@ -255,6 +261,61 @@ def test_a_ros1_node_that_kills_the_bridge_is_crashed_by_signal(
     run = open_run(out)
     assert run.outcome == "crashed", (run.outcome, run.outcome_reason)
     assert "signal 9" in run.outcome_reason, run.outcome_reason
+    shutil.rmtree(pkg)
+
+
+_THIEF = """#!/usr/bin/env python3
+# issue #26 point 5, ROS 1: take the bridge's socket to the recorder (pidfd_getfd), stop the
+# bridge, then write well-formed frames to the recorder and never read what it sends
+import ctypes, os, signal, struct, sys, time
+import rospy
+from rosgraph_msgs.msg import Clock
+rospy.init_node("killer")
+rospy.wait_for_message("/clock", Clock)  # the run has started: the recorder writes ticks now
+rospy.sleep(1.0)
+me = os.getpid()
+for pid in os.listdir("/proc"):
+    if not pid.isdigit() or int(pid) == me:
+        continue
+    try:
+        argv = open(f"/proc/{pid}/cmdline", "rb").read().split(b"\\0")
+    except OSError:
+        continue
+    if argv[1:3] == [b"-m", b"usar_replay.ros1.bridge"]:  # the bridge, not bwrap
+        fd_number = int(argv[3])
+        pidfd = os.pidfd_open(int(pid))
+        libc = ctypes.CDLL(None, use_errno=True)
+        sock = libc.syscall(438, pidfd, fd_number, 0)  # pidfd_getfd
+        if sock < 0:
+            sys.exit(f"pidfd_getfd: errno {ctypes.get_errno()}")
+        os.kill(int(pid), signal.SIGSTOP)
+        frame = b"O" + struct.pack("<qI", 0, 0) + b"\\x00"
+        for _ in range(100_000):
+            os.write(sock, struct.pack("!i", len(frame)) + frame)
+time.sleep(60)
+"""
+
+
+def test_a_ros1_node_that_steals_the_bridges_socket_is_a_verdict_in_a_closed_log(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Point 5, ROS 1: a node takes the bridge's socket to the recorder with ``pidfd_getfd``,
+    stops the bridge and floods the recorder with frames, never reading. Every write the
+    recorder makes has a deadline, so the run ends with a verdict (no hang) in a closed log."""
+    assert debian.missing() == [], debian.install_line(debian.missing())
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    pkg = _python_node_package(tmp_path, _THIEF)
+    world = _world(tmp_path / "w.toml")
+    out = tmp_path / "stolen.mcap"
+    args = ["record", "--ros1", str(pkg), "--launch", "kill.launch", "--scenario", str(world)]
+    done = usar(*args, "--out", str(out), "--quiet", "--max-sim-time", "30", "--tick-timeout", "3",
+                timeout=240)  # fmt: skip
+    assert done.returncode == 4, done.stdout + done.stderr
+    run = open_run(out)
+    assert run.file_state == "complete"
+    # the recorder's write of the next tick to the stopped bridge ran into its deadline
+    assert run.outcome == "hung", (run.outcome, run.outcome_reason)
+    assert "did not read its input within 3 s" in run.outcome_reason
     shutil.rmtree(pkg)
 
 
