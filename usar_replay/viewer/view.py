@@ -456,25 +456,54 @@ def _log_problem(run: Run, decode: _Decoder) -> str:
 def _stream(
     rec: rr.RecordingStream, run: Run, report: GradeReport | None, grade_problem: str
 ) -> tuple[Scene, str]:
-    """Read the run once into a scene (images sent as they come), then send the scene."""
-    with rec:  # leaving the block flushes and finalises file sinks
-        rec.send_recording_name(run.path.stem)
-        scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
-        decode = _Decoder(scene.assignment)
-        for m in run.messages(decode=False):
-            scene.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
-            if scene.pending_image_bytes >= IMAGE_BATCH_BYTES:
-                send_images(rec, scene, scene.take_images())
-        scene.close()
-        problem = _log_problem(run, decode)
-        if problem:
-            scene.add_note(f"incomplete log: {problem}")
-        if report is not None:
-            scene.add_grade(report)
-        if grade_problem:
-            scene.add_note(grade_problem, "ERROR")
-        send_scene(rec, scene)
+    """Read the run once into a scene (images sent as they come), then send the scene.
+
+    The stream is flushed with a deadline before rerun's own (unbounded) flush on leaving
+    it: when a write failed (a full disk, a file size limit), rerun's file sink has stopped,
+    and a flush without a deadline waited for it forever (seen once in 15 runs). Then no
+    flush without a deadline runs, at exit either (:func:`rerun.unregister_shutdown`)."""
+    rec.__enter__()
+    flushed = False
+    try:
+        sent = _send_run(rec, run, report, grade_problem)
+        try:
+            rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
+        except Exception as err:  # rerun's error for a flush past its deadline
+            raise RuntimeError(f"rerun's writer did not finish: {_first_line(err)}") from err
+        flushed = True
+    finally:
+        if flushed:
+            rec.__exit__(None, None, None)  # finalises file sinks; nothing left to wait for
+        else:
+            rr.unregister_shutdown()
+    return sent
+
+
+def _send_run(
+    rec: rr.RecordingStream, run: Run, report: GradeReport | None, grade_problem: str
+) -> tuple[Scene, str]:
+    """:func:`_stream`'s sending: the run's messages, then the scene; (scene, log problem)."""
+    rec.send_recording_name(run.path.stem)
+    scene = Scene(run.scenario, marker_size=run.settings.detector.marker_size)
+    decode = _Decoder(scene.assignment)
+    for m in run.messages(decode=False):
+        scene.feed(m.topic, decode(m.topic, m.msgtype, m.data, m.log_time_ns), m.log_time_ns)
+        if scene.pending_image_bytes >= IMAGE_BATCH_BYTES:
+            send_images(rec, scene, scene.take_images())
+    scene.close()
+    problem = _log_problem(run, decode)
+    if problem:
+        scene.add_note(f"incomplete log: {problem}")
+    if report is not None:
+        scene.add_grade(report)
+    if grade_problem:
+        scene.add_note(grade_problem, "ERROR")
+    send_scene(rec, scene)
     return scene, problem
+
+
+FLUSH_TIMEOUT_S = 120.0
+"""Wall seconds the view's last flush may take (a safety net: it takes well under a second)."""
 
 
 def _write_failed(rrd: Path, part: Path, err: BaseException) -> UsageError:
