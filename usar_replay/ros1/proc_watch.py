@@ -44,6 +44,8 @@ class ProcWatch:
     """pid -> its command name, every package process seen so far."""
     codes: dict[int, int] = field(default_factory=dict)
     """pid -> exit status (waitpid's encoding) of the ones seen as zombies."""
+    exited: set[int] = field(default_factory=set)
+    """The ones seen exited (zombies or gone) by :meth:`ended`."""
 
     def package(self) -> list[int]:
         """The package's processes now (the launcher's descendants; with roslaunch, not
@@ -67,11 +69,13 @@ class ProcWatch:
         for pid in self.seen:
             st = _stat(pid)
             if st is None:
+                self.exited.add(pid)
                 continue
             state, code = st
             if state in ("Z", "X"):
                 if code is not None:
                     self.codes.setdefault(pid, code)
+                self.exited.add(pid)
                 continue
             done = False
         return done
