@@ -74,6 +74,8 @@ NODE = "/usar_sim"
 _LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC)
 _DIED = re.compile(r"has died \[pid \d+, exit code (-?\d+)")
 """roslaunch's report of a node's death (exit code 0 is a clean end)."""
+CONSOLE_FORMAT = "[${severity}] [${node}]: ${message}"
+"""rosconsole's and rospy's screen format in the graph (``ROSCONSOLE_FORMAT``): no time."""
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07")
 
 
@@ -190,6 +192,9 @@ class Bridge:
             ROS_HOME=str(run / "ros_home"),
             ROS_LOG_DIR=str(run / "ros_log"),
             PYTHONUNBUFFERED="1",
+            # the nodes' screen lines without rosconsole's ${time} (wall time, then sim time):
+            # their output, kept in the log, is the same on every recording (rospy reads it too)
+            ROSCONSOLE_FORMAT=CONSOLE_FORMAT,
         )
         os.environ.update(
             {k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")}
