@@ -25,10 +25,16 @@ a node woken by the clock finds the tick's data already there), then wait until 
 idle (:mod:`.quiescence`; at most ``dt / rtf`` of wall time, a safety net), then hand back what
 arrived, sorted by (topic, node). ``/clock`` never runs ahead: the next tick starts only after
 the recorder has the outputs. It starts only once the graph is connected and idle
-(:mod:`.graph_start`), and the run ends in the tick the package shut down, held until the
-process table shows it gone (:mod:`.proc_watch`); the recorder runs the graph on one CPU under
+(:mod:`.graph_start`). A node's shutdown lands in the tick it began: roscpp's
+``ros::shutdown`` plays out on wall time (a join of a thread that looks every 100 ms, then the
+unregistrations), so once a tick shows a sign of one (a main thread entering a wait without a
+timeout, a process exited, a connection closed and its node unregistered) that tick holds
+until the processes shutting down have exited and roslaunch collected them
+(:mod:`.shutdown_watch`); the run ends in that tick when the package as a whole ended, once the
+process table shows it gone (:mod:`.proc_watch`). The recorder runs the graph on one CPU under
 SCHED_RR (:mod:`.scheduling`). With these, two recordings of a package that does not read the
-wall clock are identical (docs/ros1.md, "Pacing").
+wall clock are identical, its end and the nodes' screen output included (docs/ros1.md,
+"Pacing").
 """
 
 from __future__ import annotations

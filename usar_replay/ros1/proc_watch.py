@@ -3,10 +3,11 @@
 Why: roslaunch notices that a node exited by polling every 0.1 s of wall time, so a run that
 ended when roslaunch said so ended up to a few ticks later on one recording than on another
 (the issue measured 9). The bridge asks the process table instead, right after the graph went
-idle in a tick: the package has ended in the tick in which its last node process is gone or a
-zombie (its parent, roslaunch, has not collected it yet). A zombie's exit status is in its
-``/proc/<pid>/stat`` (field 52), so a node that died with an error is seen as such without
-waiting for roslaunch's report.
+idle in a tick: a package process gone or a zombie (its parent, roslaunch, has not collected it
+yet) has exited. Which tick the end counts in is decided by :mod:`.shutdown_watch` (the tick
+the shutdown began, held until the processes are gone); the package has ended once every
+process seen here has exited. A zombie's exit status is in its ``/proc/<pid>/stat`` (field
+52), so a node that died with an error is seen as such without waiting for roslaunch's report.
 """
 
 from __future__ import annotations
