@@ -93,6 +93,8 @@ def test_a_process_that_does_not_exit_ends_the_hold_at_its_cap() -> None:
         assert held.wall_s >= 0.05
         longest = f"{held.wall_s * 1000:.0f} ms"
         assert watch.summary() == f"1 shutdown holds (longest {longest}, 1 capped)"
+        # a false sign costs one hold: its main thread's waits are no sign any more
+        assert watch.starting({busy.pid}) == set()
     finally:
         busy.kill()
         busy.wait()

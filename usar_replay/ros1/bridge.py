@@ -372,6 +372,8 @@ class Bridge:
             self._node_pids = node_pids(master, NODE, self._package_nodes)
             self._connected = quiet.connected
             self.shutdown.starting(quiet.untimed)
+            graph.watch.ended()  # processes that came and went before tick 1 are no sign
+            self._exited = set(graph.watch.exited)
         except RuntimeError as err:
             if "ended (exit" in str(err):
                 raise

@@ -19,7 +19,8 @@ checked by the bridge too, the master asked only in a tick in which a connection
 
 A false sign (a main thread that waits without a timeout for a thread of its own) costs one
 hold of at most :data:`HOLD_CAP_S` of wall time, once: only a main thread *entering* such a
-wait is a sign. Nothing here is sampled in a tick without a sign.
+wait is a sign, and a process that did not exit within a hold gives no such sign again.
+Nothing here is sampled in a tick without a sign.
 """
 
 from __future__ import annotations
@@ -98,11 +99,14 @@ class ShutdownWatch:
     _untimed: frozenset[int] = frozenset()
     holds: list[Hold] = field(default_factory=list)
     """Every hold so far (the bridge's log sums them up)."""
+    ignored: set[int] = field(default_factory=set)
+    """Processes held for once that did not exit within the cap: their main thread's waits
+    are no sign any more (a false sign costs one hold, not one per tick)."""
 
     def starting(self, untimed: Collection[int]) -> set[int]:
         """The processes whose main thread entered a wait without a timeout since the last
         call (``untimed``: :attr:`.quiescence.Quiescence.untimed` after this tick)."""
-        new = set(untimed) - self._untimed
+        new = set(untimed) - self._untimed - self.ignored
         self._untimed = frozenset(untimed)
         return new
 
@@ -114,6 +118,7 @@ class ShutdownWatch:
         wanted = tuple(sorted(pids))
         capped = not _wait(lambda: all(exited(p) for p in wanted), self.hold_cap_s, poll)
         done = tuple(p for p in wanted if exited(p))
+        self.ignored |= set(wanted) - set(done)
         if done and self.collected_by_launcher:
             capped |= not _wait(lambda: all(reaped(p) for p in done), self.reap_cap_s, poll)
         held = Hold(wanted, done, time.perf_counter() - start, capped)
