@@ -224,6 +224,7 @@ class Bridge:
         self.sim_topics: list[str] = list(setup["sim_topics"])
         self.quiet: Quiescence | None = None
         self.capped = 0
+        """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
         self.waited_s = 0.0
         """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
         self._master: Any = None
