@@ -56,8 +56,6 @@ def test_bytes_in_a_socket_of_the_graph_keep_it_busy() -> None:
         assert quiet.sockets_waiting() == already
 
 
-
-
 def test_a_main_thread_joining_a_thread_is_noted_as_in_an_untimed_wait() -> None:
     # ros::shutdown joins roscpp's threads so (:mod:`usar_replay.ros1.shutdown_watch`); a main
     # thread in timed naps is not
