@@ -56,3 +56,30 @@ def test_bytes_in_a_socket_of_the_graph_keep_it_busy() -> None:
         assert quiet.sockets_waiting() == already
 
 
+def test_a_main_thread_joining_a_thread_is_noted_as_in_an_untimed_wait() -> None:
+    # ros::shutdown joins roscpp's threads so (:mod:`usar_replay.ros1.shutdown_watch`); a main
+    # thread in timed naps is not
+    joining = start_child(
+        "import threading\nt = threading.Thread(target=threading.Event().wait)\nt.start()\nt.join()"
+    )
+    napping = start_child("import time\nwhile True: time.sleep(0.01)")
+    try:
+        quiet = Quiescence(own_tid=threading.get_native_id())
+        wait_for(lambda: len(quiet.refresh()) > 2, "the children")
+        package = [joining.pid, napping.pid]
+        quiet.refresh(package)
+
+        def noted() -> bool:
+            quiet.refresh(package)
+            quiet.threads()
+            return joining.pid in quiet.untimed
+
+        wait_for(noted, "the join")
+        assert napping.pid not in quiet.untimed
+        quiet.refresh([napping.pid])  # only the package's processes are looked at
+        quiet.threads()
+        assert joining.pid not in quiet.untimed
+    finally:
+        for c in (joining, napping):
+            c.kill()
+            c.wait()

@@ -25,10 +25,16 @@ a node woken by the clock finds the tick's data already there), then wait until 
 idle (:mod:`.quiescence`; at most ``dt / rtf`` of wall time, a safety net), then hand back what
 arrived, sorted by (topic, node). ``/clock`` never runs ahead: the next tick starts only after
 the recorder has the outputs. It starts only once the graph is connected and idle
-(:mod:`.graph_start`), and the run ends in the tick the package shut down, held until the
-process table shows it gone (:mod:`.proc_watch`); the recorder runs the graph on one CPU under
+(:mod:`.graph_start`). A node's shutdown lands in the tick it began: roscpp's
+``ros::shutdown`` plays out on wall time (a join of a thread that looks every 100 ms, then the
+unregistrations), so once a tick shows a sign of one (a main thread entering a wait without a
+timeout, a process exited, a connection closed and its node unregistered) that tick holds
+until the processes shutting down have exited and roslaunch collected them
+(:mod:`.shutdown_watch`); the run ends in that tick when the package as a whole ended, once the
+process table shows it gone (:mod:`.proc_watch`). The recorder runs the graph on one CPU under
 SCHED_RR (:mod:`.scheduling`). With these, two recordings of a package that does not read the
-wall clock are identical (docs/ros1.md, "Pacing").
+wall clock are identical, its end and the nodes' screen output included (docs/ros1.md,
+"Pacing").
 """
 
 from __future__ import annotations
@@ -63,6 +69,7 @@ from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_un
 from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
 from usar_replay.ros1.proc_watch import ProcWatch
 from usar_replay.ros1.quiescence import Quiescence
+from usar_replay.ros1.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
 
@@ -73,6 +80,8 @@ NODE = "/usar_sim"
 _LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC)
 _DIED = re.compile(r"has died \[pid \d+, exit code (-?\d+)")
 """roslaunch's report of a node's death (exit code 0 is a clean end)."""
+CONSOLE_FORMAT = "[${severity}] [${node}]: ${message}"
+"""rosconsole's and rospy's screen format in the graph (``ROSCONSOLE_FORMAT``): no time."""
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07")
 
 
@@ -137,6 +146,11 @@ class Graph:
                 return code, without_prefix(line.strip())
         return code, ""
 
+    def launcher_stopping(self) -> bool:
+        """roslaunch said it stops the launch (a required node died, or all of them did)."""
+        text = _tail(self.log_path, 40)
+        return "Initiating shutdown!" in text or "roslaunch will exit" in text
+
     def tail(self, lines: int = 40) -> str:
         """The nodes' last output lines (``[node] line``), then roslaunch's (terminal colours
         removed)."""
@@ -184,6 +198,9 @@ class Bridge:
             ROS_HOME=str(run / "ros_home"),
             ROS_LOG_DIR=str(run / "ros_log"),
             PYTHONUNBUFFERED="1",
+            # the nodes' screen lines without rosconsole's ${time} (wall time, then sim time):
+            # their output, kept in the log, is the same on every recording (rospy reads it too)
+            ROSCONSOLE_FORMAT=CONSOLE_FORMAT,
         )
         os.environ.update(
             {k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")}
@@ -208,13 +225,20 @@ class Bridge:
         self.sim_topics: list[str] = list(setup["sim_topics"])
         self.quiet: Quiescence | None = None
         self.capped = 0
+        """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
         self.waited_s = 0.0
         """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
         self._master: Any = None
         self._package_nodes: set[str] = set()
-        self._connected: frozenset[int] = frozenset()
         """The package's nodes registered when /clock started (to see their ros::shutdown)."""
-        """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
+        self._node_pids: dict[str, int] = {}
+        self._left: set[str] = set()
+        """Package nodes seen unregistered."""
+        self._exited: set[int] = set()
+        """Package processes seen exited by the end of the last tick."""
+        self._connected: frozenset[int] = frozenset()
+        self._cap: float | None = None
+        self.shutdown = ShutdownWatch(collected_by_launcher=bool(config.get("launch")))
 
     # -- start-up -------------------------------------------------------------------------------
 
@@ -347,6 +371,11 @@ class Bridge:
                 wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
             self._master = master
             self._package_nodes = registered_nodes(master, NODE)
+            self._node_pids = node_pids(master, NODE, self._package_nodes)
+            self._connected = quiet.connected
+            self.shutdown.starting(quiet.untimed)
+            graph.watch.ended()  # processes that came and went before tick 1 are no sign
+            self._exited = set(graph.watch.exited)
         except RuntimeError as err:
             if "ended (exit" in str(err):
                 raise
@@ -484,7 +513,7 @@ class Bridge:
         self.last_t = t_ns
         # the graph paces the clock: the tick ends when the graph is idle (:mod:`.quiescence`);
         # the wall cap (dt / rtf) is a safety net for a graph that never goes idle
-        cap = max(self.settle_s, dt / self.rtf) if self.rtf > 0 else None
+        cap = self._cap = max(self.settle_s, dt / self.rtf) if self.rtf > 0 else None
         # the tick's messages delivered and taken in before /clock: actionlib's publishers
         # (move_base's result, status, feedback) write from rospy's queue threads, so without
         # this wait a result could reach a node after it saw the new time, or before, as the
@@ -545,29 +574,59 @@ class Bridge:
                 return
 
     def _ended(self) -> tuple[int, str] | None:
-        """None while the package runs; (exit code, problem) in the tick its last process
-        exited, seen from the process table (:mod:`.proc_watch`), not roslaunch's polling."""
-        assert self.graph is not None
-        ended = self.graph.exit_status()
+        """None while the package runs; (exit code, problem) in the tick its shutdown began
+        (:mod:`.shutdown_watch`), held until the process table shows its processes gone
+        (:mod:`.proc_watch`), not when roslaunch's polling notices."""
+        graph, quiet = self.graph, self.quiet
+        assert graph is not None and quiet is not None
+        ended = graph.exit_status()
         if ended is not None:
             return ended
-        if not self.graph.watch.ended():
-            # a node's ros::shutdown closes its connections: ask the master (some ms) only in
-            # a tick in which a connection closed
-            assert self.quiet is not None
-            closed = self._connected - self.quiet.connected
-            self._connected = self.quiet.connected
-            nodes = self._package_nodes
-            if not closed or not nodes or registered_nodes(self._master, NODE) & nodes:
-                return None
-            # every node of the package unregistered in this tick (ros::shutdown): its
-            # processes take a wall-clock while to exit (roscpp joins threads that wake on
-            # 100 ms timeouts), so /clock holds until the process table shows them gone
+        watch = graph.watch
+        gone = watch.ended()
+        # signs of a shutdown in this tick, none of which costs a system call: a main thread
+        # that entered a wait without a timeout (roscpp's join at ros::shutdown), a package
+        # process that exited, a connection that closed (then the master is asked which nodes
+        # unregistered: some ms, only in such a tick)
+        shutting = self.shutdown.starting(quiet.untimed)
+        exits = watch.exited - self._exited
+        closed = self._connected - quiet.connected
+        if closed and self._package_nodes:
+            left = self._package_nodes - registered_nodes(self._master, NODE)
+            shutting |= {self._node_pids[n] for n in left - self._left if n in self._node_pids}
+            self._left |= left
+        if not (shutting or exits):
+            self._connected = quiet.connected
+            return None if not gone else self._exit_code()
+        # hold /clock until the shutdown has played out: the processes exited and roslaunch
+        # collected them (and acted: a required node's death stops the launch)
+        held = self.shutdown.hold(shutting | exits, poll=watch.ended)
+        print(
+            f"usar shutdown hold at {self.last_t or 0} ns: pids {list(held.pids)}, exited "
+            f"{list(held.exited)}, {held.wall_s * 1000:.0f} ms{' (capped)' if held.capped else ''}",
+            flush=True,
+        )
+        self._wait_idle(self._cap)
+        self.shutdown.starting(quiet.untimed)  # what the hold changed is this tick's
+        self._connected = quiet.connected
+        gone = watch.ended()
+        self._exited = set(watch.exited)
+        if not gone:
+            stopping = graph.launcher_stopping()
+            if not stopping and registered_nodes(self._master, NODE) & self._package_nodes:
+                return None  # a node ended, the package goes on
+            # the package as a whole ends (its nodes unregistered, or roslaunch stops it): the
+            # rest of its processes (rosout, the nodes roslaunch stops) exit on wall time
             deadline = time.monotonic() + 10.0
-            while not self.graph.watch.ended() and time.monotonic() < deadline:
-                if self.graph.exit_status() is not None:
+            while not watch.ended() and time.monotonic() < deadline:
+                if graph.exit_status() is not None:
                     break
                 time.sleep(0.002)
+        return self._exit_code()
+
+    def _exit_code(self) -> tuple[int, str]:
+        """The ended package's (exit code, problem)."""
+        assert self.graph is not None
         failures = self.graph.watch.failures()
         if failures:
             return 1, failures[0]
@@ -586,7 +645,7 @@ class Bridge:
         if self.quiet is not None:
             print(
                 f"usar pacing: {self.quiet.samples} samples, {self.capped} ticks capped, "
-                f"{self.waited_s:.1f} s waiting for the graph",
+                f"{self.waited_s:.1f} s waiting for the graph, {self.shutdown.summary()}",
                 flush=True,
             )
             self.quiet.close()

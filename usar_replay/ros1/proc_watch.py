@@ -3,10 +3,11 @@
 Why: roslaunch notices that a node exited by polling every 0.1 s of wall time, so a run that
 ended when roslaunch said so ended up to a few ticks later on one recording than on another
 (the issue measured 9). The bridge asks the process table instead, right after the graph went
-idle in a tick: the package has ended in the tick in which its last node process is gone or a
-zombie (its parent, roslaunch, has not collected it yet). A zombie's exit status is in its
-``/proc/<pid>/stat`` (field 52), so a node that died with an error is seen as such without
-waiting for roslaunch's report.
+idle in a tick: a package process gone or a zombie (its parent, roslaunch, has not collected it
+yet) has exited. Which tick the end counts in is decided by :mod:`.shutdown_watch` (the tick
+the shutdown began, held until the processes are gone); the package has ended once every
+process seen here has exited. A zombie's exit status is in its ``/proc/<pid>/stat`` (field
+52), so a node that died with an error is seen as such without waiting for roslaunch's report.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ class ProcWatch:
     """pid -> its command name, every package process seen so far."""
     codes: dict[int, int] = field(default_factory=dict)
     """pid -> exit status (waitpid's encoding) of the ones seen as zombies."""
+    exited: set[int] = field(default_factory=set)
+    """The ones seen exited (zombies or gone) by :meth:`ended`."""
 
     def package(self) -> list[int]:
         """The package's processes now (the launcher's descendants; with roslaunch, not
@@ -67,11 +70,13 @@ class ProcWatch:
         for pid in self.seen:
             st = _stat(pid)
             if st is None:
+                self.exited.add(pid)
                 continue
             state, code = st
             if state in ("Z", "X"):
                 if code is not None:
                     self.codes.setdefault(pid, code)
+                self.exited.add(pid)
                 continue
             done = False
         return done

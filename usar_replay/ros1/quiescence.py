@@ -129,6 +129,9 @@ class Quiescence:
         self._inodes: set[int] = set()
         self.samples = 0
         """Samples taken (for the bridge's log)."""
+        self.untimed: frozenset[int] = frozenset()
+        """The package's processes whose main thread was in a wait without a timeout at the
+        last sample (:mod:`.shutdown_watch`: roscpp's ``ros::shutdown`` joins its threads so)."""
         self.connected: frozenset[int] = frozenset()
         """The established TCP connections of the namespace at the last sample (a node's
         ``ros::shutdown`` closes its connections: the bridge asks the master then)."""
@@ -204,6 +207,7 @@ class Quiescence:
     def threads(self) -> dict[int, ThreadState]:
         """Every thread of the tree now (gone ones left out)."""
         out: dict[int, ThreadState] = {}
+        untimed: set[int] = set()
         for tid, t in list(self._threads.items()):
             try:
                 stat = os.pread(t.stat, 1024, 0)
@@ -218,9 +222,15 @@ class Quiescence:
             fields = sched.split()
             runs = int(fields[2]) if len(fields) > 2 else 0
             running = state in (b"R", b"D")  # D: in I/O for the reaction (a write), not done
-            polling = not running and t.role == "node" and self._short_sleep(t)
+            polling = False
+            if not running and t.role == "node":
+                call = self._syscall(t)
+                polling = self._short_sleep(t, call)
+                if tid == t.pid and _untimed_wait(call):
+                    untimed.add(t.pid)
             out[tid] = ThreadState(running, runs, polling, t.role != "infra")
         self.samples += 1
+        self.untimed = frozenset(untimed)
         return out
 
     def long_waits(self) -> list[int]:
@@ -251,17 +261,23 @@ class Quiescence:
         left = self._left(t.pid, timeout, absolute=clock)
         return 0.0 if left == float("inf") else left
 
-    def _short_sleep(self, t: _Thread) -> bool:
+    @staticmethod
+    def _syscall(t: _Thread) -> list[int]:
+        """The thread's blocking system call and its arguments ([] where none is shown)."""
         if t.syscall is None:
-            return False
+            return []
         try:
             text = os.pread(t.syscall, 256, 0).split()
         except OSError:
+            return []
+        if len(text) < 7 or not text[0].isdigit():
+            return []
+        return [int(text[0]), *(int(a, 16) for a in text[1:7])]
+
+    def _short_sleep(self, t: _Thread, call: list[int]) -> bool:
+        if not call:
             return False
-        if len(text) < 5 or not text[0].isdigit():
-            return False
-        nr = int(text[0])
-        args = [int(a, 16) for a in text[1:7]]
+        nr, args = call[0], call[1:]
         if nr == _NANOSLEEP:
             return self._left(t.pid, args[0], absolute=None) <= POLL_SLEEP_S
         if nr == _CLOCK_NANOSLEEP:
@@ -316,6 +332,13 @@ class Quiescence:
             if deadline is not None and time.perf_counter() > deadline:
                 return False
             time.sleep(NAP_S)
+
+
+def _untimed_wait(call: list[int]) -> bool:
+    """A futex wait without a timeout (a join, a condition waited on for good)."""
+    if not call or call[0] != _FUTEX or call[4]:
+        return False
+    return (call[2] & 127) in (_FUTEX_WAIT, _FUTEX_WAIT_BITSET)
 
 
 def _still(base: dict[int, ThreadState], now: dict[int, ThreadState]) -> bool:
