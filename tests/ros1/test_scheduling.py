@@ -25,3 +25,24 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
         child.wait()
 
 
+
+
+def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
+    from usar_replay.ros1.scheduling import watching_elsewhere
+
+    before = os.sched_getaffinity(0)
+    cpus = sorted(before)
+    try:
+        os.sched_setaffinity(0, {cpus[-1]})  # as the recorder pins the bridge
+        with watching_elsewhere():
+            inside = os.sched_getaffinity(0)
+        assert os.sched_getaffinity(0) == {cpus[-1]}
+        if len(cpus) > 1:
+            assert cpus[-1] not in inside and inside
+        else:
+            assert inside == {cpus[-1]}  # no other CPU: it stays
+        os.sched_setaffinity(0, before)  # not pinned: it stays where it is
+        with watching_elsewhere():
+            assert os.sched_getaffinity(0) == before
+    finally:
+        os.sched_setaffinity(0, before)

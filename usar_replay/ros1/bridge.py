@@ -69,6 +69,7 @@ from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_un
 from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
 from usar_replay.ros1.proc_watch import ProcWatch
 from usar_replay.ros1.quiescence import Quiescence
+from usar_replay.ros1.scheduling import watching_elsewhere
 from usar_replay.ros1.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
@@ -538,7 +539,8 @@ class Bridge:
         assert self.quiet is not None and self.graph is not None
         self.quiet.refresh(self.graph.watch.package())
         waited = time.perf_counter()  # pacing only: never reaches a message
-        idle = self.quiet.wait(cap)
+        with watching_elsewhere():  # the graph keeps its CPU to itself (:mod:`.scheduling`)
+            idle = self.quiet.wait(cap)
         self.waited_s += time.perf_counter() - waited
         return idle
 

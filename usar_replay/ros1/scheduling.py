@@ -13,17 +13,24 @@ Set from the recorder, which is root outside the sandbox (a sandboxed process ma
 own policy): every thread of the run, the bridge's included, found in the run's cgroup
 (``tasks``) or, without one, as the bridge's descendants. New threads are picked up before each
 tick. Where the machine refuses (not root), the run goes on unpinned, as before.
+
+The one thread that need not share the graph's CPU is the bridge's main thread while it only
+watches (:func:`watching_elsewhere`): the idle check samples ``/proc`` and netlink some
+thousands of times a run, and on the graph's CPU every sample is time the graph waits for.
+It moves to another CPU for the wait and back before it publishes again, so whatever it
+publishes is still written on the graph's CPU before any node there runs.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 from usar_replay.ros1.quiescence import descendants
 
-__all__ = ["OneCpu"]
+__all__ = ["OneCpu", "watching_elsewhere"]
 
 PRIORITY = 1
 
@@ -65,3 +72,21 @@ class OneCpu:
             except PermissionError as err:
                 self.refused = str(err)
         return len(new)
+
+
+@contextlib.contextmanager
+def watching_elsewhere() -> Iterator[None]:
+    """The calling thread, pinned to the graph's one CPU, runs on another one for the block
+    (the module doc); unpinned, or where no other CPU may be used, it stays where it is."""
+    home = os.sched_getaffinity(0)
+    others = set(range(os.cpu_count() or 1)) - home
+    moved = False
+    if len(home) == 1 and others:
+        with contextlib.suppress(OSError):
+            os.sched_setaffinity(0, others)  # 0: this thread
+            moved = True
+    try:
+        yield
+    finally:
+        if moved:
+            os.sched_setaffinity(0, home)
