@@ -83,3 +83,27 @@ def test_a_main_thread_joining_a_thread_is_noted_as_in_an_untimed_wait() -> None
         for c in (joining, napping):
             c.kill()
             c.wait()
+
+
+def test_one_walk_of_the_tree_answers_for_any_process_in_it() -> None:
+    import os
+    import signal
+
+    from usar_replay.ros1.quiescence import children_map, descendants
+
+    parent = start_child(
+        "import subprocess, sys, time\n"
+        "subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)'])\n"
+        "time.sleep(60)"
+    )
+    try:
+        wait_for(lambda: len(descendants(parent.pid)) == 2, "the grandchild")
+        me = os.getpid()
+        kids = children_map(me)
+        assert descendants(me, kids) == descendants(me)
+        below = descendants(parent.pid, kids)  # a process inside the walk, no /proc read
+        assert below == descendants(parent.pid) and below[0] == parent.pid and len(below) == 2
+        os.kill(below[1], signal.SIGKILL)
+    finally:
+        parent.kill()
+        parent.wait()

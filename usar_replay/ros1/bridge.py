@@ -68,7 +68,7 @@ from usar_replay.ros1.debian import DIST_PACKAGES
 from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
 from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
 from usar_replay.ros1.proc_watch import ProcWatch
-from usar_replay.ros1.quiescence import Quiescence
+from usar_replay.ros1.quiescence import Quiescence, children_map
 from usar_replay.ros1.scheduling import watching_elsewhere
 from usar_replay.ros1.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
@@ -537,7 +537,8 @@ class Bridge:
     def _wait_idle(self, cap: float | None) -> bool:
         """Until the graph is idle (:mod:`.quiescence`; True), at most ``cap`` wall seconds."""
         assert self.quiet is not None and self.graph is not None
-        self.quiet.refresh(self.graph.watch.package())
+        kids = children_map(self.quiet.root)  # one walk of /proc for both questions
+        self.quiet.refresh(self.graph.watch.package(kids), kids)
         waited = time.perf_counter()  # pacing only: never reaches a message
         with watching_elsewhere():  # the graph keeps its CPU to itself (:mod:`.scheduling`)
             idle = self.quiet.wait(cap)

@@ -48,10 +48,11 @@ class ProcWatch:
     exited: set[int] = field(default_factory=set)
     """The ones seen exited (zombies or gone) by :meth:`ended`."""
 
-    def package(self) -> list[int]:
+    def package(self, children: dict[int, list[int]] | None = None) -> list[int]:
         """The package's processes now (the launcher's descendants; with roslaunch, not
-        roslaunch itself)."""
-        pids = descendants(self.launcher)
+        roslaunch itself); from ``children`` (a walk of a tree holding the launcher) when
+        given."""
+        pids = descendants(self.launcher, children)
         return pids if self.launcher_is_package else pids[1:]
 
     def update(self) -> None:

@@ -37,7 +37,7 @@ from usar_replay.ros1.sock_diag import SockDiag
 
 TCP_ESTABLISHED = 1
 
-__all__ = ["SHORT_SLEEP_S", "Quiescence", "ThreadState", "descendants"]
+__all__ = ["SHORT_SLEEP_S", "Quiescence", "ThreadState", "children_map", "descendants"]
 
 SHORT_SLEEP_S = 0.005
 """A timed wait on a condition with at most this much left counts as a clock poll (roscpp's
@@ -77,17 +77,34 @@ class ThreadState:
     what they do for the graph goes through sockets)."""
 
 
-def descendants(pid: int) -> list[int]:
-    """``pid`` and every process below it (children of every thread), parents first."""
+def children_map(pid: int) -> dict[int, list[int]]:
+    """Every process below ``pid`` (``pid`` included) -> its children (children of every
+    thread), read once from ``/proc``: one walk that :func:`descendants` of any process in it
+    can share (the bridge walks once per wait, not once for each question)."""
+    out: dict[int, list[int]] = {}
+    todo = [pid]
+    while todo:
+        p = todo.pop(0)
+        kids: list[int] = []
+        with contextlib.suppress(OSError):
+            for tid in os.listdir(f"/proc/{p}/task"):
+                with contextlib.suppress(OSError), open(f"/proc/{p}/task/{tid}/children") as f:
+                    kids += [int(c) for c in f.read().split()]
+        out[p] = kids
+        todo += kids
+    return out
+
+
+def descendants(pid: int, children: dict[int, list[int]] | None = None) -> list[int]:
+    """``pid`` and every process below it (children of every thread), parents first; from
+    ``children`` (:func:`children_map` of ``pid`` or of a process above it) when given."""
+    tree = children_map(pid) if children is None else children
     out: list[int] = []
     todo = [pid]
     while todo:
         p = todo.pop(0)
         out.append(p)
-        with contextlib.suppress(OSError):
-            for tid in os.listdir(f"/proc/{p}/task"):
-                with contextlib.suppress(OSError), open(f"/proc/{p}/task/{tid}/children") as f:
-                    todo += [int(c) for c in f.read().split()]
+        todo += tree.get(p, [])
     return out
 
 
@@ -148,10 +165,13 @@ class Quiescence:
 
     # -- processes, threads, sockets -------------------------------------------------------------
 
-    def refresh(self, package: Collection[int] = ()) -> list[int]:
+    def refresh(
+        self, package: Collection[int] = (), children: dict[int, list[int]] | None = None
+    ) -> list[int]:
         """Find the tree's processes and threads again (new nodes, exited ones); ``package``:
-        the pids of the package's processes (the nodes)."""
-        self._pids = descendants(self.root)
+        the pids of the package's processes (the nodes); ``children``: a walk of the tree
+        just made (:func:`children_map` of the root)."""
+        self._pids = descendants(self.root, children)
         seen: set[int] = set()
         for pid in self._pids:
             with contextlib.suppress(OSError):
