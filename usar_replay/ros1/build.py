@@ -18,6 +18,11 @@ against its manifest before it is reused. A build that fails, or goes past a lim
 *package's* outcome, ``build_failed`` with the compiler's errors (paths in the student's
 folder) and a hint; never a traceback of usar's.
 
+In the sandbox the package's workspace is built at ``/ros1/ws`` and the underlay at
+``/ros1/underlay``, whatever host folders hold them, so that nothing the build writes (catkin's
+absolute paths, a node's ``__FILE__`` in its ``/rosout`` lines) depends on the host
+(:mod:`usar_replay.ros1.layout`).
+
 catkin_make runs as Debian's own program with a clean environment (``PATH=/usr/bin:/bin``,
 ``PYTHON_EXECUTABLE=/usr/bin/python3``): a virtual environment's or pyenv's ``python3`` on the
 PATH has no ``catkin_pkg``, and catkin would pick it up.
