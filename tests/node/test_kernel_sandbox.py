@@ -97,3 +97,55 @@ def test_a_bad_network_is_refused(folders: dict[str, Path]) -> None:
         pytest.skip("no bwrap here")
     with pytest.raises(ValueError, match="network='host'"):
         sandbox_argv(["true"], ro_binds=[], work_dir=str(folders["work"]), env={}, network="host")  # type: ignore[arg-type]
+
+
+MOVED = """
+pwd
+cat /fixed/ro/visible.txt
+cat /fixed/ro/secret.txt; echo "secret:$?"
+ls {ro} 2>/dev/null; echo "host-path:$?"
+echo x > /fixed/ro/new.txt 2>/dev/null; echo "ro-write:$?"
+echo kept > /fixed/work/out.txt; echo "work-write:$?"
+"""
+
+
+def test_a_folder_mounted_at_another_path_is_read_only_and_hides_as_at_home(
+    folders: dict[str, Path],
+) -> None:
+    """``ro_mounts`` and ``work_at`` (a ROS 1 workspace at /ros1/ws): the host folders appear
+    at the given paths only, the mount read-only, a hidden file under it hidden there too."""
+    ok, why = bwrap_available()
+    if not ok:
+        pytest.skip(why)
+    ro, work = folders["ro"], folders["work"]
+    script = MOVED.format(ro=ro)
+    argv = sandbox_argv(
+        ["/bin/sh", "-c", script],
+        ro_binds=[],
+        work_dir=str(work),
+        env={"PATH": "/usr/bin:/bin"},
+        hidden=[str(ro / "secret.txt")],
+        ro_mounts=[(str(ro), "/fixed/ro")],
+        work_at="/fixed/work",
+    )
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == "/fixed/work" and lines[1] == "the mission's file"
+    assert lines[2] in ("secret:0", "secret:1") and "the grader's world" not in done.stdout
+    assert lines[3] != "host-path:0"  # not at its host path as well
+    assert lines[4] != "ro-write:0" and not (ro / "new.txt").exists()
+    assert lines[5] == "work-write:0" and (work / "out.txt").read_text() == "kept\n"
+
+
+@pytest.mark.parametrize("dest", ["relative", "/usr/lib/x", "/proc", "/", "/a/../b", "/lib"])
+def test_a_mount_over_the_sandboxs_own_paths_is_refused(
+    folders: dict[str, Path], dest: str
+) -> None:
+    if not bwrap_available()[0]:
+        pytest.skip("no bwrap here")
+    with pytest.raises(ValueError, match="mount"):
+        sandbox_argv(
+            ["true"], ro_binds=[], work_dir=str(folders["work"]), env={},
+            ro_mounts=[(str(folders["ro"]), dest)],
+        )  # fmt: skip

@@ -129,12 +129,13 @@ def test_links_planted_by_the_build_are_never_followed(tmp_path: Path, cache: Pa
 
 def test_the_run_mounts_the_built_workspace_read_only(tmp_path: Path, cache: Path) -> None:
     """A node that writes into its built workspace (its ``setup.bash``, a new file) and
-    usar's underlay: refused by the file system (mounted read-only: even the owner's chmod
-    fails); the workspace is as its manifest says."""
+    usar's underlay, seen at the sandbox's fixed paths: refused by the file system (mounted
+    read-only: even the owner's chmod fails); the workspace is as its manifest says."""
     script = """
     import os, pathlib, sys
     ws = pathlib.Path(os.environ["ROS_PACKAGE_PATH"].split(":")[0]).parents[0]
     under = pathlib.Path(os.environ["ROS_PACKAGE_PATH"].split(":")[1]).parents[0]
+    print("AT", ws, under)
     for name, do in [
         ("chmod", lambda: os.chmod(ws / "devel" / "setup.bash", 0o666)),
         ("new", lambda: open(ws / "devel" / "x", "w")),
@@ -152,6 +153,7 @@ def test_the_run_mounts_the_built_workspace_read_only(tmp_path: Path, cache: Pat
     assert outcome == "crashed", reason
     assert "ALLOWED" not in reason
     assert reason.count("failed Read-only file system") == 3, reason
+    assert "AT /ros1/ws /ros1/underlay" in reason, reason  # the sandbox's fixed paths
     [entry] = _entries(cache, "writer")
     record = json.loads((entry / "built.json").read_text(encoding="utf-8"))
     assert tree.verify(entry / "ws", record["files"]) == ""

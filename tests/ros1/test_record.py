@@ -151,3 +151,42 @@ def test_view_shows_the_stored_pose_array(recorded: tuple[Path, str]) -> None:
     rows = scene.stored_markers
     assert rows.lengths == [1] and rows.labels == ["stored 0"]
     assert abs(rows.items[0][0] - 1.994) < 0.01 and abs(rows.items[0][1] - 0.401) < 0.01
+
+
+def test_the_log_does_not_depend_on_where_the_build_is_kept(
+    recorded: tuple[Path, str], tmp_path: Path
+) -> None:
+    """The same package recorded again from another build-cache root, in a private build folder
+    (a batch's, with a random name): the /rosout lines are the same bytes, because the build
+    and the run see the workspace at the sandbox's fixed paths (docs/ros1.md), never the host's
+    (a C++ node's ``file`` field is its ``__FILE__``)."""
+    from usar_replay.core.settings import RunSettings
+    from usar_replay.node.kernel_sandbox import bwrap_available
+    from usar_replay.ros1.process import Ros1Options
+    from usar_replay.ros1.record import record_ros1
+
+    if not bwrap_available()[0]:
+        pytest.skip("only a sandboxed run is path-independent (no bubblewrap here)")
+    first, _ = recorded
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path / "another" / "cache")
+    out = tmp_path / "again.mcap"
+    try:
+        options = Ros1Options(cache=False)  # a private build folder, as a batch's team gets
+        result = record_ros1(quick_room(), out, PACKAGE, RunSettings(), options=options)
+    finally:
+        if before is None:
+            del os.environ["XDG_CACHE_HOME"]
+        else:
+            os.environ["XDG_CACHE_HOME"] = before
+    assert result.outcome == "done", result
+
+    def rosout(log: Path) -> list[tuple[int, bytes]]:
+        return [(m.log_time_ns, m.data) for m in open_run(log).messages(["/rosout"], decode=False)]
+
+    again = rosout(out)
+    assert again == rosout(first) and len(again) >= 3
+    files = {m.msg.file for m in open_run(out).messages(["/rosout"]) if isinstance(m.msg, msgs.Log)}
+    cpp = sorted(f for f in files if f.endswith(".cpp"))
+    assert cpp and all(f.startswith("/ros1/ws/src/usar_two_nodes/src/") for f in cpp), files
+    assert not [f for f in files if "cache" in f or str(tmp_path) in f], files

@@ -154,6 +154,8 @@ def sandbox_argv(
     network: Network = "none",
     hidden: Sequence[str] = (),
     info_fd: int | None = None,
+    ro_mounts: Sequence[tuple[str, str]] = (),
+    work_at: str = "",
 ) -> list[str]:
     """The bwrap command line that runs ``argv`` in the sandbox.
 
@@ -166,7 +168,11 @@ def sandbox_argv(
     ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
     loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
     outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
-    process's host PID (:attr:`KernelSandbox.info_fd`).
+    process's host PID (:attr:`KernelSandbox.info_fd`). ``ro_mounts``: (host path, path in the
+    sandbox) pairs, each host folder mounted read-only at the other path (a built ROS 1
+    workspace at a path that does not depend on the host: :mod:`usar_replay.ros1.layout`);
+    ``work_at``: where ``work_dir`` appears in the sandbox (default: its own path). Neither
+    adds a writable path: ``work_dir`` stays the only one.
     """
     bwrap = _bwrap()
     if bwrap is None:
@@ -202,22 +208,46 @@ def sandbox_argv(
             continue
         out += ["--ro-bind", path, path]
         bound.append(path)
+    moved = _checked_mounts(ro_mounts)
+    for src, dest in moved:
+        out += ["--ro-bind", src, dest]
     visible = [*bound, *_SYSTEM_BINDS, *_SYSTEM_FILES]
     for path in hidden:
         real = os.path.realpath(path)
-        if not _covered(real, visible):
-            continue  # not mounted: nothing to hide
-        if os.path.isdir(real):
-            # a folder of the grader's inside a mounted one: an empty read-only folder over it
-            # (not over a folder that holds a mounted one: that is the mission's own)
-            if not any(_covered(b, [real]) for b in (*bound, work_dir)):
-                out += ["--perms", "0555", "--tmpfs", real, "--remount-ro", real]
-        elif os.path.exists(real):
-            out += ["--ro-bind", "/dev/null", real]
-    out += ["--bind", work_dir, work_dir, "--chdir", work_dir]
+        inside = [real] if _covered(real, visible) else []
+        inside += [dest + real[len(src) :] for src, dest in moved if _covered(real, [src])]
+        for seen in inside:  # where the sandbox sees it: its own path, or under a mount
+            if os.path.isdir(real):
+                # a folder of the grader's inside a mounted one: an empty read-only folder over
+                # it (not over a folder that holds a mounted one: that is the mission's own)
+                held = (*bound, *(s for s, _ in moved), work_dir)
+                if not any(_covered(b, [real]) for b in held):
+                    out += ["--perms", "0555", "--tmpfs", seen, "--remount-ro", seen]
+            elif os.path.exists(real):
+                out += ["--ro-bind", "/dev/null", seen]
+    at = work_at or work_dir
+    out += ["--bind", work_dir, at, "--chdir", at]
     for key, value in sorted(env.items()):
         out += ["--setenv", key, value]
     return [*out, "--", *argv]
+
+
+def _checked_mounts(mounts: Sequence[tuple[str, str]]) -> list[tuple[str, str]]:
+    """``mounts`` whose host folder exists, each to an absolute, normalised path of its own
+    outside the system's folders and the private file systems (a ValueError otherwise: a
+    mount over ``/usr`` or ``/proc`` would replace what the sandbox is made of)."""
+    out: list[tuple[str, str]] = []
+    fixed = ("/proc", "/dev", *_SYSTEM_BINDS, *_SYSTEM_FILES)
+    for src, dest in mounts:
+        if not os.path.isabs(dest) or os.path.normpath(dest) != dest or dest == "/":
+            raise ValueError(f"mount {src} at {dest!r}: expected an absolute, normalised path")
+        if _covered(dest, fixed) or any(_covered(f, [dest]) for f in fixed):
+            raise ValueError(f"mount {src} at {dest}: that path is the sandbox's own")
+        if any(_covered(dest, [d]) or _covered(d, [dest]) for _, d in out):
+            raise ValueError(f"mount {src} at {dest}: it overlaps another mount")
+        if os.path.exists(src):
+            out.append((os.path.realpath(src), dest))
+    return out
 
 
 def signal_of_exit(code: int | None) -> int | None:

@@ -51,7 +51,13 @@ from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import FrameKind, Wire
 from usar_replay.node.wire_io import send_within
 
-__all__ = ["MissionEnded", "MissionLimits", "MissionProcess", "hide_from_mission"]
+__all__ = [
+    "MissionEnded",
+    "MissionLimits",
+    "MissionProcess",
+    "hide_from_mission",
+    "uses_kernel_sandbox",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +84,9 @@ class MissionLimits:
     read_roots: tuple[str, ...] = ()
     """What the sandboxed mission may read besides Python (default: its file's folder, or the
     folder its module was found in); a batch gives the team's submission."""
+    read_mounts: tuple[tuple[str, str], ...] = ()
+    """(host folder, path in the sandbox) pairs the sandboxed mission reads at another path
+    than the host's (a built ROS 1 workspace: :mod:`usar_replay.ros1.layout`); read-only."""
     hidden: tuple[str, ...] = ()
     """Files and folders the sandboxed mission may not read even when they lie in a readable
     folder (the log being written or replayed, and every file the grader passed in: the
@@ -98,6 +107,12 @@ def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimit
 
 
 _warned = False
+
+
+def uses_kernel_sandbox(limits: MissionLimits) -> bool:
+    """Will a mission under ``limits`` run in the kernel sandbox? (what a ROS 1 build asks
+    before it builds: a workspace built for the sandbox's fixed paths runs only there)"""
+    return _use_kernel_sandbox(limits)
 
 
 def _use_kernel_sandbox(limits: MissionLimits) -> bool:
@@ -232,7 +247,8 @@ class MissionProcess:
             roots = self.limits.read_roots or self.target.submission_roots()
             hidden: list[str] = []
             if self._sandbox is not None:  # the grader's files, by any of their names
-                hidden = [*sum(hide.grader_files(self.limits.hidden, roots), ())]
+                mounted = [src for src, _ in self.limits.read_mounts]
+                hidden = [*sum(hide.grader_files(self.limits.hidden, [*roots, *mounted]), ())]
             parent_sock, child_sock = socket.socketpair()
         except BaseException:
             self._cleanup()
@@ -254,6 +270,7 @@ class MissionProcess:
                         limits=self._sandbox.limits,
                         hidden=hidden,
                         info_fd=self._sandbox.info_fd,
+                        ro_mounts=self.limits.read_mounts,
                     )
                 )
                 fds += (self._sandbox.info_fd,)

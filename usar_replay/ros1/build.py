@@ -18,6 +18,11 @@ against its manifest before it is reused. A build that fails, or goes past a lim
 *package's* outcome, ``build_failed`` with the compiler's errors (paths in the student's
 folder) and a hint; never a traceback of usar's.
 
+In the sandbox the package's workspace is built at ``/ros1/ws`` and the underlay at
+``/ros1/underlay``, whatever host folders hold them, so that nothing the build writes (catkin's
+absolute paths, a node's ``__FILE__`` in its ``/rosout`` lines) depends on the host
+(:mod:`usar_replay.ros1.layout`).
+
 catkin_make runs as Debian's own program with a clean environment (``PATH=/usr/bin:/bin``,
 ``PYTHON_EXECUTABLE=/usr/bin/python3``): a virtual environment's or pyenv's ``python3`` on the
 PATH has no ``catkin_pkg``, and catkin would pick it up.
@@ -40,7 +45,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_replay.core.errors import MissionEnded, UsageError
-from usar_replay.ros1 import buildmsg, tree
+from usar_replay.ros1 import buildmsg, layout, tree
 from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 
 __all__ = [
@@ -56,6 +61,7 @@ __all__ = [
     "package_sha256",
     "private_build",
     "remove_tree",
+    "sandboxed",
     "underlay",
 ]
 
@@ -87,10 +93,34 @@ class Built:
     cached: bool = False
     underlays: tuple[Path, ...] = field(default=())
     """Workspaces this one extends (sourced by its ``devel/setup.bash``): usar's messages."""
+    at: str = ""
+    """Where it was built inside the sandbox and must be mounted to run
+    (:data:`usar_replay.ros1.layout.WORKSPACE`, its underlays at theirs); '': at its host path
+    (built without a kernel sandbox)."""
 
     @property
     def setup(self) -> Path:
         return self.workspace / "devel" / "setup.bash"
+
+    @property
+    def run_workspace(self) -> str:
+        """The workspace's path as the run sees it."""
+        return self.at or str(self.workspace)
+
+    @property
+    def run_underlays(self) -> tuple[str, ...]:
+        """The underlays' paths as the run sees them."""
+        if self.at:
+            return tuple(layout.underlay_at(i) for i in range(len(self.underlays)))
+        return tuple(map(str, self.underlays))
+
+    @property
+    def mounts(self) -> tuple[tuple[str, str], ...]:
+        """(host folder, path in the sandbox) for a run to mount read-only; () when built at
+        its host path (then the run binds the host folders where they are)."""
+        if not self.at:
+            return ()
+        return ((str(self.workspace), self.at), *layout.mounts(self.underlays))
 
 
 def find_package(path: str | os.PathLike[str]) -> Package:
@@ -153,36 +183,56 @@ def _toplevel(src: Path) -> None:
     shutil.copyfile("/usr/share/catkin/cmake/toplevel.cmake", src / "CMakeLists.txt")
 
 
-def _catkin_make(
-    ws: Path, name: str, user: Path, underlays: tuple[Path, ...], limits: BuildLimits, jobs: int
-) -> None:
-    """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox; raise
-    ``build_failed`` with the errors (paths as the student's) and a hint, or return."""
+def sandboxed() -> bool:
+    """Does a build run in the kernel sandbox here? (bubblewrap works, ``USAR_SANDBOX`` is not
+    ``off``): only then can it be built at :mod:`~usar_replay.ros1.layout`'s fixed paths."""
     from usar_replay.node import kernel_sandbox
 
-    cmd = ["catkin_make", "-C", str(ws), "-DPYTHON_EXECUTABLE=/usr/bin/python3", f"-j{jobs}"]
+    ok, _ = kernel_sandbox.bwrap_available()
+    return ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
+
+
+def _catkin_make(
+    ws: Path,
+    name: str,
+    user: Path,
+    underlays: tuple[Path, ...],
+    limits: BuildLimits,
+    jobs: int,
+    at: str = "",
+) -> None:
+    """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox, where it appears
+    at ``at`` and its underlays at :func:`~usar_replay.ros1.layout.underlay_at` (``at`` '': all
+    at their host paths); raise ``build_failed`` with the errors (paths as the student's) and
+    a hint, or return."""
+    sandbox = sandboxed()
+    if at and not sandbox:
+        raise ValueError(f"a build at {at} needs the kernel sandbox")
+    inside = Path(at) if at else ws
+    seen = [layout.underlay_at(i) for i in range(len(underlays))] if at else underlays
+    cmd = ["catkin_make", "-C", str(inside), "-DPYTHON_EXECUTABLE=/usr/bin/python3", f"-j{jobs}"]
     if underlays:  # as on a course machine: the underlay sourced, then catkin_make
         cmd = [
             "/bin/bash",
             "-c",
             'source "$0/devel/setup.bash" && exec "$@"',
-            str(underlays[-1]),
+            str(seen[-1]),
             *cmd,
         ]
-    ok, _ = kernel_sandbox.bwrap_available()
-    sandbox = ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
     env = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
     # catkin picks Debian's Python layout (dist-packages) by /etc/debian_version
     etc = [p for p in ("/etc/catkin", "/etc/ros", "/etc/debian_version") if Path(p).exists()]
     done = run_jailed(
         cmd,
         workspace=ws,
-        ro_binds=[*etc, *map(str, underlays)],
+        ro_binds=[*etc] if at else [*etc, *map(str, underlays)],
         env=env if sandbox else catkin_env(),
         limits=limits,
         sandbox=sandbox,
+        workspace_at=at,
+        ro_mounts=layout.mounts(underlays) if at else (),
     )
-    output = buildmsg.student_paths(done.output, ws / "src" / name, user)
+    output = buildmsg.student_paths(done.output, inside / "src" / name, user)
     if done.limit:
         raise MissionEnded(
             "build_failed", f"{buildmsg.errors(output)}\nthe build of {name} exceeded {done.limit}"
@@ -217,8 +267,11 @@ def build(
     underlays: tuple[Path, ...] = (),
     jobs: int = 2,
     limits: BuildLimits | None = None,
+    at: str = "",
 ) -> Built:
-    """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``.
+    """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``; in the
+    sandbox at ``at`` (:data:`usar_replay.ros1.layout.WORKSPACE`, the underlays at theirs) or,
+    with ``at`` '', at its host path.
 
     ``entry`` is usar's: only ``entry/ws`` is writable by the build. A failure raises
     :class:`MissionEnded` ``build_failed`` with the compiler's errors."""
@@ -229,10 +282,10 @@ def build(
     _copy(pkg, src / pkg.name)
     _toplevel(src)
     start = time.perf_counter()  # for the build time shown to people only
-    _catkin_make(ws, pkg.name, pkg.path, underlays, limits or BuildLimits(), jobs)
+    _catkin_make(ws, pkg.name, pkg.path, underlays, limits or BuildLimits(), jobs, at)
     seconds = time.perf_counter() - start
     _seal(ws, entry, seconds)
-    return Built(ws, pkg, seconds, underlays=underlays)
+    return Built(ws, pkg, seconds, underlays=underlays, at=at)
 
 
 def cache_root() -> Path:
@@ -272,12 +325,13 @@ def remove_tree(path: Path) -> None:
     shutil.rmtree(path, ignore_errors=True)
 
 
-def _usar_key(h: hashlib._Hash) -> None:
+def _usar_key(h: hashlib._Hash, fixed: bool) -> None:
     from usar_replay import __version__
 
     h.update(package_sha256(Package(FIDUCIAL_MSGS, "fiducial_msgs")).encode())
     h.update(__version__.encode())
     h.update(str(shutil.which("g++")).encode())
+    h.update((layout.VERSION if fixed else layout.HOST).encode())
 
 
 def _reuse(entry: Path, pkg: Package, underlays: tuple[Path, ...]) -> Built | None:
@@ -315,20 +369,29 @@ def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -
         os.close(lock_fd)
 
 
-def underlay(root: Path | None = None, limits: BuildLimits | None = None) -> Path:
+def underlay(
+    root: Path | None = None, limits: BuildLimits | None = None, *, fixed: bool = False
+) -> Path:
     """usar's ``fiducial_msgs`` built in a workspace of its own (cached and verified like any
-    build: it is usar's own bytes, so every run may share it, and no sandbox can write it)."""
+    build: it is usar's own bytes, so every run may share it, and no sandbox can write it);
+    ``fixed``: at :data:`usar_replay.ros1.layout.UNDERLAY` in the sandbox (when there is one)."""
     root = _private_root(root or cache_root())
+    fixed = fixed and sandboxed()
     h = hashlib.sha256(b"underlay")
-    _usar_key(h)
+    _usar_key(h, fixed)
     msgs = Package(FIDUCIAL_MSGS, "fiducial_msgs")
     key = f"underlay-{h.hexdigest()[:20]}"
-    built = _cached(root, key, msgs, lambda entry: build(msgs, entry, limits=limits))
+    at = layout.UNDERLAY if fixed else ""
+    built = _cached(root, key, msgs, lambda entry: build(msgs, entry, limits=limits, at=at))
     return built.workspace
 
 
 def cached_build(
-    pkg: Package, root: Path | None = None, limits: BuildLimits | None = None
+    pkg: Package,
+    root: Path | None = None,
+    limits: BuildLimits | None = None,
+    *,
+    fixed: bool = False,
 ) -> Built:
     """:func:`build` once per package content: a workspace built before from the same files
     (same fiducial_msgs, same usar, same compiler) is reused when it is exactly as its manifest
@@ -336,24 +399,34 @@ def cached_build(
     variants of one package) build the same files. Two teams share a build only when their
     packages are the same bytes: the build ran those bytes alone, and nothing but usar can
     write the cache. Built in place (catkin writes absolute paths into ``devel/``), under a
-    lock; a failed build is not kept."""
+    lock; a failed build is not kept. ``fixed``: built at the sandbox's fixed paths
+    (:mod:`usar_replay.ros1.layout`) when the build has a sandbox, for a run that has one."""
     root = _private_root(root or cache_root())
-    under = () if pkg.name == "fiducial_msgs" else (underlay(root, limits),)
+    fixed = fixed and sandboxed()
+    under = () if pkg.name == "fiducial_msgs" else (underlay(root, limits, fixed=fixed),)
     h = hashlib.sha256()
     h.update(package_sha256(pkg).encode())
-    _usar_key(h)
+    _usar_key(h, fixed)
     key = f"{pkg.name}-{h.hexdigest()[:20]}"
-    made = _cached(root, key, pkg, lambda entry: build(pkg, entry, underlays=under, limits=limits))
-    return Built(made.workspace, pkg, made.seconds, made.cached, under)
+    at = layout.WORKSPACE if fixed else ""
+    made = _cached(
+        root, key, pkg, lambda entry: build(pkg, entry, underlays=under, limits=limits, at=at)
+    )
+    return Built(made.workspace, pkg, made.seconds, made.cached, under, at)
 
 
-def private_build(pkg: Package, limits: BuildLimits | None = None) -> tuple[Built, Path]:
+def private_build(
+    pkg: Package, limits: BuildLimits | None = None, *, fixed: bool = False
+) -> tuple[Built, Path]:
     """:func:`build` in a fresh folder of its own (no cache; the underlay still is): the
-    built workspace and the folder to remove with :func:`remove_tree` when done."""
-    under = () if pkg.name == "fiducial_msgs" else (underlay(None, limits),)
+    built workspace and the folder to remove with :func:`remove_tree` when done (``fixed``
+    as for :func:`cached_build`)."""
+    fixed = fixed and sandboxed()
+    under = () if pkg.name == "fiducial_msgs" else (underlay(None, limits, fixed=fixed),)
+    at = layout.WORKSPACE if fixed else ""
     holder = Path(tempfile.mkdtemp(prefix="usar-ros1-build-"))
     try:
-        return build(pkg, holder / "entry", underlays=under, limits=limits), holder
+        return build(pkg, holder / "entry", underlays=under, limits=limits, at=at), holder
     except BaseException:
         remove_tree(holder)
         raise

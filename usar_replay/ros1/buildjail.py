@@ -122,10 +122,14 @@ def run_jailed(
     env: Mapping[str, str],
     limits: BuildLimits,
     sandbox: bool,
+    workspace_at: str = "",
+    ro_mounts: Sequence[tuple[str, str]] = (),
 ) -> BuildOutcome:
     """Run ``cmd`` with ``workspace`` its only writable folder (see the module doc); without
     ``sandbox`` (no bubblewrap, ``USAR_SANDBOX=off``) it runs with the same rlimits only, as a
-    mission does then."""
+    mission does then. In the sandbox, ``workspace`` appears at ``workspace_at`` (default: its
+    own path) and each ``ro_mounts`` host folder read-only at its other path
+    (:mod:`usar_replay.ros1.layout`)."""
     box = kernel_sandbox.KernelSandbox(
         kernel_sandbox.SandboxLimits(
             memory_mb=limits.memory_mb,
@@ -144,6 +148,8 @@ def run_jailed(
             env=env,
             limits=box.limits,
             info_fd=box.info_fd,
+            ro_mounts=ro_mounts,
+            work_at=workspace_at,
         )
         fds = (box.info_fd,)
     argv = box.launch(argv)

@@ -5,7 +5,8 @@ the bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the sam
 tick protocol, the same checks on what comes back (a student's ``/tf`` that moves a simulator frame
 is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is ``crashed``
 with its output, one that stops answering is ``hung``). The package was built before
-(:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only.
+(:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only,
+in the kernel sandbox at the fixed paths they were built at (:mod:`usar_replay.ros1.layout`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from typing import Any
 
 from usar_replay.core import contract
 from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
-from usar_replay.node.mission_process import MissionLimits, MissionProcess
+from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
 from usar_replay.ros1 import run_files
@@ -135,10 +136,13 @@ class Ros1Process(MissionProcess):
         self.built = built
         try:
             limits = limits or MissionLimits()
+            if built.at and not uses_kernel_sandbox(limits):
+                raise ValueError(f"{built.workspace} was built for the kernel sandbox's {built.at}")
+            # the paths the bridge sees: the sandbox's fixed ones (.layout) or the host's
             config = {
                 "package": package.name,
-                "workspace": str(self.built.workspace),
-                "underlays": [str(u) for u in self.built.underlays],
+                "workspace": built.run_workspace,
+                "underlays": list(built.run_underlays),
                 "run_dir": str(self.run_dir),
             }
             config.update({k: v for k, v in asdict(options).items()})
@@ -153,10 +157,10 @@ class Ros1Process(MissionProcess):
                 limits,
                 startup_timeout_s=startup,
                 read_roots=(
-                    str(self.built.workspace),
-                    *map(str, self.built.underlays),
+                    *(() if built.mounts else (str(built.workspace), *map(str, built.underlays))),
                     *_ros_etc(),
                 ),
+                read_mounts=built.mounts,
                 work_dir=str(self.run_dir),
             )
             super().__init__(

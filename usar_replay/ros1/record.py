@@ -21,7 +21,7 @@ from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.mission_process import MissionEnded, MissionLimits
+from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline.record import Progress, RecordResult, record
 from usar_replay.ros1 import debian
 from usar_replay.ros1.build import (
@@ -76,14 +76,15 @@ def record_ros1(
     pkg = find_package(package)
     opts = choose_entry(pkg, options or Ros1Options())
     build_limits = build_limits_for(limits or MissionLimits(), opts)
+    fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None
     process: Callable[..., Any]
     try:
         built: Built
         if opts.cache:
-            built = cached_build(pkg, limits=build_limits)
+            built = cached_build(pkg, limits=build_limits, fixed=fixed)
         else:  # a folder of its own, never inside the run's (which the run may write)
-            built, holder = private_build(pkg, limits=build_limits)
+            built, holder = private_build(pkg, limits=build_limits, fixed=fixed)
         process = functools.partial(Ros1Process, package=pkg, options=opts, built=built)
         note = "cached" if built.cached else f"catkin_make {built.seconds:.1f} s"
     except MissionEnded as failed:

@@ -21,7 +21,7 @@ from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.log.run import Run
-from usar_replay.node.mission_process import MissionLimits, MissionProcess
+from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.ros1 import debian
 from usar_replay.ros1.build import cached_build, find_package
@@ -70,6 +70,9 @@ def ros1_process(
         options = Ros1Options(launch=rec_launch, node=rec_node)
     options = choose_entry(pkg, options)
     target = ros1_target(pkg, options)
-    built = cached_build(pkg, limits=build_limits_for(limits or MissionLimits(), options))
+    given = limits or MissionLimits()
+    built = cached_build(
+        pkg, limits=build_limits_for(given, options), fixed=uses_kernel_sandbox(given)
+    )
     factory: Any = functools.partial(Ros1Process, package=pkg, options=options, built=built)
     return dataclasses.replace(target), factory
