@@ -20,6 +20,7 @@ from pathlib import Path
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import grade_file
+from usar_replay.node.mission_process import MissionLimits, uses_kernel_sandbox
 from usar_replay.ros1 import build as build_mod
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
@@ -43,7 +44,8 @@ def main() -> None:
         pkg = build_mod.find_package(args.package)
         t0 = everything = time.perf_counter()
         cpu0 = _children_cpu()
-        build_mod.cached_build(pkg)
+        # built as the recording will want it (at the sandbox's fixed paths when there is one)
+        build_mod.cached_build(pkg, fixed=uses_kernel_sandbox(MissionLimits()))
         print(
             f"build: {time.perf_counter() - t0:.1f} s wall, {_children_cpu() - cpu0:.1f} s CPU"
             f" (catkin_make -j2, {pkg.name} + fiducial_msgs)"
