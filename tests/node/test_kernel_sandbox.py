@@ -149,3 +149,36 @@ def test_a_mount_over_the_sandboxs_own_paths_is_refused(
             ["true"], ro_binds=[], work_dir=str(folders["work"]), env={},
             ro_mounts=[(str(folders["ro"]), dest)],
         )  # fmt: skip
+
+
+def _limit_memory(cgroup: str, limit: int) -> bool:
+    """Give the run's memory cgroup a limit (v1 or v2), as a grader could; False where the
+    kernel does not let this test set one."""
+    for name in ("memory.max", "memory.limit_in_bytes"):
+        path = Path(cgroup, name)
+        if path.exists():
+            try:
+                path.write_text(str(limit))
+                return True
+            except OSError:
+                return False
+    return False
+
+
+@pytest.mark.parametrize("oom", [True, False])
+def test_a_kill_is_called_out_of_memory_only_on_the_kernels_record(oom: bool) -> None:
+    """The OOM killer really fires in the run's memory cgroup (its limit set here, 64 MiB,
+    then 256 MiB touched), and :meth:`KernelSandbox.oom_killed` reads its record; a plain
+    SIGKILL of the same process leaves no record (issue #26 point 11)."""
+    import sys
+
+    with KernelSandbox(SandboxLimits(memory_mb=0)) as box:
+        if box.memory_cgroup is None or not _limit_memory(box.memory_cgroup, 64 << 20):
+            pytest.skip("no memory cgroup of usar's own on this machine")
+        hog = "x = bytearray(256 << 20)\nimport time\ntime.sleep(60)"
+        wait = "import time\ntime.sleep(60)"
+        proc = subprocess.Popen(box.launch([sys.executable, "-c", hog if oom else wait]))
+        if not oom:
+            proc.send_signal(signal.SIGKILL)
+        assert proc.wait(timeout=60) == -signal.SIGKILL
+        assert box.oom_killed() is oom
