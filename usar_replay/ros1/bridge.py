@@ -341,7 +341,7 @@ class Bridge:
             graph.watch.update()
 
         def idle(cap_s: float) -> bool:
-            quiet.refresh(graph.watch.package())
+            self._refresh()
             return quiet.wait(cap_s)
 
         try:
@@ -534,11 +534,17 @@ class Bridge:
         # cmd_vel_one_publisher line reports the fight
         return [(topic, value) for topic, _node, value in got] + driven
 
+    def _refresh(self) -> None:
+        """The idle check's processes and threads found again, and which are the package's:
+        one walk of ``/proc`` answers both."""
+        assert self.quiet is not None and self.graph is not None
+        kids = children_map(self.quiet.root)
+        self.quiet.refresh(self.graph.watch.package(kids), kids)
+
     def _wait_idle(self, cap: float | None) -> bool:
         """Until the graph is idle (:mod:`.quiescence`; True), at most ``cap`` wall seconds."""
-        assert self.quiet is not None and self.graph is not None
-        kids = children_map(self.quiet.root)  # one walk of /proc for both questions
-        self.quiet.refresh(self.graph.watch.package(kids), kids)
+        assert self.quiet is not None
+        self._refresh()
         waited = time.perf_counter()  # pacing only: never reaches a message
         with watching_elsewhere():  # the graph keeps its CPU to itself (:mod:`.scheduling`)
             idle = self.quiet.wait(cap)
