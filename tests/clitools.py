@@ -35,6 +35,19 @@ def usar(
     )
 
 
+def start_usar(*args: str, env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+    """``usar ARGS...`` started in the background, stdout and stderr piped, with the default
+    signal handlers (:func:`default_signals`), so a test can signal it while it runs."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "usar_replay.cli", *args],
+        preexec_fn=default_signals,  # only resets handlers: safe before exec
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+
+
 def no_display() -> dict[str, str]:
     """The environment without a display: ``usar view`` then saves or says how to open."""
     return {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from clitools import default_signals, one_error_line, usar
+from clitools import one_error_line, start_usar, usar
 from conftest import one_room
 
 from usar_replay.core import msgs
@@ -251,15 +251,7 @@ def _handlers_installed(pid: int) -> bool:
 def _record(tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     scenario, out = tmp_path / "room.toml", tmp_path / "cut.mcap"
     save(one_room(), scenario)
-    argv = ["record", "--scenario", str(scenario), "--out", str(out)]
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "usar_replay.cli", *argv],
-        preexec_fn=default_signals,
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    return proc, out
+    return start_usar("record", "--scenario", str(scenario), "--out", str(out)), out
 
 
 @pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 import pytest
-from clitools import default_signals
+from clitools import start_usar
 from conftest import one_room
 from logtools import digest
 
@@ -171,19 +171,10 @@ def test_an_existing_recording_is_never_overwritten_silently(
 def test_ctrl_c_in_the_cli_exits_130_with_a_closed_log(tmp_path: Path) -> None:
     """A real SIGINT to `usar record`, sent once its first progress line shows it is running."""
     import signal
-    import subprocess
-    import sys
 
     scenario, out = tmp_path / "room.toml", tmp_path / "cut.mcap"
     save(one_room(), scenario)
-    argv = ["record", "--scenario", str(scenario), "--out", str(out)]
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "usar_replay.cli", *argv],
-        preexec_fn=default_signals,
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-    )
+    proc = start_usar("record", "--scenario", str(scenario), "--out", str(out))
     assert proc.stderr is not None
     assert proc.stderr.readline().startswith("sim ")  # the run is under way
     proc.send_signal(signal.SIGINT)

@@ -246,16 +246,24 @@ def _python_node_package(tmp_path: Path, script: str) -> Path:
     return pkg
 
 
+def _record_node(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, script: str
+) -> tuple[list[str], Path]:
+    """``usar record`` arguments (no ``--out``) that run ``script`` as the package's one node on
+    a small world, with a build cache of the test's own; and the package."""
+    assert debian.missing() == [], debian.install_line(debian.missing())
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    pkg = _python_node_package(tmp_path, script)
+    world = _world(tmp_path / "w.toml")
+    return ["record", "--ros1", str(pkg), "--launch", "kill.launch", "--scenario", str(world)], pkg
+
+
 def test_a_ros1_node_that_kills_the_bridge_is_crashed_by_signal(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Point 11, ROS 1: a node that SIGKILLs the bridge gets ``crashed (signal 9)``."""
-    assert debian.missing() == [], debian.install_line(debian.missing())
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    pkg = _python_node_package(tmp_path, _NODE)
-    world = _world(tmp_path / "w.toml")
+    args, pkg = _record_node(tmp_path, monkeypatch, _NODE)
     out = tmp_path / "killed.mcap"
-    args = ["record", "--ros1", str(pkg), "--launch", "kill.launch", "--scenario", str(world)]
     code = main([*args, "--out", str(out), "--quiet", "--max-sim-time", "2"])
     assert code == 4
     run = open_run(out)
@@ -302,12 +310,8 @@ def test_a_ros1_node_that_steals_the_bridges_socket_is_a_verdict_in_a_closed_log
     """Point 5, ROS 1: a node takes the bridge's socket to the recorder with ``pidfd_getfd``,
     stops the bridge and floods the recorder with frames, never reading. Every write the
     recorder makes has a deadline, so the run ends with a verdict (no hang) in a closed log."""
-    assert debian.missing() == [], debian.install_line(debian.missing())
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    pkg = _python_node_package(tmp_path, _THIEF)
-    world = _world(tmp_path / "w.toml")
+    args, pkg = _record_node(tmp_path, monkeypatch, _THIEF)
     out = tmp_path / "stolen.mcap"
-    args = ["record", "--ros1", str(pkg), "--launch", "kill.launch", "--scenario", str(world)]
     done = usar(*args, "--out", str(out), "--quiet", "--max-sim-time", "30", "--tick-timeout", "3",
                 timeout=240)  # fmt: skip
     assert done.returncode == 4, done.stdout + done.stderr

@@ -5,7 +5,6 @@ differing message (exit 1), with the rubric delta under ``--grade``."""
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -15,10 +14,6 @@ from example_worlds import quick_room
 from usar_replay.core.settings import RunSettings
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
-
-
-def _usar(*args: str) -> subprocess.CompletedProcess[str]:
-    return usar(*args)
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +44,7 @@ def example_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_an_unchanged_package_replays_bit_for_bit(example_log: Path) -> None:
-    done = _usar("replay", "--grade", str(example_log))
+    done = usar("replay", "--grade", str(example_log))
     assert done.returncode == 0, done.stdout + done.stderr
     assert "bit for bit" in done.stdout
     assert "DIFFERENT" not in done.stdout
@@ -59,7 +54,7 @@ def test_an_unchanged_package_replays_bit_for_bit(example_log: Path) -> None:
 def test_a_changed_package_shows_the_first_difference_and_the_rubric_delta(
     example_log: Path, wall_clock_package: Path
 ) -> None:
-    done = _usar("replay", str(example_log), "--ros1", str(wall_clock_package), "--grade")
+    done = usar("replay", str(example_log), "--ros1", str(wall_clock_package), "--grade")
     assert done.returncode == 1, done.stdout + done.stderr
     assert "First divergence: /rosout" in done.stdout
     assert "Rubric:" in done.stdout and "total 60 -> 60 of 60" in done.stdout
@@ -69,7 +64,7 @@ def test_a_package_reading_the_wall_clock_names_where_it_diverged(
     tmp_path: Path, wall_clock_package: Path
 ) -> None:
     log = _record(tmp_path / "wall.mcap", wall_clock_package)
-    done = _usar("replay", str(log))
+    done = usar("replay", str(log))
     assert done.returncode == 1, done.stdout + done.stderr
     first = [line for line in done.stdout.splitlines() if line.startswith("First divergence")]
     assert first and first[0].startswith("First divergence: /rosout message #8 at sim time")

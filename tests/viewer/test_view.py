@@ -24,7 +24,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 import rerun as rr
-from clitools import default_signals, no_display, one_error_line, usar
+from clitools import no_display, one_error_line, start_usar, usar
 
 from usar_replay.cli.main import main
 from usar_replay.core import msgs
@@ -412,14 +412,7 @@ def _free_port() -> int:
 def test_cli_web_serves_until_ctrl_c(room_log: tuple[Path, RecordResult]) -> None:
     web, grpc = _free_port(), _free_port()
     args = ["view", str(room_log[0]), "--web", "--web-port", str(web), "--grpc-port", str(grpc)]
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        preexec_fn=default_signals,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=no_display(),
-    )
+    proc = start_usar(*args, env=no_display())
     try:
         assert proc.stdout is not None
         line = proc.stdout.readline()

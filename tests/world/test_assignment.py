@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from clitools import usar
 
 PLUGIN = '''
 """toy-patrol: one robot, the scout, drives forward; the rubric checks it moved."""
@@ -146,16 +147,10 @@ def plugin(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _usar(plugin: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    checkout = str(Path(__file__).resolve().parents[2])
-    path = [str(plugin), checkout, os.environ.get("PYTHONPATH", "")]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in path if p)}
-    return subprocess.run(
-        [sys.executable, "-m", "usar_replay.cli", *args],
-        capture_output=True,
-        text=True,
-        check=False,
-        cwd=cwd,
-        env=env,
+    """``usar ARGS`` in ``cwd`` with the toy assignment's package importable."""
+    path = [str(plugin), os.environ.get("PYTHONPATH", "")]
+    return usar(
+        *args, cwd=cwd, env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in path if p)}
     )
 
 
