@@ -16,6 +16,8 @@ from conftest import one_room
 from example_worlds import quick_room
 
 from usar_replay.cli.main import main
+from usar_replay.core import contract, msgs
+from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
 from usar_replay.ros1 import debian
@@ -24,6 +26,8 @@ from usar_replay.world.scenario import course_world
 from usar_replay.world.scenario_toml import save
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
+SPIN_ON_SUCCESS = Path(__file__).resolve().parent / "packages" / "spin_on_success"
+"""One explorer goal, then a one-shot spin when it SUCCEEDS (issue #32's shape, our own code)."""
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -151,6 +155,44 @@ def test_two_cmd_vel_publishers_lose_only_their_line(tmp_path: Path) -> None:
     save(quick_room(), world)  # the fight starts at the first spin
     out = _record(tmp_path, world, "two", "faulty_two_cmd_vel_publishers.launch")
     assert _failed(out) == {"explorer.cmd_vel_one_publisher"}
+
+
+def test_a_one_shot_spin_on_success_is_the_robots_last_command(tmp_path: Path) -> None:
+    """Issue #32: move_base publishes its zero velocity before its SUCCEEDED result, so the
+    twist a package sends once when it sees the result is the last command of that tick and
+    the robot turns (before the fix, move_base's zero twists came after it: it never did)."""
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "spin.mcap"
+    args = ["record", "--ros1", str(SPIN_ON_SUCCESS), "--scenario", str(world), "--out", str(out)]
+    assert main([*args, "--quiet", "--launch", "spin_on_success.launch"]) == 0
+    run = open_run(out)
+    assert run.outcome == "done", run.outcome_reason
+    cmd, status, truth = (
+        contract.cmd_vel("explorer"),
+        contract.goal_status("explorer"),
+        contract.truth_pose("explorer"),
+    )
+    [reached] = [
+        m.log_time_ns
+        for m in run.messages([status])
+        if isinstance(m.msg, msgs.DiagnosticStatus) and m.msg.message == "succeeded"
+    ]
+    in_tick = [
+        m.msg.angular.z
+        for m in run.messages([cmd], reached, reached + 1)
+        if isinstance(m.msg, msgs.Twist)
+    ]
+    assert in_tick[-1] == 0.3, in_tick  # move_base's stop came first
+    assert 0.0 in in_tick[:-1], in_tick
+    yaws = [
+        yaw_from_quat(m.msg.pose.orientation)
+        for m in run.messages([truth], reached)
+        if isinstance(m.msg, msgs.PoseStamped)
+    ]
+    turned = abs(yaws[-1] - yaws[0])
+    assert turned > 0.5, f"turned {turned:.3f} rad after the goal"  # 0.3 rad/s for 3 s
+    assert not [m for m in run.messages([cmd], reached + 1)], "nothing commanded after it"
 
 
 @pytest.mark.slow

@@ -138,3 +138,35 @@ def test_a_goal_in_the_odom_frame_is_put_in_map() -> None:
     nowhere = msgs.PoseStamped(header=msgs.Header(frame_id="nowhere"))
     with pytest.raises(ValueError, match="'nowhere' cannot be looked up in map"):
         loop.nav.send_goal(nowhere)
+
+
+def test_a_command_sent_on_success_is_the_last_of_its_tick() -> None:
+    """As move_base (issue #32): the client's zero velocity and outcome come before the done
+    callback runs, so a one-shot spin sent from it is the tick's last command and the robot
+    turns."""
+    loop = Loop()
+    spin = msgs.Twist(angular=msgs.Vector3(z=0.3))
+    with loop.ex.activate():
+        own = loop.node.create_publisher(msgs.Twist, contract.cmd_vel(ROBOT))
+
+    def spin_once(result: NavResult) -> None:
+        loop.results.append(result)
+        own.publish(spin)  # the mission's own publisher, once
+
+    loop.pending.append(
+        msgs.PoseStamped(
+            header=msgs.Header(frame_id=contract.MAP),
+            pose=msgs.Pose(position=msgs.Point(x=-0.7, y=0.6)),
+        )
+    )
+    loop.nav.send_goal(loop.pending.pop(), spin_once, name="there", ignore_yaw=True)
+    before = len(loop.outputs)
+    loop.run(20.0)
+    [result] = loop.results
+    assert result.succeeded
+    last_tick = [m for t, m in loop.outputs[before:] if t == contract.cmd_vel(ROBOT)][-2:]
+    assert last_tick == [msgs.Twist(), spin]  # move_base's stop, then the spin
+    yaw = loop.pose[2]
+    for _ in range(20):
+        loop.step()
+    assert loop.pose[2] - yaw == pytest.approx(0.3, abs=1e-6)  # 1 s at 0.3 rad/s

@@ -507,9 +507,12 @@ class Bridge:
             # the course's /fiducial_transforms comes in the tick, right after its frame
             self._publish(topic, value)
         poses = {r: self._pose(r, t_ns) for r in self.robots}
+        settled: list[tuple[str, msgs.Message]] = []
         driven: list[tuple[str, msgs.Message]] = []
         for robot in self.robots:
-            driven += self.move_base[robot].tick(t_ns, poses, self._in_map)
+            before, after = self.move_base[robot].tick(t_ns, poses, self._in_map)
+            settled += before
+            driven += after
         dt = 0.0 if self.last_t is None else (t_ns - self.last_t) / 1e9
         self.last_t = t_ns
         # the graph paces the clock: the tick ends when the graph is idle (:mod:`.quiescence`);
@@ -529,10 +532,13 @@ class Bridge:
         # what arrived within the tick in a fixed order: by topic, then publishing node (one
         # node's messages on one topic keep their order: one TCP connection)
         got.sort(key=lambda item: (item[0], item[1]))
-        # move_base's commands last: when the package also commands a robot move_base drives,
-        # move_base's command is the one the robot follows (what team 002 saw) and the rubric's
-        # cmd_vel_one_publisher line reports the fight
-        return [(topic, value) for topic, _node, value in got] + driven
+        # a goal's end first: real move_base publishes its zero velocity before the result
+        # (resetState(), then setSucceeded), so a command the package sends when it learns
+        # of the result (a one-shot spin on SUCCEEDED) is the robot's last one (issue #32).
+        # The active goal's command last: when the package also commands a robot move_base
+        # drives, move_base's command is the one the robot follows (what team 002 saw) and the
+        # rubric's cmd_vel_one_publisher line reports the fight
+        return settled + [(topic, value) for topic, _node, value in got] + driven
 
     def _refresh(self) -> None:
         """The idle check's processes and threads found again, and which are the package's:

@@ -16,6 +16,13 @@ A goal inside an obstacle or its inflation is moved to the nearest free cell wit
 (students' follower goals are markers on walls). The other robot, where tf says it stands when
 the goal arrives, is an obstacle in this robot's costmap, as its laser would mark it.
 
+Order, as move_base's own code has it: each control cycle publishes the feedback first; at a
+goal's end, move_base's ``resetState()`` publishes the zero velocity and only then does
+``as_->setSucceeded()`` (or ``setAborted``) send the result, which actionlib publishes before
+its status array. So :meth:`MoveBase.tick` hands back what it published up to its last result
+of the tick apart from what it published after it: a package that reacts to SUCCEEDED with a
+command (a one-shot spin) commands after move_base's zero velocity, and the robot follows it.
+
 Threads: actionlib calls back on its own threads; those callbacks only queue events, and
 :meth:`MoveBase.tick` (the bridge's main loop, once per control tick) handles them in arrival
 order, so the navigator itself is only ever touched by one thread.
@@ -83,11 +90,16 @@ class MoveBase:
         t_ns: int,
         poses: dict[str, Pose | None],
         in_map: Any,
-    ) -> list[tuple[str, msgs.Message]]:
+    ) -> tuple[list[tuple[str, msgs.Message]], list[tuple[str, msgs.Message]]]:
         """Handle the queued goals and cancels, then drive one tick; what to publish (the
-        ``cmd_vel``, the goal, the outcome) as usar messages. ``in_map(frame)`` gives a frame's
-        pose in map ((x, y, yaw) or None), for goals in another frame."""
+        ``cmd_vel``, the goal, the outcome) as usar messages, in two parts: ``(before, after)``.
+        ``before`` is everything up to and including the tick's last result (a goal's last
+        command, the zero velocity, its outcome): it precedes whatever the package published in
+        the tick, which may react to that result. ``after`` is the active goal's command (and
+        its start), later than the package's own command of the tick. ``in_map(frame)`` gives a
+        frame's pose in map ((x, y, yaw) or None), for goals in another frame."""
         out: list[tuple[str, msgs.Message]] = []
+        ended = 0  # out[:ended]: published up to the tick's last result
         while True:
             try:
                 kind, handle = self._events.get_nowait()
@@ -95,23 +107,27 @@ class MoveBase:
                 break
             if kind == "goal":
                 out += self._start(handle, t_ns, poses, in_map)
+                if self.active is None:  # it ended at once (no map, not linked, no path)
+                    ended = len(out)
             elif self.active is not None and _same(handle, self.active):
                 if self.nav is not None:
                     self.nav.cancel()
+                out.append((contract.cmd_vel(self.robot), msgs.Twist()))  # before the result
                 self.active.set_canceled(_result(), "cancelled by the client")
                 self.active = None
-                out.append((contract.cmd_vel(self.robot), msgs.Twist()))
+                ended = len(out)
             else:
                 handle.set_canceled(_result(), "cancelled by the client")
         pose = poses.get(self.robot)
         if self.active is None or self.nav is None or pose is None:
-            return out
+            return out[:ended], out[ended:]
+        self._feedback(pose)  # move_base's cycle: the feedback first, then the command
         twist = self.nav.update(t_ns, *pose)
         out.append((contract.cmd_vel(self.robot), twist))
-        self._feedback(pose)
         if self.nav.status is not NavStatus.ACTIVE:
             out += self._finish(self.nav.status is NavStatus.SUCCEEDED, self.nav.reason, t_ns, pose)
-        return out
+            ended = len(out)
+        return out[:ended], out[ended:]
 
     def _feedback(self, pose: Pose) -> None:
         from move_base_msgs.msg import MoveBaseFeedback
@@ -183,7 +199,10 @@ class MoveBase:
     def _finish(
         self, ok: bool, reason: str, t_ns: int, pose: Pose | None = None
     ) -> list[tuple[str, msgs.Message]]:
+        """The goal's end as move_base's: the zero velocity first (``resetState()``), then the
+        result (``setSucceeded``/``setAborted``; actionlib publishes it, then its status)."""
         handle, self.active = self.active, None
+        stop = (contract.cmd_vel(self.robot), msgs.Twist())
         if ok:
             handle.set_succeeded(_result(), "goal reached")
         else:
@@ -191,10 +210,7 @@ class MoveBase:
         status = goal_status(
             self.robot, self._name, self._seq, ok, reason, pose, self._started_ns, t_ns
         )
-        return [
-            (contract.cmd_vel(self.robot), msgs.Twist()),
-            (contract.goal_status(self.robot), status),
-        ]
+        return [stop, (contract.goal_status(self.robot), status)]
 
 
 def _same(a: Any, b: Any) -> bool:
