@@ -164,7 +164,7 @@ def test_marker_frame_never_broadcast(room_log: tuple[Path, RecordResult], tmp_p
     report = grade_file(path)
     # no broadcast at all: only_on_detection has nothing to judge and gives no credit
     assert report.failed_ids() == ["marker_0.broadcast", "marker_frame.only_on_detection"]
-    assert report.check("marker_0.broadcast").measured == "no broadcast"
+    assert report.check("marker_0.broadcast").measured == "nothing broadcast on /tf"
     assert report.check("marker_frame.only_on_detection").measured.startswith("nothing broadcast")
 
 
@@ -217,7 +217,8 @@ def test_a_broadcast_20_cm_off_fails_the_broadcast_line(
 def test_a_broadcast_on_a_frame_without_detection(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
-    """Empty the detection of one frame that was broadcast: marker_frame had no detection."""
+    """Empty the detections of the last broadcast's frame and of the frame before it (one
+    camera period, 0.1 s, earlier): that broadcast had no detection in its window."""
     path = tmp_path / "undetected.mcap"
     stamps = [
         t.header.stamp.ns
@@ -229,7 +230,10 @@ def test_a_broadcast_on_a_frame_without_detection(
 
     def edit(m: bag.BagMessage) -> msgs.Message | None:
         msg = m.msg
-        if isinstance(msg, msgs.FiducialTransformArray) and msg.header.stamp.ns == stamps[-1]:
+        if (
+            isinstance(msg, msgs.FiducialTransformArray)
+            and 0 <= stamps[-1] - msg.header.stamp.ns <= 100_000_000
+        ):
             return replace(msg, transforms=())
         return None
 
@@ -237,7 +241,8 @@ def test_a_broadcast_on_a_frame_without_detection(
     report = grade_file(path)
     assert report.failed_ids() == ["marker_frame.only_on_detection"]
     line = report.check("marker_frame.only_on_detection")
-    assert "1 without a matching detection" in line.measured and line.evidence_ns == stamps[-1]
+    assert "1 without a detection within 0.1 s" in line.measured
+    assert line.evidence_ns == stamps[-1]
 
 
 def test_a_run_longer_than_10_minutes_fails_the_time_limit(

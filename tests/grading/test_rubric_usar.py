@@ -198,10 +198,12 @@ def test_marker_broadcast_worst_error_against_the_threshold() -> None:
     broadcast(g, 0, 6 * S, error_m=0.3)
     line = marker_broadcast(g, 0)
     assert not line.passed and line.value == pytest.approx(0.3) and line.limit == 0.10
-    assert line.evidence_ns == 6 * S and line.evidence == "worst broadcast"
-    assert line.measured == "2 broadcasts, worst error 30.0 cm"
+    assert line.evidence_ns == 6 * S
+    assert line.evidence == "worst broadcast: marker_frame stamped 6.000 s, image 6.000 s"
+    assert line.measured == "marker_frame: 2 broadcasts, worst error 30.0 cm"
     none = marker_broadcast(g, 1)
-    assert none.measured == "no broadcast" and none.value is None and none.evidence_ns is None
+    assert none.measured == "no broadcast within 0.1 s after a frame where marker 1 was detected"
+    assert none.value is None and none.evidence_ns is None
     loose = Grader(world(), Thresholds(marker_map_error_m=0.5))
     detect(loose, [0], 5 * S)
     broadcast(loose, 0, 5 * S, error_m=0.3)
@@ -217,8 +219,11 @@ def test_only_on_detection_counts_broadcasts_without_one_or_off_the_camera() -> 
     broadcast(g, 0, 8 * S, parent=contract.MAP)
     line = only_on_detection(g)
     assert not line.passed and line.value == 2 and line.limit == 0
-    assert line.measured == "3 broadcasts, 2 without a matching detection, 1 with another parent"
+    assert line.measured == (
+        "3 broadcasts (marker_frame), 2 without a detection within 0.1 s, 1 with another parent"
+    )
     assert line.evidence_ns == 7 * S
+    assert line.evidence == "first bad broadcast: marker_frame stamped 7.000 s"
 
 
 def test_an_older_detection_stamped_anew_is_not_a_detection() -> None:
@@ -246,7 +251,9 @@ def test_an_older_detection_stamped_anew_is_not_a_detection() -> None:
     g.feed(contract.TF, msgs.TFMessage(transforms=(stale,)), 6 * S)
     line = only_on_detection(g)
     assert not line.passed and line.evidence_ns == 6 * S
-    assert line.measured == "1 broadcast, 1 without a matching detection, 0 with another parent"
+    assert line.measured == (
+        "1 broadcast (marker_frame), 1 without a detection within 0.1 s, 0 with another parent"
+    )
     fresh = Grader(world())
     detect(fresh, [0], 5 * S)
     broadcast(fresh, 0, 5 * S)  # its own frame's detection: fine
@@ -261,7 +268,7 @@ def test_only_on_detection_gives_no_credit_when_nothing_was_broadcast() -> None:
     detect(g, [0], 3 * S)  # detected, but never broadcast
     line = only_on_detection(g)
     assert not line.passed and line.points == 0 and line.max_points == 4
-    assert line.measured == "nothing broadcast as marker_frame"
+    assert line.measured == "nothing broadcast on /tf"
     assert line.value is None and line.evidence_ns is None  # nothing measured
     assert "marker_frame.only_on_detection" in judge_failed(g)
 
@@ -365,3 +372,122 @@ def test_two_moving_commands_in_one_tick_are_two_publishers() -> None:
     bad = checks["explorer.cmd_vel_one_publisher"]
     assert not bad.passed and bad.value == 1.0 and bad.evidence_ns == t + 1
     assert bad.max_points == 0.0  # it flags the run without moving the course's 60 points
+
+
+# --- broadcasts as a TA sees them in RViz (rubric version 2, issue #32) ---------------------------
+
+MS = 1_000_000
+
+
+def send(
+    g: Grader,
+    child: str,
+    xyz: tuple[float, float, float],
+    t: int,
+    *,
+    stamp: int | None = None,
+    parent: str = contract.OPTICAL_FRAME,
+) -> None:
+    """One transform on /tf, published at log time ``t``, stamped ``stamp`` (default ``t``)."""
+    tf = msgs.TransformStamped(
+        header=msgs.Header(stamp=msgs.Time.from_ns(t if stamp is None else stamp), frame_id=parent),
+        child_frame_id=child,
+        transform=msgs.Transform(
+            translation=msgs.Vector3(x=xyz[0], y=xyz[1], z=xyz[2]), rotation=msgs.Quaternion(w=1.0)
+        ),
+    )
+    g.feed(contract.TF, msgs.TFMessage(transforms=(tf,)), t)
+
+
+def camera(g: Grader, t: int, x: float = 0.0) -> None:
+    """The simulator's camera frame at (x, 0, 0) in map at ``t``."""
+    send(g, contract.OPTICAL_FRAME, (x, 0.0, 0.0), t, parent=contract.MAP)
+
+
+def test_a_broadcast_of_any_name_up_to_one_camera_period_late_counts() -> None:
+    """okritvik's and the sample code's shape: ``my_frame`` stamped ``now()`` a tick (50 ms)
+    or a whole camera period (100 ms) after the image; the line names the frame and stamps."""
+    g = Grader(world())
+    for t in (5 * S, 5 * S + 50 * MS, 5 * S + 100 * MS):
+        camera(g, t)
+    detect(g, [0], 5 * S)
+    send(g, "my_frame", MARKERS[0], 5 * S + 50 * MS)
+    send(g, "my_frame", MARKERS[0], 5 * S + 100 * MS)
+    line = marker_broadcast(g, 0)
+    assert line.passed and line.measured == "my_frame: 2 broadcasts, worst error 0.0 cm"
+    assert line.evidence == "first broadcast: my_frame stamped 5.050 s, image 5.000 s"
+    only = only_on_detection(g)
+    assert only.passed, only.measured
+    assert only.measured.startswith("2 broadcasts (my_frame), 0 without a detection")
+
+
+def test_a_broadcast_later_than_one_camera_period_has_no_detection() -> None:
+    g = Grader(world())
+    for t in (5 * S, 5 * S + 150 * MS):
+        camera(g, t)
+    detect(g, [0], 5 * S)
+    send(g, "target_0", MARKERS[0], 5 * S + 150 * MS)
+    line = marker_broadcast(g, 0)
+    assert not line.passed
+    assert line.measured == "no broadcast within 0.1 s after a frame where marker 0 was detected"
+    only = only_on_detection(g)
+    assert not only.passed and only.evidence_ns == 5 * S + 150 * MS
+    assert only.evidence == "first bad broadcast: target_0 stamped 5.150 s"
+
+
+def test_a_zero_stamp_is_the_time_it_was_published() -> None:
+    """``ros::Time(0)`` as a stamp: the frame as it stood when it was sent (tf's "latest")."""
+    g = Grader(world())
+    for t in (5 * S, 5 * S + 50 * MS):
+        camera(g, t)
+    detect(g, [0], 5 * S)
+    send(g, "marker_frame", MARKERS[0], 5 * S + 50 * MS, stamp=0)
+    assert marker_broadcast(g, 0).passed and only_on_detection(g).passed
+    assert "stamped 5.050 s, image 5.000 s" in marker_broadcast(g, 0).evidence
+
+
+def test_the_map_position_is_the_parent_chain_at_the_stamp() -> None:
+    """The camera moved 0.4 m between the image and the late stamp: the frame, copied from the
+    image's detection, is 0.4 m off where tf puts it then, and the line fails. A frame under
+    map itself is judged by where it is (passes), and only_on_detection names its parent."""
+    g = Grader(world())
+    camera(g, 5 * S)
+    camera(g, 5 * S + 50 * MS, x=0.4)
+    detect(g, [0], 5 * S)
+    send(g, "my_frame", MARKERS[0], 5 * S + 50 * MS)
+    line = marker_broadcast(g, 0)
+    assert not line.passed and line.value == pytest.approx(0.4)
+    in_map = Grader(world())
+    camera(in_map, 5 * S)
+    detect(in_map, [1], 5 * S)
+    send(in_map, "target_1", MARKERS[1], 5 * S + 50 * MS, parent=contract.MAP)
+    assert marker_broadcast(in_map, 1).passed
+    only = only_on_detection(in_map)
+    assert not only.passed and "1 with another parent" in only.measured
+
+
+def test_the_simulators_frames_are_not_broadcasts() -> None:
+    g = Grader(world())
+    camera(g, 5 * S)
+    detect(g, [0], 5 * S)
+    send(g, "explorer_tf/base_footprint", (0.0, 0.0, 0.0), 5 * S, parent="explorer_tf/odom")
+    assert only_on_detection(g).measured == "nothing broadcast on /tf"
+    assert marker_broadcast(g, 0).measured == "nothing broadcast on /tf"
+
+
+def test_the_line_shows_the_frame_that_is_on_the_marker() -> None:
+    """Two frames for one marker, one 0.4 m off: a TA would look at the right one."""
+    g = Grader(world())
+    camera(g, 5 * S)
+    detect(g, [0], 5 * S)
+    off = (MARKERS[0][0] + 0.4, MARKERS[0][1], MARKERS[0][2])
+    send(g, "helper", off, 5 * S)
+    send(g, "my_frame", MARKERS[0], 5 * S)
+    line = marker_broadcast(g, 0)
+    assert line.passed
+    assert line.measured == "my_frame: 1 broadcast, worst error 0.0 cm (and 1 other frame)"
+    alone = Grader(world())
+    camera(alone, 5 * S)
+    detect(alone, [0], 5 * S)
+    send(alone, "my_frame", off, 5 * S)
+    assert not marker_broadcast(alone, 0).passed

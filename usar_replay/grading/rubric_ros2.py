@@ -275,7 +275,15 @@ class Grader:
             self._destination_reached(),
             self._time_limit(),
         )
-        return GradeReport(source, checks, self.start_ns or 0, log_complete, log_problem)
+        return GradeReport(
+            source,
+            checks,
+            self.start_ns or 0,
+            log_complete,
+            log_problem,
+            rubric="ros2-final",
+            rubric_version=RUBRIC.version,
+        )
 
     def _odom_to_base(self) -> Check:
         """``tf.odom_to_base``: the odometry broadcaster connected the tree, matching odometry."""

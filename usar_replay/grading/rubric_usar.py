@@ -71,6 +71,7 @@ from usar_replay.world.scenario import Scenario
 
 __all__ = [
     "RUBRIC",
+    "RUBRIC_VERSION",
     "DETECTION_MEMORY_NS",
     "GRADE_TOPICS",
     "MAX_VISITS",
@@ -114,6 +115,11 @@ NO_DETECTOR = (
 )
 """What the detection lines measure when the detector never published (a mission without
 ``ArucoDetect()`` in its ``main()``)."""
+RUBRIC_VERSION = 2
+"""1: only ``marker_frame`` was a broadcast, stamped exactly with a detected image's stamp.
+2 (issue #32): a frame of any name on ``/tf`` (not the simulator's), stamped within one camera
+period after a detected image (or zero: when it was sent), placed in ``map`` through its parent
+at that stamp; the broadcast line shows the frame a TA would look at."""
 MAX_VISITS = 256
 """Entry times kept per disc; past this the newest replaces the last kept (the bound only keeps
 memory flat on a pathological log)."""
@@ -182,17 +188,41 @@ class Disc:
 
 
 @dataclass(slots=True)
-class Broadcasts:
-    """The ``marker_frame`` broadcasts attributed to one marker."""
+class FrameBroadcasts:
+    """One child frame's broadcasts attributed to one marker (a TA's look at that frame)."""
 
+    frame: str
     count: int = 0
-    detected: int = 0
-    """Broadcasts stamped with a frame in which the course's detector saw this marker: only
-    those count (a ``marker_frame`` without a detection is not evidence of one)."""
     worst_m: float = -1.0
     worst_ns: int = 0
+    worst_stamp: tuple[int, int] = (0, 0)
+    """(the broadcast's stamp, the detection's image stamp) of the worst one."""
     first_ns: int | None = None
+    first_stamp: tuple[int, int] = (0, 0)
     failed_lookups: int = 0
+
+
+@dataclass(slots=True)
+class Broadcasts:
+    """The broadcasts attributed to one marker: only those within one camera period after an
+    image in which the course's detector saw it (a broadcast without one is no evidence of a
+    detection; :func:`only_on_detection` judges it), by child frame name."""
+
+    frames: dict[str, FrameBroadcasts] = field(default_factory=dict)
+
+    @property
+    def count(self) -> int:
+        return sum(f.count for f in self.frames.values())
+
+    def shown(self, limit_m: float) -> FrameBroadcasts | None:
+        """The frame a TA would point at: one whose every broadcast is within ``limit_m`` (the
+        most broadcast such frame), else the one closest to passing; None without any."""
+        if not self.frames:
+            return None
+        return min(
+            self.frames.values(),
+            key=lambda f: (0.0, -f.count) if f.worst_m <= limit_m else (1.0, f.worst_m),
+        )
 
 
 class Grader:
@@ -225,12 +255,21 @@ class Grader:
         """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
         self._recent: dict[int, tuple[msgs.FiducialTransform, ...]] = {}
         """Detections by image stamp, the last :data:`DETECTION_MEMORY_NS` only."""
+        self._stamps: list[int] = []
+        """The keys of :attr:`_recent`, sorted (for the window of a broadcast's stamp)."""
+        self.period_ns = math.ceil(1e9 / scenario.camera.rate_hz)
+        """One camera period: how long after an image its broadcast may be stamped."""
+        self._not_candidates = frozenset((contract.MAP, *contract.sim_frames()))
         self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
         self.broadcast_count = 0
+        self.broadcast_frames: dict[str, int] = {}
+        """Broadcasts by child frame name, in the order first seen."""
         self.without_detection = 0
         self.without_detection_ns: int | None = None
+        self.without_detection_what = ""
         self.wrong_parent = 0
         self.wrong_parent_ns: int | None = None
+        self.wrong_parent_what = ""
         self.bad_broadcasts = 0
         """Broadcasts without a detection *or* with another parent (each counted once)."""
         self.start_ns: int | None = None
@@ -301,14 +340,13 @@ class Grader:
             self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
         if msg.transforms:
             stamp = msg.header.stamp.ns
+            if stamp not in self._recent:
+                bisect.insort(self._stamps, stamp)
             self._recent[stamp] = self._recent.get(stamp, ()) + msg.transforms
-        # forget detections older than the tf cache (dicts keep insertion order: oldest first)
+        # forget detections older than the tf cache
         horizon = t_ns - DETECTION_MEMORY_NS
-        while self._recent:
-            oldest = next(iter(self._recent))
-            if oldest >= horizon:
-                break
-            del self._recent[oldest]
+        while self._stamps and self._stamps[0] < horizon:
+            del self._recent[self._stamps.pop(0)]
 
     def _on_follower(self, xy: tuple[float, float], t_ns: int) -> None:
         if self.follower_start is None:
@@ -323,101 +361,136 @@ class Grader:
         self.follower_home_disc.update(xy, t_ns)
 
     def _on_marker_frames(self, msg: msgs.TFMessage, t_ns: int) -> None:
-        """The ``marker_frame`` broadcasts of one ``/tf`` message, judged after the message is
-        in the buffer (as tf2 sees it). Work is linear in the *distinct* broadcasts: identical
-        ones are judged once and counted as often as they were sent, and ``map`` is looked up
-        once per stamp (the buffer does not change within the message), so a message with
-        thousands of copies (a grade bomb) costs one judgement; every count is as before."""
+        """The broadcasts of one ``/tf`` message: every transform whose child is not one of the
+        simulator's frames (any name: ``marker_frame``, ``my_frame``, ``target_1``), judged
+        after the message is in the buffer (as tf2 sees it). Work is linear in the *distinct*
+        broadcasts: identical ones are judged once and counted as often as they were sent, and
+        a parent is looked up in ``map`` once per stamp (the buffer does not change within the
+        message), so a message with thousands of copies (a grade bomb) costs one judgement."""
         sent: dict[msgs.TransformStamped, int] = {}
         for tf in msg.transforms:
-            if tf.child_frame_id == contract.MARKER_FRAME:
+            if tf.child_frame_id.lstrip("/") not in self._not_candidates:
                 sent[tf] = sent.get(tf, 0) + 1
-        in_map: dict[int, msgs.TransformStamped | None] = {}
+        parents: dict[tuple[str, int], msgs.TransformStamped | None] = {}
         for tf, times in sent.items():
-            stamp = tf.header.stamp.ns
-            if stamp not in in_map:
+            # ros::Time(0) (the sample code's lookup time, used as a stamp) means "now": the
+            # frame as it was when it was published
+            stamp = tf.header.stamp.ns or t_ns
+            key = (tf.header.frame_id, stamp)
+            if key not in parents:
                 try:
-                    in_map[stamp] = self.buffer.lookup_transform(
-                        contract.MAP, contract.MARKER_FRAME, tf.header.stamp
-                    )
+                    parents[key] = self.buffer.lookup_transform(contract.MAP, key[0], stamp)
                 except TransformException:
-                    in_map[stamp] = None
-            self._on_marker_frame(tf, t_ns, times, in_map[stamp])
+                    parents[key] = None
+            parent = parents[key]
+            where = None if parent is None else _compose(parent.transform, tf.transform)
+            self._on_broadcast(tf, stamp, t_ns, times, where)
 
-    def _on_marker_frame(
+    def _window(self, stamp: int) -> list[tuple[int, msgs.FiducialTransform]]:
+        """The detections a broadcast stamped ``stamp`` may be: those of images stamped at most
+        one camera period before it (a callback that ran a tick late and stamped "now"),
+        newest image first."""
+        lo = bisect.bisect_left(self._stamps, stamp - self.period_ns)
+        hi = bisect.bisect_right(self._stamps, stamp)
+        return [(s, f) for s in reversed(self._stamps[lo:hi]) for f in self._recent[s]]
+
+    def _on_broadcast(
         self,
         tf: msgs.TransformStamped,
+        stamp: int,
         t_ns: int,
         times: int,
-        in_map: msgs.TransformStamped | None,
+        where: tuple[float, float, float] | None,
     ) -> None:
-        """``times`` identical broadcasts of ``tf``; ``in_map`` is ``marker_frame`` in ``map``
-        at its stamp (None: the lookup failed)."""
+        """``times`` identical broadcasts of ``tf``, stamped ``stamp`` (its own, or the log time
+        for a zero stamp); ``where`` is its child frame's position in ``map`` through its
+        parent at that stamp (None: the parent could not be looked up)."""
+        frame = tf.child_frame_id
+        what = f"{frame} stamped {stamp / 1e9:.3f} s"
         self.broadcast_count += times
-        if tf.header.frame_id != contract.OPTICAL_FRAME:
+        self.broadcast_frames[frame] = self.broadcast_frames.get(frame, 0) + times
+        on_camera = tf.header.frame_id.lstrip("/") == contract.OPTICAL_FRAME
+        if not on_camera:
             self.wrong_parent += times
             if self.wrong_parent_ns is None:
-                self.wrong_parent_ns = t_ns
-        detections = self._recent.get(tf.header.stamp.ns, ())
-        if not detections or self._stale_copy(tf, detections):
+                self.wrong_parent_ns, self.wrong_parent_what = t_ns, what
+        window = self._window(stamp)
+        if not window or (on_camera and self._stale_copy(tf, stamp, window)):
             self.without_detection += times
             if self.without_detection_ns is None:
-                self.without_detection_ns = t_ns
+                self.without_detection_ns, self.without_detection_what = t_ns, what
             self.bad_broadcasts += times
-        elif tf.header.frame_id != contract.OPTICAL_FRAME:
+        elif not on_camera:
             self.bad_broadcasts += times
-        mid = _detected_id(tf.transform, detections)
+        if not window:
+            return  # no detection to be the broadcast of: only only_on_detection judges it
+        image, mid = self._attribute(tf, window, where, on_camera)
         if mid not in self.markers:
-            if in_map is None or not self.markers:
-                return  # neither an ID nor a place: only the only_on_detection line can tell
-            p = in_map.transform.translation
-            mid = min(self.markers, key=lambda k: math.dist((p.x, p.y, p.z), self.markers[k]))
-        b = self.broadcasts[mid]
+            return
+        b = self.broadcasts[mid].frames.setdefault(frame, FrameBroadcasts(frame))
         b.count += times
-        if any(f.fiducial_id == mid for f in detections):
-            b.detected += times
         if b.first_ns is None:
-            b.first_ns = t_ns
-        if in_map is None:
+            b.first_ns, b.first_stamp = t_ns, (stamp, image)
+        err = math.inf if where is None else math.dist(where, self.markers[mid])
+        if not math.isfinite(err):  # NaN is never "worse than" anything: make it the worst
             b.failed_lookups += times
             err = math.inf
-        else:
-            p = in_map.transform.translation
-            err = math.dist((p.x, p.y, p.z), self.markers[mid])
-            if not math.isfinite(err):  # NaN is never "worse than" anything: make it the worst
-                b.failed_lookups += times
-                err = math.inf
         if err > b.worst_m:
-            b.worst_m, b.worst_ns = err, t_ns
+            b.worst_m, b.worst_ns, b.worst_stamp = err, t_ns, (stamp, image)
+
+    def _attribute(
+        self,
+        tf: msgs.TransformStamped,
+        window: list[tuple[int, msgs.FiducialTransform]],
+        where: tuple[float, float, float] | None,
+        on_camera: bool,
+    ) -> tuple[int, int]:
+        """(image stamp, marker ID) of the detection a broadcast is: on the camera, the one it
+        copies (identical, else nearest in the camera frame); elsewhere, the detected marker
+        nearest to where it puts its frame in ``map``."""
+        if on_camera:
+            exact = next(((s, f) for s, f in window if f.transform == tf.transform), None)
+            s, f = exact or min(window, key=lambda sf: _apart_m(tf.transform, sf[1].transform))
+            return s, f.fiducial_id
+        if where is None:
+            return window[0][0], window[0][1].fiducial_id
+        known = [(s, f) for s, f in window if f.fiducial_id in self.markers]
+        if not known:
+            return window[0][0], window[0][1].fiducial_id
+        s, f = min(known, key=lambda sf: math.dist(where, self.markers[sf[1].fiducial_id]))
+        return s, f.fiducial_id
 
     def _stale_copy(
-        self, tf: msgs.TransformStamped, own: tuple[msgs.FiducialTransform, ...]
+        self,
+        tf: msgs.TransformStamped,
+        stamp: int,
+        window: list[tuple[int, msgs.FiducialTransform]],
     ) -> bool:
-        """Is this broadcast an older frame's detection stamped with a newer frame (the
-        "stamped now" bug)? Its pose is not where its own frame's detections put a marker
-        (:data:`BROADCAST_MATCH_M`) but is exactly one of an earlier frame's. Any other pose
-        (an identity, an offset) is judged by the broadcast line, not here."""
-        stamp = tf.header.stamp.ns
-        if _near_a_detection(tf.transform, own, BROADCAST_MATCH_M):
+        """Is this broadcast an older frame's detection stamped anew, more than one camera
+        period later (the "stamped now" bug, beyond what a callback one tick late does)? Its
+        pose is not where the window's detections put a marker (:data:`BROADCAST_MATCH_M`) but
+        is exactly one of an earlier frame's. Any other pose (an identity, an offset) is
+        judged by the broadcast line, not here."""
+        if _near_a_detection(tf.transform, tuple(f for _, f in window), BROADCAST_MATCH_M):
             return False
+        oldest = window[-1][0]
         return any(
-            _near_a_detection(tf.transform, found, 1e-9)
-            for s, found in self._recent.items()
-            if s < stamp
+            _near_a_detection(tf.transform, self._recent[s], 1e-9)
+            for s in self._stamps
+            if s < oldest
         )
 
     def found_markers(self) -> tuple[FoundMarker, ...]:
-        """The markers broadcast as ``marker_frame`` (attributed as :func:`marker_broadcast`
-        does), with the worst error of their broadcasts looked up in ``map``."""
-        return tuple(
-            FoundMarker(
-                mid,
-                _broadcast_text(b, mid),
-                b.worst_m if math.isfinite(b.worst_m) else None,
-            )
-            for mid, b in self.broadcasts.items()
-            if b.count
-        )
+        """The markers broadcast (attributed as :func:`marker_broadcast` does), with the worst
+        error of the broadcasts of the frame the line shows."""
+        out = []
+        for mid, b in self.broadcasts.items():
+            shown = b.shown(self.th.marker_map_error_m)
+            if shown is None:
+                continue
+            worst = shown.worst_m if math.isfinite(shown.worst_m) else None
+            out.append(FoundMarker(mid, _broadcast_text(b, shown), worst))
+        return tuple(out)
 
     def resolved_thresholds(self) -> Thresholds:
         """The thresholds judged by, with the scenario's time limit filled in."""
@@ -437,6 +510,8 @@ class Grader:
             log_problem,
             thresholds=self.resolved_thresholds(),
             scenario=self.scenario.name,
+            rubric="usar",
+            rubric_version=RUBRIC_VERSION,
         )
 
 
@@ -461,17 +536,19 @@ def _apart_m(a: msgs.Transform, b: msgs.Transform) -> float:
     return math.dist((p.x, p.y, p.z), (q.x, q.y, q.z))
 
 
-def _detected_id(
-    transform: msgs.Transform, detections: tuple[msgs.FiducialTransform, ...]
-) -> int | None:
-    """Which detection a broadcast is: the identical transform (the mission copies it), else
-    the detection nearest in the camera frame; None without detections."""
-    if not detections:
-        return None
-    for f in detections:
-        if f.transform == transform:
-            return f.fiducial_id
-    return min(detections, key=lambda f: _apart_m(transform, f.transform)).fiducial_id
+def _compose(parent: msgs.Transform, child: msgs.Transform) -> tuple[float, float, float]:
+    """Where ``child`` (a transform from its parent) puts its frame's origin, given the
+    parent's transform in ``map``."""
+    q, v, p = parent.rotation, child.translation, parent.translation
+    # v' = v + 2w (u x v) + 2 u x (u x v), u the quaternion's vector part
+    tx = 2 * (q.y * v.z - q.z * v.y)
+    ty = 2 * (q.z * v.x - q.x * v.z)
+    tz = 2 * (q.x * v.y - q.y * v.x)
+    return (
+        p.x + v.x + q.w * tx + (q.y * tz - q.z * ty),
+        p.y + v.y + q.w * ty + (q.z * tx - q.x * tz),
+        p.z + v.z + q.w * tz + (q.x * ty - q.y * tx),
+    )
 
 
 # --- the rubric lines -------------------------------------------------------------------------
@@ -621,77 +698,109 @@ def marker_detected(g: Grader, mid: int) -> Check:
     )
 
 
-def _broadcast_text(b: Broadcasts, mid: int) -> str:
-    """What a marker's broadcasts measured, in words (the line's and the record summary's)."""
-    if b.count == 0:
-        return "no broadcast"
-    if b.detected == 0:
-        return f"{_n(b.count, 'broadcast')}, none on a frame where marker {mid} was detected"
-    if b.failed_lookups:
-        return (
-            f"{_n(b.count, 'broadcast')}, {b.failed_lookups} not found in {contract.MAP} or not "
-            "finite"
-        )
-    return f"{_n(b.count, 'broadcast')}, worst error {b.worst_m * 100:.1f} cm"
+def _broadcast_text(b: Broadcasts, shown: FrameBroadcasts) -> str:
+    """What a marker's broadcasts measured, in words (the line's and the record summary's):
+    the frame a TA would look at, and how many other frames were broadcast for it."""
+    others = len(b.frames) - 1
+    also = f" (and {_n(others, 'other frame')})" if others else ""
+    head = f"{shown.frame}: {_n(shown.count, 'broadcast')}"
+    if shown.failed_lookups:
+        return f"{head}, {shown.failed_lookups} not found in {contract.MAP} or not finite{also}"
+    return f"{head}, worst error {shown.worst_m * 100:.1f} cm{also}"
+
+
+def _stamps_text(frame: str, stamps: tuple[int, int]) -> str:
+    """``my_frame stamped 12.350 s, image 12.300 s``: which broadcast a line used."""
+    return f"{frame} stamped {stamps[0] / 1e9:.3f} s, image {stamps[1] / 1e9:.3f} s"
 
 
 def marker_broadcast(g: Grader, mid: int) -> Check:
-    """``marker_k.broadcast``: broadcast as ``marker_frame``, every broadcast near the truth."""
+    """``marker_k.broadcast``: a frame broadcast on ``/tf`` (any name) within one camera period
+    after an image in which marker k was detected, every such broadcast of that frame near the
+    truth in ``map`` (as a TA sees it in RViz)."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
-    ok = b.detected > 0 and b.worst_m <= limit
-    measured = _broadcast_text(b, mid)
+    shown = b.shown(limit)
+    ok = shown is not None and shown.worst_m <= limit
+    period = f"{g.period_ns / 1e9:g} s"
+    if shown is None:
+        measured = (
+            "nothing broadcast on /tf"
+            if g.broadcast_count == 0
+            else f"no broadcast within {period} after a frame where marker {mid} was detected"
+        )
+        evidence_ns, evidence = None, ""
+    else:
+        measured = _broadcast_text(b, shown)
+        if ok:
+            evidence_ns = shown.first_ns
+            evidence = "first broadcast: " + _stamps_text(shown.frame, shown.first_stamp)
+        else:
+            evidence_ns = shown.worst_ns
+            evidence = "worst broadcast: " + _stamps_text(shown.frame, shown.worst_stamp)
     each = 8.0 / max(len(g.markers), 1)
-    evidence_ns = (b.first_ns if ok else b.worst_ns) if b.count else None
     return Check(
         id=f"marker_{mid}.broadcast",
-        description=f"marker {mid} broadcast as {contract.MARKER_FRAME}, near the truth",
+        description=f"marker {mid} broadcast on /tf (any frame name), near the truth",
         passed=ok,
         points=each if ok else 0.0,
         max_points=each,
         measured=measured,
-        threshold=f"every broadcast <= {limit * 100:g} cm",
+        threshold=f"stamped within {period} after a detection; every broadcast of the frame "
+        f"<= {limit * 100:g} cm",
         evidence_ns=evidence_ns,
-        value=b.worst_m if b.count and math.isfinite(b.worst_m) else None,
+        value=shown.worst_m if shown is not None and math.isfinite(shown.worst_m) else None,
         unit="m",
         limit=limit,
         op="<=",
-        evidence=("first broadcast" if ok else "worst broadcast") if b.count else "",
+        evidence=evidence,
     )
 
 
 def only_on_detection(g: Grader) -> Check:
     """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera.
 
-    A line that judges broadcasts gives no credit when there were none: a mission that never
-    broadcast (it crashed at its first target, or has no broadcaster yet) has shown nothing this
-    line can judge, so it fails with "nothing broadcast" rather than passing by default."""
+    Every frame broadcast on ``/tf`` that is not the simulator's counts (whatever its name);
+    one without a detection within one camera period before its stamp, or an older frame's
+    detection stamped anew, is one broadcast without a detection. A line that judges
+    broadcasts gives no credit when there were none: a mission that never broadcast (it
+    crashed at its first target, or has no broadcaster yet) has shown nothing this line can
+    judge, so it fails with "nothing broadcast" rather than passing by default."""
     bad = g.bad_broadcasts
-    first_bad = min(
-        (t for t in (g.without_detection_ns, g.wrong_parent_ns) if t is not None), default=None
-    )
+    firsts = [
+        (t, what)
+        for t, what in (
+            (g.without_detection_ns, g.without_detection_what),
+            (g.wrong_parent_ns, g.wrong_parent_what),
+        )
+        if t is not None
+    ]
+    first_bad = min(firsts, default=None)
     ok = bad == 0 and g.broadcast_count > 0
+    period = f"{g.period_ns / 1e9:g} s"
     if g.broadcast_count == 0:
-        measured = f"nothing broadcast as {contract.MARKER_FRAME}"
+        measured = "nothing broadcast on /tf"
     else:
+        names = ", ".join(g.broadcast_frames)
         measured = (
-            f"{_n(g.broadcast_count, 'broadcast')}, {g.without_detection} without a "
-            f"matching detection, {g.wrong_parent} with another parent"
+            f"{_n(g.broadcast_count, 'broadcast')} ({names}), {g.without_detection} without "
+            f"a detection within {period}, {g.wrong_parent} with another parent"
         )
     return Check(
         id="marker_frame.only_on_detection",
-        description=f"{contract.MARKER_FRAME} broadcast only with a detection, child of the camera",
+        description="frames broadcast only with a detection, child of the camera",
         passed=ok,
         points=4.0 if ok else 0.0,
         max_points=4.0,
         measured=measured,
-        threshold=f"0 without a detection; parent {contract.OPTICAL_FRAME}",
-        evidence_ns=first_bad,
+        threshold=f"0 without a detection in the {period} before the stamp; parent "
+        f"{contract.OPTICAL_FRAME}",
+        evidence_ns=None if first_bad is None else first_bad[0],
         value=float(bad) if g.broadcast_count else None,  # nothing broadcast: nothing measured
         unit="broadcasts",
         limit=0.0,
         op="<=",
-        evidence="" if first_bad is None else "first bad broadcast",
+        evidence="" if first_bad is None else f"first bad broadcast: {first_bad[1]}",
     )
 
 
@@ -848,5 +957,11 @@ def judge(g: Grader) -> tuple[Check, ...]:
     return tuple(lines)
 
 
-RUBRIC = Rubric(Grader, GRADE_TOPICS, REQUIRED_TOPICS, trusted_topics=(contract.FIDUCIALS,))
+RUBRIC = Rubric(
+    Grader,
+    GRADE_TOPICS,
+    REQUIRED_TOPICS,
+    trusted_topics=(contract.FIDUCIALS,),
+    version=RUBRIC_VERSION,
+)
 """The US&R rubric, as its assignment carries it."""

@@ -58,6 +58,10 @@ class GradeReport:
     """The scenario's name."""
     seconds: float = 0.0
     """Wall time spent grading (JUnit's ``time``); never part of the verdict."""
+    rubric: str = ""
+    """The rubric's name (its assignment's: ``usar``, ``ros2-final``)."""
+    rubric_version: int = 0
+    """Which version of that rubric judged (:attr:`Rubric.version`; 0: not said)."""
 
     @property
     def points(self) -> float:
@@ -127,5 +131,8 @@ class Rubric:
     required_topics: tuple[str, ...]
     """Without these a log cannot be graded at all."""
     trusted_topics: tuple[str, ...] = ()
+    version: int = 1
+    """Raised whenever a line's meaning changes, so that the same log may grade differently:
+    every report says which version judged it (``docs/reports.md``)."""
     """Topics that count only as the world published them (the ``sim`` publisher: the course's
     detector on the recorder's side), never as a mission did: a forged copy is not graded."""
