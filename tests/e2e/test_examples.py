@@ -212,7 +212,7 @@ def test_stamped_now_and_looked_up_at_latest(room_log: tuple[Path, RecordResult]
     # 10 Hz is the camera's), each a copy of an earlier frame's detection
     assert broadcasts and all(tf.header.stamp.ns % 100_000_000 == 0 for tf in broadcasts)
     measured = report.check("marker_frame.only_on_detection").measured
-    assert f"{len(broadcasts)} broadcasts, 0 without a matching detection" in measured
+    assert f"{len(broadcasts)} broadcasts (marker_frame), 0 without a detection" in measured
     stored = [m for _, m, _ in kept if isinstance(m, msgs.FiducialTransformArray)]
     assert [m.header.frame_id for m in stored if m.transforms][-1:] == [contract.MAP]
 
@@ -234,6 +234,116 @@ def test_the_spin_and_the_navigator_both_command_the_explorer(
 def test_the_rubric_catches_two_cmd_vel_publishers(room_log: tuple[Path, RecordResult]) -> None:
     _, report, _ = _replay(room_log[0], "cmd_vel_conflict.py")
     _expect(report, ["explorer.cmd_vel_one_publisher"])
+
+
+# --- broadcasts as a TA sees them in RViz (rubric version 2, issue #32) -------------------------
+
+LATE_BROADCASTER = """
+    def on_markers(self, msg: FiducialTransformArray) -> None:
+        # the frame is broadcast by the 20 Hz loop, a tick after its image, stamped "now"
+        # (okritvik's callback; the assignment's sample code stamps with ros::Time::now())
+        if not msg.transforms:
+            if JUNK and not self.junked and self.empty is not None:
+                # once: a frame on an image with no detection, after one without either
+                self.junked = True
+                self.send(Header(stamp=msg.header.stamp, frame_id=msg.header.frame_id),
+                          Transform(translation=Vector3(z=1.0)))
+            self.empty = msg.header.stamp
+            return
+        self.empty = None
+        for f in msg.transforms:
+            t = f.transform.translation
+            if self.spinning and f.fiducial_id not in self.found and math.hypot(t.x, t.z) < 2.5:
+                self.pending = (f.fiducial_id, msg.header, f.transform)
+
+    def send(self, header: Header, transform: Transform) -> None:
+        t = transform.translation
+        moved = Transform(translation=Vector3(x=t.x + OFFSET_X, y=t.y, z=t.z),
+                          rotation=transform.rotation)
+        child = TransformStamped(header=header, child_frame_id=FRAME, transform=moved)
+        self.tf.sendTransform(child)
+
+    def on_tick(self) -> None:
+        now = self.get_clock().now().to_msg()
+        if self.pending is None or self.pending[1].stamp == now:
+            return
+        marker_id, header, transform = self.pending
+        self.pending = None
+        self.send(Header(stamp=now, frame_id=header.frame_id), transform)
+        self.seen = (marker_id, now)
+
+"""
+
+
+def _late_broadcaster(
+    tmp_path: Path, frame: str, *, offset_m: float = 0.0, junk: bool = False
+) -> str:
+    """examples/minimal_mission.py with its broadcaster as real packages write it: the frame
+    named ``frame``, broadcast a tick (50 ms) after its image stamped with the loop's "now",
+    ``offset_m`` off along the camera's x; ``junk``: also once on an image with no detection."""
+    text = (EXAMPLES / "minimal_mission.py").read_text()
+    start = text.index(
+        "    def on_markers(self, msg: FiducialTransformArray) -> None:\n        for f"
+    )
+    end = text.index("    def on_timer(self)")
+    text = text[:start] + LATE_BROADCASTER.lstrip("\n") + text[end:]
+    timer = "        self.create_timer(0.1, self.on_timer)\n"
+    assert timer in text and '"map", "marker_frame"' in text
+    text = text.replace(
+        timer,
+        timer + "        self.create_timer(0.05, self.on_tick)\n"
+        "        self.pending, self.empty, self.junked = None, None, False\n",
+    )
+    text = text.replace('"map", "marker_frame"', f'"map", {frame!r}')
+    names = "TransformBroadcaster, TransformException"
+    text = text.replace(names, "Transform, " + names)
+    header = f"FRAME, OFFSET_X, JUNK = {frame!r}, {offset_m!r}, {junk!r}\n"
+    mission = tmp_path / f"late_{frame}.py"
+    mission.write_text(text.replace("\n\n\ndef goal(", "\n" + header + "\n\ndef goal(", 1))
+    return str(mission)
+
+
+def test_my_frame_stamped_a_tick_late_passes_the_broadcast_lines(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """okritvik's shape (issue #32): ``my_frame``, stamped with the loop's "now" a tick after
+    its image. Every line passes; the evidence names the frame and both stamps."""
+    mission = _late_broadcaster(tmp_path, "my_frame")
+    _, report, kept = _replay(room_log[0], mission, [contract.TF])
+    _expect(report, [])
+    line = report.check("marker_0.broadcast")
+    assert line.measured.startswith("my_frame: ") and "worst error" in line.measured
+    stamps = [
+        tf.header.stamp.ns
+        for _, m, _ in kept
+        if isinstance(m, msgs.TFMessage)
+        for tf in m.transforms
+        if tf.child_frame_id == "my_frame"
+    ]
+    assert stamps and all(s % 100_000_000 == 50_000_000 for s in stamps)  # between two images
+    assert line.evidence.startswith(f"first broadcast: my_frame stamped {stamps[0] / 1e9:.3f} s")
+    assert f"image {(stamps[0] - 50_000_000) / 1e9:.3f} s" in line.evidence
+
+
+def test_a_broadcast_0_4_m_off_still_fails_the_broadcast_line(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    mission = _late_broadcaster(tmp_path, "my_frame", offset_m=0.4)
+    _, report, _ = _replay(room_log[0], mission)
+    _expect(report, ["marker_0.broadcast"])
+    assert report.check("marker_0.broadcast").value == pytest.approx(0.4, abs=0.05)
+
+
+def test_a_broadcast_with_no_detection_in_its_window_fails_only_on_detection(
+    room_log: tuple[Path, RecordResult], tmp_path: Path
+) -> None:
+    """Once, a frame on an image with no detection, the image before it had none either."""
+    mission = _late_broadcaster(tmp_path, "target_0", junk=True)
+    _, report, _ = _replay(room_log[0], mission)
+    _expect(report, ["marker_frame.only_on_detection"])
+    line = report.check("marker_frame.only_on_detection")
+    assert ", 1 without a detection within 0.1 s, 0 with another parent" in line.measured
+    assert line.evidence.startswith("first bad broadcast: target_0 stamped ")
 
 
 # --- tf2's errors reach the user's code: uncaught, they crash the mission -----------------------

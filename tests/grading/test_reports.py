@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 
@@ -19,6 +20,7 @@ from usar_replay.grading.reports import (
     to_junit,
     to_table,
 )
+from usar_replay.grading.rubric_usar import RUBRIC_VERSION
 
 T0 = 1_000_000_000
 
@@ -37,7 +39,7 @@ def _report(source: str, *, fail: bool, complete: bool = True) -> GradeReport:
     problem = "" if complete else "the file is truncated or corrupt; read 10 messages"
     return GradeReport(
         source, checks, T0, complete, problem, thresholds=Thresholds(time_limit_s=600.0),
-        scenario="course", seconds=0.25,
+        scenario="course", seconds=0.25, rubric="usar", rubric_version=RUBRIC_VERSION,
     )  # fmt: skip
 
 
@@ -87,6 +89,7 @@ def test_junit_one_case_per_line_per_recording_totals_and_errors_kept() -> None:
     suite_props = {p.get("name"): p.get("value") for p in suites[0].find("properties") or []}
     assert suite_props["schema_version"] == str(SCHEMA_VERSION)
     assert suite_props["threshold.time_limit_s"] == "600"
+    assert (suite_props["rubric"], suite_props["rubric_version"]) == ("usar", str(RUBRIC_VERSION))
 
 
 def test_csv_one_row_per_recording() -> None:
@@ -115,3 +118,16 @@ def test_json_schema_numbers_units_and_one_shape() -> None:
     assert [c["evidence"]["sim_time_s"] for c in graded["checks"]] == [10.4, 701.0]
     assert error["status"] == "error" and error["error"] == "bad" and error["checks"] == []
     assert error["points"] is None and error["passed"] is False
+    assert (graded["rubric"], graded["rubric_version"]) == ("usar", RUBRIC_VERSION)
+    assert error["rubric"] is None and error["rubric_version"] is None
+
+
+def test_a_grade_says_which_rubric_version_judged_it() -> None:
+    """The version changes whenever a line's meaning does (docs/reports.md lists them): the
+    usar rubric is at 2 since issue #32 (broadcasts of any frame name, a camera period late)."""
+    from usar_replay.grading.rubric_ros2 import RUBRIC as ROS2
+    from usar_replay.grading.rubric_usar import RUBRIC as USAR
+
+    assert RUBRIC_VERSION == USAR.version == 2 and ROS2.version == 1
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "reports.md").read_text()
+    assert f"| `usar` | {RUBRIC_VERSION} |" in docs and f"| `ros2-final` | {ROS2.version} |" in docs

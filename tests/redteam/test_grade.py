@@ -146,7 +146,8 @@ def test_marker_frame_without_a_detection_earns_no_marker_line(tmp_path: Path) -
     lines = {c.id: c for c in grade_file(log).checks}
     for line in ("marker_0.detected", "marker_0.broadcast", "marker_frame.only_on_detection"):
         assert not lines[line].passed and lines[line].points == 0.0, lines[line]  # ... unpaid
-    assert "none on a frame where marker 0 was detected" in lines["marker_0.broadcast"].measured
+    measured = lines["marker_0.broadcast"].measured
+    assert measured == "no broadcast within 0.1 s after a frame where marker 0 was detected"
 
 
 # --- non-finite values ----------------------------------------------------------------------------

@@ -9,7 +9,7 @@ Two halves:
 
 * :class:`Grader` (the *observations*): a streaming consumer, :meth:`Grader.feed` one message at
   a time, keeping bounded state: entry times into a disc around each target, marker and home,
-  detections, ``marker_frame`` broadcasts looked up in ``map`` with the tf2 rules the mission
+  detections, the frames broadcast on ``/tf`` placed in ``map`` with the tf2 rules the mission
   uses, and when the follower first moved;
 * one small function per rubric line (:func:`explorer_targets`, :func:`marker_detected`,
   :func:`marker_broadcast`, :func:`only_on_detection`, :func:`explorer_home_before_follower`,
@@ -18,6 +18,9 @@ Two halves:
   the sim time of its evidence.
 
 Robots are judged by the simulator's ground truth, never by what the mission believes.
+Broadcasts are judged as a TA looks at frames in RViz (:data:`RUBRIC_VERSION` 2, issue #32): the
+assignment says "e.g., marker_frame" and its sample code stamps with ``ros::Time::now()``, so real
+packages name the frame ``my_frame`` or ``target_<id>`` and stamp it a tick after the image.
 
 ===================================  ======  ===================================================
 line (``Check.id``)                  points  passes when
@@ -26,17 +29,19 @@ line (``Check.id``)                  points  passes when
                                              target_k after the earlier targets it reached
 ``marker_k.detected``                12      the course's detector's ``/fiducial_transforms``
                                              (trusted; never a mission's) holds ID k once
-``marker_k.broadcast``               8       ``marker_frame`` was broadcast for marker k on a
-                                             frame where it was detected, and every such
-                                             broadcast, looked up in ``map``, lies within
+``marker_k.broadcast``               8       a frame broadcast on ``/tf`` (any name but the
+                                             simulator's) within one camera period after an
+                                             image where marker k was detected, every such
+                                             broadcast of that frame, placed in ``map``
+                                             through its parent at its stamp, within
                                              ``marker_map_error_m`` of the true marker (a
                                              non-finite one is the worst)
-``marker_frame.only_on_detection``   4       ``marker_frame`` was broadcast, and every such
-                                             broadcast is a child of the camera's optical
-                                             frame, stamped with a detected frame, and not
-                                             an older frame's detection stamped anew
-                                             ("nothing broadcast" fails: no credit without
-                                             evidence)
+``marker_frame.only_on_detection``   4       something was broadcast, and every broadcast is a
+                                             child of the camera's optical frame, stamped
+                                             within one camera period after a detected image
+                                             (a zero stamp: when it was sent), and not an
+                                             older frame's detection stamped anew ("nothing
+                                             broadcast" fails: no credit without evidence)
 ``explorer.home_before_follower``    4       after its last target the explorer came within
                                              ``home_m`` of its start before the follower moved
 ``follower.marker_k``                12      the follower came within ``follower_visit_m`` of
@@ -124,7 +129,7 @@ MAX_VISITS = 256
 """Entry times kept per disc; past this the newest replaces the last kept (the bound only keeps
 memory flat on a pathological log)."""
 DETECTION_MEMORY_NS = 30 * 1_000_000_000
-"""How long a detection is remembered for matching ``marker_frame`` stamps: the tf cache time
+"""How long a detection is remembered for matching broadcasts' stamps: the tf cache time
 (a broadcast older than that could not be looked up in ``map`` anyway)."""
 
 
@@ -287,7 +292,7 @@ class Grader:
             return
         if topic == contract.TF and isinstance(msg, msgs.TFMessage):
             self.listener.on_tf(msg)
-            self._on_marker_frames(msg, t_ns)
+            self._on_broadcasts(msg, t_ns)
         elif topic == EXPLORER_TRUTH and isinstance(msg, msgs.PoseStamped):
             xy = (msg.pose.position.x, msg.pose.position.y)
             for d in self.target_discs:
@@ -360,7 +365,7 @@ class Grader:
             d.update(xy, t_ns)
         self.follower_home_disc.update(xy, t_ns)
 
-    def _on_marker_frames(self, msg: msgs.TFMessage, t_ns: int) -> None:
+    def _on_broadcasts(self, msg: msgs.TFMessage, t_ns: int) -> None:
         """The broadcasts of one ``/tf`` message: every transform whose child is not one of the
         simulator's frames (any name: ``marker_frame``, ``my_frame``, ``target_1``), judged
         after the message is in the buffer (as tf2 sees it). Work is linear in the *distinct*
@@ -516,7 +521,7 @@ class Grader:
 
 
 BROADCAST_MATCH_M = 0.005
-"""How close ``marker_frame`` must be to a detection at its stamp (in the camera frame) to be
+"""How close a broadcast must be to a detection in its window (in the camera frame) to be
 that detection's broadcast. A broadcaster copies the detected pose, so an honest one is exact;
 a copy of an older frame's detection stamped "now" is off by the turn since that frame (about
 1-2.5 cm at 0.1 rad/s and 10 Hz, 1-2.5 m away) and is, exactly, that older detection."""
