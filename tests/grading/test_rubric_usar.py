@@ -15,6 +15,7 @@ import pytest
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import Thresholds
 from usar_replay.grading.rubric_usar import (
+    MAX_FRAMES,
     Disc,
     Grader,
     explorer_home_before_follower,
@@ -491,3 +492,18 @@ def test_the_line_shows_the_frame_that_is_on_the_marker() -> None:
     detect(alone, [0], 5 * S)
     send(alone, "my_frame", off, 5 * S)
     assert not marker_broadcast(alone, 0).passed
+
+
+def test_frame_names_are_escaped_shortened_and_bounded() -> None:
+    """The team's frame names reach a TA's terminal: escaped, at most 40 characters, and a
+    new name every tick costs no memory past MAX_FRAMES."""
+    g = Grader(world())
+    camera(g, 5 * S)
+    detect(g, [0], 5 * S)
+    send(g, "\x1b[2J" + "x" * 100, MARKERS[0], 5 * S)
+    line = marker_broadcast(g, 0)
+    assert line.passed and line.measured.startswith("\\x1b[2J" + "x" * 30 + "...: 1 broadcast")
+    for k in range(MAX_FRAMES + 5):
+        send(g, f"f{k}", MARKERS[0], 5 * S)
+    assert len(g.broadcast_frames) == MAX_FRAMES + 1  # the first 16 names, then "(other frames)"
+    assert " and 14 more)" in only_on_detection(g).measured

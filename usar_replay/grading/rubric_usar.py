@@ -69,6 +69,7 @@ from dataclasses import dataclass, field, replace
 
 from usar_replay.core import contract, msgs
 from usar_replay.core.finite import nonfinite_field
+from usar_replay.core.safe_text import safe_line
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import BufferCore, BufferFeeder, TransformException
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
@@ -79,6 +80,7 @@ __all__ = [
     "RUBRIC_VERSION",
     "DETECTION_MEMORY_NS",
     "GRADE_TOPICS",
+    "MAX_FRAMES",
     "MAX_VISITS",
     "NO_DETECTOR",
     "REQUIRED_TOPICS",
@@ -126,6 +128,10 @@ RUBRIC_VERSION = 2
 period after a detected image (or zero: when it was sent), placed in ``map`` through its parent
 at that stamp; the broadcast line shows the frame a TA would look at."""
 MAX_VISITS = 256
+MAX_FRAMES = 16
+"""Broadcast frame names kept apart; past this, a new name counts as :data:`OTHER_FRAMES` (the
+bound only keeps memory flat on a log that broadcasts a new name every tick)."""
+OTHER_FRAMES = "(other frames)"
 """Entry times kept per disc; past this the newest replaces the last kept (the bound only keeps
 memory flat on a pathological log)."""
 DETECTION_MEMORY_NS = 30 * 1_000_000_000
@@ -410,7 +416,9 @@ class Grader:
         """``times`` identical broadcasts of ``tf``, stamped ``stamp`` (its own, or the log time
         for a zero stamp); ``where`` is its child frame's position in ``map`` through its
         parent at that stamp (None: the parent could not be looked up)."""
-        frame = tf.child_frame_id
+        frame = _frame_name(tf.child_frame_id)
+        if frame not in self.broadcast_frames and len(self.broadcast_frames) >= MAX_FRAMES:
+            frame = OTHER_FRAMES
         what = f"{frame} stamped {stamp / 1e9:.3f} s"
         self.broadcast_count += times
         self.broadcast_frames[frame] = self.broadcast_frames.get(frame, 0) + times
@@ -539,6 +547,13 @@ def _apart_m(a: msgs.Transform, b: msgs.Transform) -> float:
     """How far apart two transforms put their child frame's origin (metres)."""
     p, q = a.translation, b.translation
     return math.dist((p.x, p.y, p.z), (q.x, q.y, q.z))
+
+
+def _frame_name(frame: str) -> str:
+    """A frame name from the mission as a report shows it: control characters escaped, at most
+    40 characters (it is the team's text, shown on a TA's terminal)."""
+    shown = safe_line(frame)
+    return shown if len(shown) <= 40 else shown[:37] + "..."
 
 
 def _compose(parent: msgs.Transform, child: msgs.Transform) -> tuple[float, float, float]:
@@ -786,7 +801,9 @@ def only_on_detection(g: Grader) -> Check:
     if g.broadcast_count == 0:
         measured = "nothing broadcast on /tf"
     else:
-        names = ", ".join(g.broadcast_frames)
+        names = ", ".join(list(g.broadcast_frames)[:3])
+        if len(g.broadcast_frames) > 3:
+            names += f" and {len(g.broadcast_frames) - 3} more"
         measured = (
             f"{_n(g.broadcast_count, 'broadcast')} ({names}), {g.without_detection} without "
             f"a detection within {period}, {g.wrong_parent} with another parent"
