@@ -210,3 +210,114 @@ def test_an_eight_megabyte_ros1_definition_is_refused_quickly(tmp_path: Path) ->
     assert err.count("\n") == 1 and err.startswith("usar: error: "), err
     assert "definition" in err and "at most" in err, err
     assert took < 15, f"took {took:.1f} s"
+
+
+# --- point 9: a log's strings never reach a terminal raw -----------------------------------
+
+EVIL = "\x1b]0;pwned\x07\x1b[2J\x9b31m\u202e"
+"""A window title (OSC ... BEL), a cleared screen (CSI 2J), C1's one-byte CSI and a
+right-to-left override: what a crafted log puts in every string it holds."""
+EVIL_TOPIC = f"/evil{EVIL}"
+
+
+def _raw_controls(data: bytes) -> list[str]:
+    """The control characters (C0 but newline and tab, DEL, C1, U+202E) that ``data`` would
+    send a terminal."""
+    text = data.decode("utf-8", errors="replace")
+    return sorted(
+        {
+            repr(ch)
+            for ch in text
+            if (ord(ch) < 0x20 and ch not in "\n\t") or 0x7F <= ord(ch) <= 0x9F or ch == "\u202e"
+        }
+    )
+
+
+def write_evil_log(path: Path) -> None:
+    """A gradable log (the one-room world, its ground truth and ``/tf``) whose every string is
+    :data:`EVIL`: topic, type and schema names, metadata, the status reason, ``mission.toml``
+    and ``ros1.toml``, a node's name and output, ``/rosout``'s name and text, a frame id."""
+    from logtools import Synthetic
+
+    from usar_replay.core import contract
+    from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
+    from usar_replay.log.run import MissionInfo
+
+    room = one_room()
+    s = Synthetic(path, room)
+    w = s.w
+    w.add_metadata(bag.RUN_METADATA, {f"host{EVIL}": f"value{EVIL}"})
+    mission = MissionInfo(f"ros1:evil{EVIL}", f"ros1:evil{EVIL}", EVIL, EVIL).to_toml()
+    w.add_attachment(contract.MISSION_ATTACHMENT, "application/toml", mission.encode())
+    ros1 = Ros1Run(
+        package=f"pkg{EVIL}",
+        path=f"/home/{EVIL}",
+        launch=f"go{EVIL}.launch",
+        nodes=(Ros1Node(f"/node{EVIL}", f"pkg{EVIL}", f"type{EVIL}"),),
+        parameters=(ParameterRead(f"/p{EVIL}", f"v{EVIL}", (f"/node{EVIL}",)),),
+    )
+    w.add_attachment(contract.ROS1_ATTACHMENT, "application/toml", ros1.to_toml().encode())
+    w.add_attachment(
+        f"{contract.NODE_OUTPUT_ATTACHMENT_PREFIX}node{EVIL}.txt",
+        "text/plain",
+        f"hello {EVIL}\nbye\r\n".encode(),
+    )
+    for _ in range(20):
+        s.pose("explorer", 0.0, 0.0)
+        s.pose("follower", 0.5, 0.0)
+        tf = msgs.TFMessage(
+            transforms=(
+                msgs.TransformStamped(
+                    header=msgs.Header(stamp=msgs.Time.from_ns(s.t), frame_id=f"map{EVIL}"),
+                    child_frame_id=f"explorer_tf/odom{EVIL}",
+                ),
+            )
+        )
+        w.write("/tf", tf, s.t, publisher="sim")
+        log = msgs.Log(name=f"/node{EVIL}", msg=f"found {EVIL}", level=msgs.Log.INFO)
+        s.write("/rosout", log)
+        s.write(EVIL_TOPIC, msgs.Twist())
+        message = ros1msg.Ros1Message(msgtype=f"p{EVIL}/T", definition="int32 a\n", data=b"\0" * 4)
+        w.write_ros1(f"/ros1{EVIL}", message, s.t, publisher="mission")
+        s.advance(0.5)
+    w.close(
+        "interrupted",
+        reason=f"stopped {EVIL}",
+        outcome=f"crashed{EVIL}",
+        outcome_reason=f"Traceback {EVIL}\nValueError: {EVIL}",
+    )
+
+
+@pytest.fixture(scope="module")
+def evil_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("evil") / "evil.mcap"
+    write_evil_log(path)
+    return path
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["info"],
+        ["info", "--quick"],
+        ["log"],
+        ["log", "--output"],
+        ["log", "--output", "--node", f"node{EVIL}"],
+        ["log", "--output", "--node", "nobody"],  # the error names the nodes there are
+        ["echo", "/tf"],
+        ["echo", "/rosout"],
+        ["echo", EVIL_TOPIC],
+        ["echo", f"/ros1{EVIL}"],
+        ["echo", "/evil"],  # the error's "did you mean" names the crafted topic
+        ["grade"],
+        ["grade", "--csv"],
+        ["grade", "--junit"],
+    ],
+    ids=lambda a: " ".join(a).encode("unicode_escape").decode(),
+)
+def test_no_string_from_a_log_reaches_the_terminal_raw(evil_log: Path, args: list[str]) -> None:
+    out, _ = usar_limited(evil_log, args[0], evil_log.name, *args[1:])
+    assert "Traceback" not in out.stderr.decode(), out.stderr.decode()
+    assert out.stdout or out.stderr  # it printed something
+    assert _raw_controls(out.stdout) == [], out.stdout.decode()
+    assert _raw_controls(out.stderr) == [], out.stderr.decode()
