@@ -79,9 +79,12 @@ def lz4_bomb(size: int) -> bytes:
 
 
 @contextlib.contextmanager
-def crafted_chunk(number: int, data: bytes, declared: int) -> Iterator[None]:
+def crafted_chunk(
+    number: int, data: bytes, declared: int, crc: int | None = None
+) -> Iterator[None]:
     """While writing a log, make its ``number``-th chunk (1-based) hold ``data`` and declare
-    ``declared`` bytes uncompressed (the compression name stays the writer's)."""
+    ``declared`` bytes uncompressed (the compression name stays the writer's), and ``crc`` as
+    its CRC when given (0: none recorded)."""
     import mcap.writer
 
     real = mcap.writer.Chunk
@@ -92,6 +95,8 @@ def crafted_chunk(number: int, data: bytes, declared: int) -> Iterator[None]:
         seen += 1
         if seen == number:
             fields = {**fields, "data": data, "uncompressed_size": declared}
+            if crc is not None:
+                fields["uncompressed_crc"] = crc
         return real(**fields)  # type: ignore[arg-type]
 
     mcap.writer.Chunk = chunk  # type: ignore[assignment,misc]
@@ -166,6 +171,20 @@ def test_a_chunk_that_expands_past_what_it_declares_stops_there(
     echo, took = usar_limited(log, "echo", log.name, "/explorer/cmd_vel")
     assert_one_damage_line(echo, took, "the log is incomplete")
     assert echo.stdout.decode().count("---") > 30  # the intact chunks' messages
+
+
+def test_a_chunk_of_zeros_is_damaged_at_its_first_record(tmp_path: Path) -> None:
+    """64 MiB of zeros that say so (size and CRC 0 as declared) is 7 million empty records of
+    type 0: refused at the first, not walked (a chunk holds schemas, channels and messages)."""
+    log = tmp_path / "zeros.mcap"
+    with crafted_chunk(2, zstd_bomb(mcapfile.MAX_CHUNK_BYTES), mcapfile.MAX_CHUNK_BYTES, crc=0):
+        write_log(log)
+    reader = bag.BagReader(log)
+    start = time.monotonic()
+    assert sum(1 for _ in reader.messages()) > 30
+    assert time.monotonic() - start < 5
+    assert reader.damage is not None
+    assert "holds a record that has no place in a chunk" in reader.damage.reason
 
 
 def test_a_scan_skips_a_chunk_record_too_big_to_read(tmp_path: Path) -> None:

@@ -480,6 +480,10 @@ def chunk_messages(
                 rec.metadata.get(PUBLISHER_KEY, ""),
             )
             channels.setdefault(rec.id, info)
+        else:
+            # a chunk holds schemas, channels and messages only (MCAP's spec): anything else
+            # is damage, and a run of empty records (a chunk of zeros) must not be walked
+            raise Broken(ref.offset, f"{where} holds a record that has no place in a chunk")
         pos = end
     ref.message_count = count
     yield from found
