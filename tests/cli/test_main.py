@@ -23,3 +23,22 @@ def test_missing_log_is_one_line_exit_2(command: str, tmp_path: Path) -> None:
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "no such file" in lines[0] and str(missing) in lines[0]
     assert "Traceback" not in out.stderr
+
+
+def test_whatever_a_command_prints_on_stdout_is_escaped(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The last line of defence (#33 point 9): a path from a log's strings to stdout that no
+    module escaped (here: ``usar info``'s report, made raw on purpose) still reaches the
+    terminal escaped, as ``grade``'s table and ``replay``'s report do."""
+    from usar_replay.cli.main import main
+    from usar_replay.log import info
+
+    log = tmp_path / "x.mcap"
+    log.write_bytes(b"\x89MCAP0\r\n")  # opened, then described by the raw stand-in
+    monkeypatch.setattr(info, "open_checked", lambda path, quick=False: object())
+    monkeypatch.setattr(info, "describe", lambda run, quick=False: "Topics: /a\x1b[2J\x07\x9b")
+    monkeypatch.setattr(info, "is_whole", lambda run: True)
+    assert main(["info", str(log)]) == 0
+    out = capsys.readouterr()
+    assert out.out == "Topics: /a\\x1b[2J\\x07\\x9b\n"

@@ -41,3 +41,29 @@ def test_newline_and_tab_stay_in_lines_and_are_escaped_on_one_line() -> None:
 def test_a_character_past_the_basic_plane_is_escaped_with_eight_digits() -> None:
     assert safe("\U000e0001") == "\\U000e0001"  # LANGUAGE TAG, a format character
     assert safe("\U0001f600") == "\U0001f600"  # an emoji is printable
+
+
+def test_a_safe_stream_escapes_everything_written_and_is_the_stream_otherwise() -> None:
+    import io
+
+    from usar_replay.core.safe_text import SafeStream
+
+    inner = io.StringIO()
+    stream = SafeStream(inner)
+    print("topic /x\x1b[2J\tcount\x9b", file=stream)
+    stream.writelines(["a\x07", "b\n"])
+    stream.flush()
+    assert inner.getvalue() == "topic /x\\x1b[2J\tcount\\x9b\na\\x07b\n"
+    assert stream.isatty() is False and stream.writable()
+
+
+def test_safe_stdout_guards_stdout_for_the_block_only(capsys: pytest.CaptureFixture[str]) -> None:
+    import sys
+
+    from usar_replay.core.safe_text import safe_stdout
+
+    with safe_stdout():
+        print("title \x1b]0;pwned\x07")
+    print("after \x1b[0m")
+    assert capsys.readouterr().out == "title \\x1b]0;pwned\\x07\nafter \x1b[0m\n"
+    assert type(sys.stdout).__name__ != "SafeStream"

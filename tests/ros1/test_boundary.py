@@ -3,6 +3,8 @@ own topics and types (real wire bytes: ros1msg's and CDR's)."""
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from usar_replay.core import cdr, contract, msgs, ros1msg
@@ -64,3 +66,32 @@ def test_the_course_rules_still_hold() -> None:
         _check().check([("/" + "t" * 1000, wire_type, data)])
     with pytest.raises(OutputRefused, match=r"the mission published type 'x/msg/Nope'"):
         _check().check([("/plain", "x/msg/Nope", b"")])  # usar's own types: the parent's check
+
+
+def _wide(msgtype: str, fields: int) -> ros1msg.Ros1Message:
+    """A message of one type of ``fields`` int32 fields (all zero)."""
+    definition = "".join(f"int32 f{i}\n" for i in range(fields))
+    return ros1msg.Ros1Message(msgtype=msgtype, definition=definition, data=b"\0" * (4 * fields))
+
+
+def test_a_pathological_definition_is_refused_before_it_is_parsed() -> None:
+    """The red team's shape (#33 point 5) under the byte cap: one type of 5,000 fields, ~3 s of
+    the recorder's CPU each when parsed; refused now, at once, as the run's verdict."""
+    check = _check()
+    start = time.process_time()
+    for topic in ("/a", "/b", "/c"):
+        with pytest.raises(OutputRefused, match=rf"{topic}: .* more than 256 fields"):
+            check.check([(topic, *ros1msg.pack(_wide("p/Wide", 5_000)))])
+    assert time.process_time() - start < 1.0
+
+
+def test_a_runs_definitions_share_one_budget() -> None:
+    """Four definitions of 250 fields are parsed (each once, however many messages), the fifth
+    passes the run's 1,024 fields and ends the run."""
+    check = _check()
+    for i in range(4):
+        for _ in range(3):
+            check.check([(f"/t{i}", *ros1msg.pack(_wide(f"p/T{i}", 250)))])
+    assert check.parsed.fields == 1000
+    with pytest.raises(OutputRefused, match="/t4: the definition of p/T4 is one too many"):
+        check.check([("/t4", *ros1msg.pack(_wide("p/T4", 250)))])

@@ -1,8 +1,10 @@
 """The ``usar`` command's entry point: parse, run the command, turn errors into exit codes.
 
 User errors (:class:`usar_replay.core.errors.UsarError`) are printed as one line, ``usar: error:
-...``, without a traceback; anything else is a bug and raises. The exit codes are in
-:mod:`usar_replay.cli.exits`; each command lives in its own module of this package.
+...``, without a traceback; anything else is a bug and raises. Everything printed on stdout, and
+every error, goes through :mod:`usar_replay.core.safe_text`: a log's strings are anyone's. The
+exit codes are in :mod:`usar_replay.cli.exits`; each command lives in its own module of this
+package.
 """
 
 from __future__ import annotations
@@ -20,14 +22,16 @@ __all__ = ["main"]
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``usar`` console script; returns the process exit code."""
     from usar_replay.core import signals
+    from usar_replay.core.safe_text import safe, safe_stdout
 
-    with signals.handled():
+    with signals.handled(), safe_stdout():
         try:
             parser = build_parser()
             args = parser.parse_args(argv)
             code: int = args.func(args)
         except UsarError as err:
-            print(f"usar: error: {err}", file=sys.stderr)
+            # its text may quote a log's (a topic's name, a definition's type): shown, not obeyed
+            print(f"usar: error: {safe(str(err))}", file=sys.stderr)
             return err.exit_code
         except KeyboardInterrupt as err:
             # a plain Ctrl-C is "interrupted"; SIGTERM/SIGHUP say which signal ended the command

@@ -43,6 +43,9 @@ def incomplete_note(path: str, problem: str, done: str) -> str:
     Only a path too long for a line makes the line longer."""
     import re
 
+    from usar_replay.core.safe_text import safe_line
+
+    path, problem = safe_line(path), safe_line(problem)  # the problem may quote a log's names
     tail = f"{done} as far as it goes"
     candidates = [f"usar: {path}: the log is incomplete ({problem}); {tail}"]
     timed = re.search(r"read (\d+) messages up to sim time ([\d.]+) s", problem)

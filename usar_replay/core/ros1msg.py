@@ -10,21 +10,19 @@ and rosbags read. Nothing is converted: the bytes in the log are the bytes on th
 :class:`Ros1Message` carries one such message across the bridge's socket and the recorder's
 checks (``msgtype`` ``pkg/Type``, ``definition``, ``data``); :func:`pack`/:func:`unpack` are
 its wire form (the tick protocol's ``ros1:pkg/Type`` type name marks it); :func:`decode`
-parses the definition and deserializes the bytes with rosbags (a fresh typestore per
-definition: two packages' ``Header`` never meet).
+deserializes the bytes with rosbags, through :mod:`usar_replay.core.ros1defs` (the definition's
+shape capped before it is parsed, a fresh typestore per definition: two packages' ``Header``
+never meet).
 """
 
 from __future__ import annotations
 
-import functools
 import struct
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from usar_replay.core import msgs
-
-if TYPE_CHECKING:
-    from rosbags.typesys.store import Typestore
+from usar_replay.core.ros1defs import DefinitionLimits, Definitions
 
 __all__ = [
     "MESSAGE_ENCODING",
@@ -41,8 +39,9 @@ WIRE_PREFIX = "ros1:"
 """The tick protocol's type name of a ROS 1 message: ``ros1:std_msgs/Int32``."""
 MESSAGE_ENCODING = "ros1"
 SCHEMA_ENCODING = "ros1msg"
-MAX_DEFINITION_BYTES = 256 * 1024
-"""The longest definition accepted (a ``MarkerArray``'s full text is about 5 KiB)."""
+MAX_DEFINITION_BYTES = DefinitionLimits().max_bytes
+"""The longest definition accepted on the wire (64 KiB; a ``MarkerArray``'s full text is about
+5 KiB); :mod:`usar_replay.core.ros1defs` caps the rest of its shape."""
 
 _LEN = struct.Struct("<I")
 
@@ -72,7 +71,11 @@ def unpack(wire_type: str, data: bytes) -> Ros1Message:
     if len(data) < _LEN.size:
         raise ValueError("a ROS 1 message shorter than its header")
     (n,) = _LEN.unpack_from(data)
-    if n > MAX_DEFINITION_BYTES or _LEN.size + n > len(data):
+    if n > MAX_DEFINITION_BYTES:
+        raise ValueError(
+            f"a ROS 1 definition of {n:,} bytes; a definition is at most {MAX_DEFINITION_BYTES:,}"
+        )
+    if _LEN.size + n > len(data):
         raise ValueError(f"a ROS 1 definition of {n} bytes")
     end = _LEN.size + n
     return Ros1Message(
@@ -88,18 +91,12 @@ def ros2_name(msgtype: str) -> str:
     return msgtype if "/msg/" in msgtype else f"{pkg}/msg/{name}"
 
 
-@functools.lru_cache(maxsize=64)
-def _store(msgtype: str, definition: str) -> Typestore:
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
-    store = get_typestore(Stores.EMPTY)
-    store.register(get_types_from_msg(definition, msgtype))
-    return store
-
-
-def decode(msgtype: str, definition: str, data: bytes) -> Any:
+def decode(
+    msgtype: str, definition: str, data: bytes, definitions: Definitions | None = None
+) -> Any:
     """The message as rosbags' value (a dataclass; arrays of numbers as numpy arrays).
-    Raises (rosbags' errors, ``ValueError``) when the definition does not parse or the bytes
-    are not a whole message of it."""
-    # rosbags refuses bytes left over (a message of another type) as a size mismatch
-    return _store(msgtype, definition).deserialize_ros1(bytes(data), ros2_name(msgtype))
+    Raises (:class:`~usar_replay.core.ros1defs.DefinitionRefused`, rosbags' errors,
+    ``ValueError``) when the definition is past a cap, does not parse, or the bytes are not a
+    whole message of it. ``definitions``: the run's (or the log read's) parsed definitions and
+    budgets; without it, a fresh set for this one message."""
+    return (definitions or Definitions()).decode(msgtype, definition, data)

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 from usar_replay.core import msg_text, msgs, ros1msg
 from usar_replay.core.errors import IncompleteLog, LogError, UsageError
+from usar_replay.core.ros1defs import DefinitionRefused, Definitions
+from usar_replay.core.safe_text import safe_line
 from usar_replay.log.run import Run
 
 __all__ = ["EchoRequest", "blocks", "find_topic"]
@@ -98,10 +100,18 @@ def blocks(run: Run, request: EchoRequest) -> Iterator[list[str]]:
     end = None if request.until_ns is None else request.until_ns + 1
     width, full = request.width, request.full
     ros1 = run.reader.ros1_definition(topic)
+    parsed = Definitions()
+    if ros1 is not None:  # its shape checked before a message is read (a log is hostile input)
+        try:
+            parsed.store(*ros1)
+        except DefinitionRefused as err:
+            raise LogError(f"{run.path}: {safe_line(topic)}: {safe_line(str(err))}") from None
+        except Exception:  # noqa: BLE001 - does not parse: each message says so below
+            pass
     for m in run.messages([topic], request.since_ns, end):
         lines = [f"# {m.log_time_ns / 1e9:.3f} s"]
         if m.msg is None and ros1 is not None:
-            lines += _ros1_lines(topic, m.log_time_ns, ros1, m.data, width, full)
+            lines += _ros1_lines(topic, m.log_time_ns, ros1, m.data, parsed, width, full)
         elif m.msg is None:
             lines.append(f"# {m.msgtype}: a type usar-replay cannot decode ({len(m.data):,} bytes)")
         elif paths:
@@ -114,14 +124,21 @@ def blocks(run: Run, request: EchoRequest) -> Iterator[list[str]]:
 
 
 def _ros1_lines(
-    topic: str, t_ns: int, ros1: tuple[str, str], data: bytes, width: int, full: bool
+    topic: str,
+    t_ns: int,
+    ros1: tuple[str, str],
+    data: bytes,
+    parsed: Definitions,
+    width: int,
+    full: bool,
 ) -> list[str]:
     """A message a ROS 1 package published in a type of its own, read with its recorded
-    definition (:mod:`usar_replay.core.ros1msg`)."""
+    definition (:mod:`usar_replay.core.ros1msg`), parsed once for the whole echo."""
     try:
-        value = ros1msg.decode(*ros1, data)
+        value = ros1msg.decode(*ros1, data, parsed)
     except Exception as err:  # noqa: BLE001 - any decoding failure is the log's
         raise LogError(
-            f"message on {topic} at {t_ns / 1e9:.3f} s cannot be decoded as {ros1[0]}: {err}"
+            f"message on {safe_line(topic)} at {t_ns / 1e9:.3f} s cannot be decoded as "
+            f"{safe_line(ros1[0])}: {safe_line(str(err))}"
         ) from None
     return msg_text.value_lines(value, width=width, full=full)

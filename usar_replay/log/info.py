@@ -5,6 +5,9 @@ is damaged, how much is still readable and what to do; the CLI turns "not whole"
 By default the whole file is checked (every chunk decompressed, every CRC compared): a summary
 can say ``complete`` over damaged data. ``quick=True`` trusts the summary.
 
+Every string it prints from the file (topic and type names, settings, metadata, ``ros1.toml``'s
+fields) is escaped (:mod:`usar_replay.core.safe_text`): a log is anyone's text.
+
 The file's state (is the *file* whole?) and the mission's outcome (how did the *run* end?) are
 two lines, because they answer different questions: a complete file can hold a mission that hit
 its time limit.
@@ -18,7 +21,7 @@ import textwrap
 from usar_replay.core import settings
 from usar_replay.core.contract import SCENARIO_ATTACHMENT
 
-# Re-exported for record.py, which still imports it from here (contract.py is its home).
+# safe_line is also re-exported for record.py, which still imports it from here.
 from usar_replay.core.safe_text import safe_line
 from usar_replay.log import ros1_run
 from usar_replay.log.run import Run, open_run
@@ -72,7 +75,11 @@ def _field(label: str, text: str) -> list[str]:
     """``Label:  text``, wrapped to :data:`WIDTH` with the label's indent."""
     head = f"{label + ':':<{_LABEL}}"
     return textwrap.wrap(
-        text, WIDTH, initial_indent=head, subsequent_indent=" " * _LABEL, break_on_hyphens=False
+        safe_line(text),
+        WIDTH,
+        initial_indent=head,
+        subsequent_indent=" " * _LABEL,
+        break_on_hyphens=False,
     ) or [head.rstrip()]
 
 
@@ -137,11 +144,12 @@ def describe(run: Run, *, quick: bool = False) -> str:
     lines += _field("End", f"{run.end_ns / 1e9:.3f} s")
     lines += _field("Messages", str(reader.message_count))
     lines.append("Topics:")
-    topics = list(run.topics.values())
-    width = max((len(t.topic) for t in topics), default=0)
-    twidth = max((len(t.msgtype) for t in topics), default=0)
-    for t in topics:
-        lines.append(f"  {t.topic:<{width}}  {t.msgtype:<{twidth}}  {t.count:>7}"[:WIDTH])
+    # a log's names are anyone's text: escaped before their widths are measured
+    topics = [(safe_line(t.topic), safe_line(t.msgtype), t.count) for t in run.topics.values()]
+    width = max((len(name) for name, _, _ in topics), default=0)
+    twidth = max((len(msgtype) for _, msgtype, _ in topics), default=0)
+    for name, msgtype, count in topics:
+        lines.append(f"  {name:<{width}}  {msgtype:<{twidth}}  {count:>7}"[:WIDTH])
     if not topics:
         lines.append("  (none)")
     lines.append("Scenario:")
@@ -169,4 +177,6 @@ def describe(run: Run, *, quick: bool = False) -> str:
         lines.append("Recorded with:")
         meta = sorted((k, v) for k, v in run.run_metadata.items() if k != "mission_settings")
         lines += [f"  {k} = {v}"[:WIDTH] for k, v in meta]  # mission_settings: under Settings
-    return "\n".join(lines)
+    # every string above came from the file (names, settings, ros1.toml, metadata): escaped
+    # (those already escaped stay as they are), so none reaches a terminal raw
+    return "\n".join(safe_line(line)[:WIDTH] if not line.isprintable() else line for line in lines)

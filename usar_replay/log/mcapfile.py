@@ -12,7 +12,8 @@ byte must not make us allocate terabytes), and checks every CRC the format has:
 * the **chunk CRC** (``Chunk.uncompressed_crc``) of every chunk that is decompressed;
 * the **summary CRC** (``Footer.summary_crc``) and each **attachment's CRC**.
 
-Everything streams: at most one chunk (about 1 MiB) is held in memory at a time.
+Everything streams: at most one chunk (about 1 MiB; never more than :data:`MAX_CHUNK_BYTES`) is
+held in memory at a time.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from __future__ import annotations
 import io
 import struct
 import zlib
-from collections.abc import Container, Iterator
+from collections.abc import Callable, Container, Iterator
 from dataclasses import dataclass, field
 from typing import IO
 
@@ -48,6 +49,7 @@ __all__ = [
     "ChunkRef",
     "Layout",
     "MAGIC",
+    "MAX_CHUNK_BYTES",
     "chunk_messages",
     "data_crc_matches",
     "header_problem",
@@ -59,6 +61,15 @@ __all__ = [
 MAGIC = b"\x89MCAP0\r\n"
 _OPCODES = frozenset(int(o) for o in Opcode)
 _BLOCK = 1 << 20
+MAX_CHUNK_BYTES = 64 * 1024 * 1024
+"""The most bytes one chunk may hold once decompressed (64 MiB). usar's writer closes a chunk
+past 1 MiB, so its largest is 1 MiB plus one message (at most 8 MiB: the boundary's cap). A
+chunk that declares more, or whose data decompresses to more than it declares, is damaged: it
+is refused before anything is allocated, and decompression stops at the declared size (a 64 KiB
+zstd chunk can expand to gigabytes)."""
+_MAX_CHUNK_RECORD = MAX_CHUNK_BYTES + (1 << 20)
+"""The longest chunk record read: its data at most :data:`MAX_CHUNK_BYTES` (stored), plus its
+fields and what compression may add to incompressible data."""
 _FOOTER_LEN = 1 + 8 + 20  # opcode, length, summary_start, summary_offset_start, summary_crc
 _DATA_END_LEN = 1 + 8 + 4
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel_id, sequence, log_time, publish_time
@@ -145,15 +156,29 @@ def _read_exact(f: IO[bytes], offset: int, n: int, size: int, what: str) -> byte
     return data
 
 
-def _record_at(f: IO[bytes], offset: int, size: int) -> tuple[int, bytes]:
-    """(opcode, body) of the record at ``offset``; its length is checked against the file."""
+def _head_at(f: IO[bytes], offset: int, size: int) -> tuple[int, int]:
+    """(opcode, body length) of the record at ``offset``; its length is checked against the
+    file."""
     head = _read_exact(f, offset, 9, size, "a record")
     opcode, length = head[0], int.from_bytes(head[1:9], "little")
     if opcode not in _OPCODES:
         raise Broken(offset, f"unknown record type 0x{opcode:02x} at byte {offset}")
     if offset + 9 + length > size:
         raise Broken(offset, f"the record at byte {offset} claims {length} bytes, past the end")
+    return opcode, length
+
+
+def _record_at(f: IO[bytes], offset: int, size: int) -> tuple[int, bytes]:
+    """(opcode, body) of the record at ``offset``; its length is checked against the file."""
+    opcode, length = _head_at(f, offset, size)
     return opcode, _read_exact(f, offset + 9, length, size, "a record")
+
+
+def _too_big(length: int, where: str, offset: int) -> Broken:
+    return Broken(
+        offset,
+        f"{where} is a record of {length:,} bytes; a chunk is at most {MAX_CHUNK_BYTES:,} (64 MiB)",
+    )
 
 
 _READERS = {
@@ -333,18 +358,51 @@ def header_problem(f: IO[bytes], size: int) -> str:
 # --- chunks ---------------------------------------------------------------------------------
 
 
-def _decompress(chunk: Chunk) -> bytes:
-    if chunk.compression == "zstd":
-        return zstandard.ZstdDecompressor().decompress(
-            chunk.data, max_output_size=chunk.uncompressed_size
+def _decompress(chunk: Chunk, where: str, offset: int) -> bytes:
+    """The chunk's bytes, never more than it declares nor than :data:`MAX_CHUNK_BYTES`;
+    :class:`Broken` (saying which) otherwise."""
+    declared = chunk.uncompressed_size
+    if declared > MAX_CHUNK_BYTES:
+        raise Broken(
+            offset,
+            f"{where} declares {declared:,} bytes uncompressed; a chunk is at most "
+            f"{MAX_CHUNK_BYTES:,} (64 MiB)",
         )
-    if chunk.compression == "lz4":
+    if chunk.compression == "zstd":
+        reader = zstandard.ZstdDecompressor().stream_reader(
+            bytes(chunk.data), read_across_frames=True
+        )
+        data = _read_upto(reader.read, declared + 1)
+    elif chunk.compression == "lz4":
         import lz4.frame  # type: ignore[import-untyped]  # optional, as in mcap itself
 
-        return bytes(lz4.frame.decompress(chunk.data))
-    if chunk.compression == "":
-        return bytes(chunk.data)
-    raise ValueError(f"unknown compression {chunk.compression!r}")
+        lz = lz4.frame.LZ4FrameDecompressor()
+        data = bytes(lz.decompress(bytes(chunk.data), max_length=declared + 1))
+        if len(data) <= declared and not lz.eof:
+            raise Broken(offset, f"{where} cannot be decompressed (its lz4 frame is cut short)")
+    elif chunk.compression == "":
+        data = bytes(chunk.data)
+    else:
+        raise Broken(offset, f"{where} cannot be decompressed (unknown compression)")
+    if len(data) > declared:
+        raise Broken(
+            offset, f"{where} decompresses to more than the {declared:,} bytes it declares"
+        )
+    return data
+
+
+def _read_upto(read: Callable[[int], bytes], limit: int) -> bytes:
+    """At most ``limit`` bytes from a stream (its ``read``), in blocks: the limit is what is
+    ever allocated, whatever the compressed data expands to."""
+    parts: list[bytes] = []
+    got = 0
+    while got < limit:
+        block = read(min(_BLOCK * 4, limit - got))
+        if not block:
+            break
+        parts.append(block)
+        got += len(block)
+    return b"".join(parts)
 
 
 def chunk_messages(
@@ -362,13 +420,17 @@ def chunk_messages(
     :class:`Broken` (saying how) before yielding anything when the chunk is damaged.
     """
     where = f"chunk {ref.number}" if ref.number else f"the chunk at byte {ref.offset}"
+    if ref.length > _MAX_CHUNK_RECORD:
+        raise _too_big(ref.length, where, ref.offset)
     opcode, body = _record_at(f, ref.offset, size)
     if opcode != Opcode.CHUNK or 9 + len(body) != ref.length:
         raise Broken(ref.offset, f"{where} is not where the index says")
     chunk = _parse(opcode, body, ref.offset)
     assert isinstance(chunk, Chunk)
     try:
-        data = _decompress(chunk)
+        data = _decompress(chunk, where, ref.offset)
+    except Broken:
+        raise
     except Exception as err:
         raise Broken(ref.offset, f"{where} cannot be decompressed ({_short(err)})") from err
     if len(data) != chunk.uncompressed_size:
@@ -418,6 +480,10 @@ def chunk_messages(
                 rec.metadata.get(PUBLISHER_KEY, ""),
             )
             channels.setdefault(rec.id, info)
+        else:
+            # a chunk holds schemas, channels and messages only (MCAP's spec): anything else
+            # is damage, and a run of empty records (a chunk of zeros) must not be walked
+            raise Broken(ref.offset, f"{where} holds a record that has no place in a chunk")
         pos = end
     ref.message_count = count
     yield from found
@@ -463,6 +529,15 @@ def scan(f: IO[bytes], size: int) -> Layout:
             layout.stopped_at = pos
             break
         try:
+            opcode, body_length = _head_at(f, pos, size)
+            if opcode == Opcode.CHUNK and 9 + body_length > _MAX_CHUNK_RECORD:
+                # intact as a record, too big to read: damaged, skipped, and the walk goes on
+                number += 1
+                ref = ChunkRef(number, pos, 9 + body_length, 0, 0, message_count=0)
+                ref.problem = str(_too_big(9 + body_length, f"chunk {number}", pos))
+                layout.chunks.append(ref)
+                pos += 9 + body_length
+                continue
             opcode, body = _record_at(f, pos, size)
         except Broken:
             layout.stopped_at = pos

@@ -22,6 +22,7 @@ from typing import Any
 from usar_replay.core import contract
 from usar_replay.core.errors import UsageError
 from usar_replay.core.msg_text import WIDTH
+from usar_replay.core.safe_text import safe, safe_line
 from usar_replay.log.run import Run
 
 __all__ = ["ParameterRead", "Ros1Node", "Ros1Run", "node_output_lines", "node_outputs", "of"]
@@ -130,9 +131,10 @@ _CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
 
 
 def _shown(text: str) -> str:
-    """A node's output as it may go to a terminal: colours (rosconsole's) and every other
-    control sequence removed (the output is the student's: it must not drive the terminal)."""
-    return _CONTROL.sub("", _ANSI.sub("", text.expandtabs(4)))
+    """A node's output as it may go to a terminal: colours (rosconsole's) and the C0 control
+    characters removed, any other (C1's CSI, the right-to-left overrides) escaped (the output
+    is the student's: it must not drive the terminal)."""
+    return safe(_CONTROL.sub("", _ANSI.sub("", text.expandtabs(4))))
 
 
 def of(run: Run) -> Ros1Run | None:
@@ -169,7 +171,7 @@ def node_output_lines(run: Run, nodes: tuple[str, ...] = ()) -> Iterator[str]:
         kept = ", ".join(outputs) or "none (not a ROS 1 log, or one recorded before usar kept it)"
         raise UsageError(f"{run.path}: no output of node {missing[0]} kept; the nodes': {kept}")
     for name in wanted:
-        yield f"--- {name}: stdout and stderr ---"
+        yield f"--- {safe_line(name)}: stdout and stderr ---"  # a name from the file
         for line in _shown(outputs[name]).splitlines():
             yield from textwrap.wrap(
                 line, WIDTH, subsequent_indent="    ", break_on_hyphens=False

@@ -7,12 +7,15 @@ stored markers as a ``geometry_msgs/PoseArray``, a type of its own package), and
 records all of it (:mod:`usar_replay.ros1.topic_recorder`). Every other limit stays: sizes, topic
 names and counts, one type per topic (and one definition per ROS 1 topic), the simulator's and
 ground truth's topics refused, non-finite numbers refused in usar's types. A message kept as
-its ROS 1 bytes must decode with the definition it came with (rosbags), else ``refused``.
+its ROS 1 bytes must decode with the definition it came with (rosbags), else ``refused``; the
+definitions themselves are capped in shape and, together, per run
+(:mod:`usar_replay.core.ros1defs`: a definition past a cap is ``refused`` before it is parsed).
 """
 
 from __future__ import annotations
 
 from usar_replay.core import contract, ros1msg
+from usar_replay.core.ros1defs import DefinitionRefused, Definitions
 from usar_replay.node.boundary_check import (
     FIXED_TYPES,
     MAX_MESSAGE_BYTES,
@@ -35,6 +38,8 @@ class Ros1BoundaryCheck(BoundaryCheck):
     def __init__(self, *args: object, **kwargs: object) -> None:
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self.definitions: dict[str, str] = {}
+        self.parsed = Definitions()
+        """The run's parsed definitions: each parsed once, all within the run's budgets."""
 
     def _one(self, topic: str, msgtype: str, data: bytes) -> Checked:
         if not msgtype.startswith(ros1msg.WIRE_PREFIX):
@@ -57,7 +62,9 @@ class Ros1BoundaryCheck(BoundaryCheck):
                 f"{topic}: a second definition of {value.msgtype} (one topic, one type)"
             )
         try:
-            ros1msg.decode(value.msgtype, value.definition, value.data)
+            self.parsed.decode(value.msgtype, known, value.data)
+        except DefinitionRefused as err:
+            raise OutputRefused(f"{topic}: {err}") from None
         except Exception as err:  # noqa: BLE001 - any decoding failure is the package's
             raise OutputRefused(
                 f"the package published bytes on {topic} that do not decode as {value.msgtype} "

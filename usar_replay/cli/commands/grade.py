@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INCOMPLETE, EXIT_OK, EXIT_USAGE
 from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.core.safe_text import safe
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
@@ -125,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         if not r.log_complete:
             print(incomplete_note(r.source, r.log_problem, "graded"), file=sys.stderr)
     for _, message in errors:
-        print(f"usar: error: {message}", file=sys.stderr)
+        print(f"usar: error: {safe(message)}", file=sys.stderr)
     if len(files) > 1:
         print(f"Grade of {len(files)} recordings:")
         for f, res in zip(files, results, strict=True):

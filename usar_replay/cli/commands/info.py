@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK
 from usar_replay.core.errors import UsarError
+from usar_replay.core.safe_text import safe
 
 if TYPE_CHECKING:
     pass
@@ -33,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             run = open_checked(path, quick=args.quick)
         except UsarError as err:  # one bad path among several is one line, not the end
-            print(f"usar: error: {err}", file=sys.stderr)
+            print(f"usar: error: {safe(str(err))}", file=sys.stderr)
             worst = max(worst, err.exit_code)
             continue
         if i:

@@ -11,6 +11,7 @@ from usar_replay.cli import options
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK, EXIT_USAGE
 from usar_replay.cli.textout import incomplete_note
 from usar_replay.core.errors import UsarError
+from usar_replay.core.safe_text import safe
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
@@ -65,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     for f, page in zip(files, outputs, strict=False):
         result = _report_one(f, th, page, args.overwrite)
         if isinstance(result, tuple):
-            print(f"usar: error: {result[0]}", file=sys.stderr)
+            print(f"usar: error: {safe(result[0])}", file=sys.stderr)
             entries.append((f, page.name, None, result[0]))
             worst = max(worst, result[1])
             continue

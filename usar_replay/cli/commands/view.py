@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import parser_parts
 from usar_replay.cli.exits import EXIT_INCOMPLETE, EXIT_OK
+from usar_replay.core.safe_text import safe_line
 
 if TYPE_CHECKING:
     pass
@@ -82,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     problems = [f"the log is incomplete ({result.problem})"] if result.problem else []
     problems += [result.grade_problem] if result.grade_problem else []
     if problems:
-        text = "; ".join(problems)
+        text = safe_line("; ".join(problems))  # a damage's words may quote the log's names
         print(f"usar: {args.file}: {text}; the view shows what was read", file=sys.stderr)
     if result.url:
         print(f"serving the web viewer at {result.url} (Ctrl-C to stop)", flush=True)
