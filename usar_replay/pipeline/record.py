@@ -412,8 +412,9 @@ def _tick_loop(
     # the first tick (the world's static facts, ground truth at t0) is written before the
     # mission starts: a mission that never reaches its first tick (a crash at import, a ROS 1
     # graph that never gets ready, a failed build) still leaves a gradable log (issue 31)
-    tick: _Observed | None = _observe(sim, scenario, asg, first)
-    _write_tick(writer, tick, run, detector)
+    start = _observe(sim, scenario, asg, first)
+    _write_tick(writer, start, run, detector)
+    tick: _Observed | None = start
     with _attached(
         writer,
         run,
