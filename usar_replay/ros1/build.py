@@ -53,6 +53,8 @@ __all__ = [
     "FIDUCIAL_MSGS",
     "BuildLimits",
     "Built",
+    "NoPackage",
+    "SeveralPackages",
     "Package",
     "build",
     "cache_root",
@@ -171,6 +173,14 @@ def _has_nodes(folder: Path) -> bool:
     return _ADD_EXECUTABLE.search(text) is not None
 
 
+class NoPackage(UsageError):
+    """No catkin package in the folder given (a batch then looks for a Python mission)."""
+
+
+class SeveralPackages(UsageError):
+    """Several catkin packages build nodes in the folder given: the message lists them."""
+
+
 def find_package(path: str | os.PathLike[str]) -> Package:
     """The catkin package at ``path``: a folder with ``package.xml``, or the one package found
     in it as catkin would find it (a repository with the package in a subfolder, a catkin
@@ -184,15 +194,15 @@ def find_package(path: str | os.PathLike[str]) -> Package:
     if (root / "package.xml").is_file():
         found = [root]
     else:
-        found = [p for p in _package_dirs(root) if _name(p) not in ("fiducial_msgs", None)]
+        found = [p for p in _package_dirs(root) if _name(p) != "fiducial_msgs"]
     if len(found) > 1:
         found = [p for p in found if _has_nodes(p)] or found
     if not found:
-        raise UsageError(f"--ros1 {path}: no package.xml found; give one catkin package folder")
+        raise NoPackage(f"--ros1 {path}: no package.xml found; give one catkin package folder")
     if len(found) > 1:
         rel = [p.relative_to(root).as_posix() for p in found]
         listed = ", ".join(rel[:6]) + (f" and {len(rel) - 6} more" if len(rel) > 6 else "")
-        raise UsageError(
+        raise SeveralPackages(
             f"--ros1 {path}: {len(found)} catkin packages build nodes ({listed}); "
             f"choose one, e.g. --ros1 {root / rel[0]}"
         )
