@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from usar_replay.core.errors import MissionEnded, UnusableSubmission, UsageError
-from usar_replay.core.folder_walk import Entry, stream, walk
+from usar_replay.core.folder_walk import Entry, shown, stream, walk
 from usar_replay.ros1 import buildmsg, layout, tree
 from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 
@@ -262,6 +262,11 @@ def _copy(pkg: Package, dest: Path) -> None:
                 os.fchmod(out.fileno(), (mode & 0o755) | 0o600)
     except UnusableSubmission as err:
         raise MissionEnded("build_failed", f"package {pkg.name} cannot be built: {err}") from None
+    except OSError as err:  # a name too long, no space left: the package's verdict, said
+        where = shown(err.filename) if isinstance(err.filename, str | bytes) else "a file"
+        raise MissionEnded(
+            "build_failed", f"package {pkg.name} could not be copied: {where}: {err.strerror}"
+        ) from None
 
 
 def catkin_env() -> dict[str, str]:
