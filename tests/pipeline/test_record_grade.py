@@ -13,7 +13,6 @@ import pytest
 from conftest import one_room
 
 from usar_replay.batch.run_one import max_points, rubric
-from usar_replay.core.errors import MissingTopic
 from usar_replay.core.settings import RecordSettings, RunSettings, Thresholds
 from usar_replay.grading.grade import grade_file
 from usar_replay.grading.rubrics import rubric_for, rubric_of
@@ -74,18 +73,19 @@ def test_a_crashed_run_is_graded_the_same_live_and_from_the_file(tmp_path: Path)
     _same(result.grade.report(path), grade_file(path, th))
 
 
-def test_a_run_that_never_ticked_cannot_be_graded_either_way(tmp_path: Path) -> None:
+def test_a_run_that_never_ticked_is_graded_the_same_either_way(tmp_path: Path) -> None:
+    """Issue 31: the world's facts at t0 are written before the mission starts, so a crash
+    in ``main()`` leaves a gradable log whose every line fails with the reason."""
     mission = tmp_path / "at_start.py"
     mission.write_text("def main():\n    raise ValueError('at once')\n", encoding="utf-8")
     path = tmp_path / "start.mcap"
     result = record(one_room(), path, RunSettings(), mission=str(mission))
     assert result.outcome == "crashed"
     assert result.grade is not None
-    with pytest.raises(MissingTopic) as live:
-        result.grade.report(path)
-    with pytest.raises(MissingTopic) as filed:
-        grade_file(path)
-    assert str(live.value) == str(filed.value)
+    live = result.grade.report(path)
+    _same(live, grade_file(path))
+    assert not any(c.passed for c in live.checks)
+    assert all("ValueError: at once" in c.measured for c in live.checks)
 
 
 def test_a_ros2_final_run_is_graded_the_same_live_and_from_the_file(tmp_path: Path) -> None:
@@ -114,8 +114,8 @@ def test_batch_max_points_are_the_worlds_assignments() -> None:
 def test_a_ros2_final_world_in_a_batch_gets_its_own_rubric_when_the_mission_crashes(
     tmp_path: Path,
 ) -> None:
-    """The crash fallback (no log to grade: the mission died before the first tick) fails
-    every line of the world's own rubric, not the US&R one; thresholds travel as data."""
+    """A mission that died before the first tick fails every line of the world's own rubric,
+    not the US&R one, saying why (issue 31: its log is graded); thresholds travel as data."""
     from clitools import run_batch
 
     subs = tmp_path / "subs"
@@ -134,7 +134,8 @@ def test_a_ros2_final_world_in_a_batch_gets_its_own_rubric_when_the_mission_cras
     assert [c["id"] for c in grade["checks"]] == [c.id for c in expected.checks]
     assert grade["max_points"] == round(expected.max_points, 3)
     assert grade["points"] == 0.0
-    assert "is missing; it cannot be graded" in grade["log_problem"]
+    assert not any(c["passed"] for c in grade["checks"])
+    assert all("ValueError: at once" in c["measured"] for c in grade["checks"])
 
 
 def test_batch_thresholds_are_data_not_a_file(

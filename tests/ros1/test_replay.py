@@ -49,6 +49,8 @@ def test_an_unchanged_package_replays_bit_for_bit(example_log: Path) -> None:
     assert "bit for bit" in done.stdout
     assert "DIFFERENT" not in done.stdout
     assert "Total: 60 / 60 points: PASS" in done.stdout  # graded again from the replay
+    # the folder the log names is built only after saying so, its sha256 checked (issue 33)
+    assert f"replaying the recorded package {EXAMPLE}: its sha256" in done.stderr
 
 
 def test_a_changed_package_shows_the_first_difference_and_the_rubric_delta(

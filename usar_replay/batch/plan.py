@@ -41,6 +41,7 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
 from usar_replay.core.errors import UsageError
+from usar_replay.ros1.build import NoPackage, SeveralPackages, find_package
 from usar_replay.world.world_key import WorldKey
 
 __all__ = [
@@ -256,12 +257,15 @@ def _folder_target(folder: Path) -> tuple[str, str]:
     mission = folder / DEFAULT_MISSION_FILE
     if mission.is_file():
         return str(mission.resolve()), ""
-    if (
-        any(folder.glob("package.xml"))
-        or any(folder.glob("*/package.xml"))
-        or any(folder.glob("*/*/package.xml"))
-    ):
-        # a catkin package (the course's own deliverable): built and run by usar's ROS 1 bridge
+    try:  # a catkin package (the course's deliverable), found as `--ros1 FOLDER` finds it
+        find_package(folder)
+    except NoPackage:
+        pass
+    except SeveralPackages as err:  # which, and how to choose
+        return "", str(err).removeprefix("--ros1 ")
+    except UsageError:  # a package usar will say more about when it runs (no <name>...)
+        return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
+    else:  # built and run by usar's ROS 1 bridge
         return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
     return (
         "",

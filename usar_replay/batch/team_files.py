@@ -10,6 +10,10 @@ and bytes are streamed with a cap per file and per folder. A folder that breaks 
 :class:`UnusableSubmission`, which the batch turns into that team's verdict
 (``bad_submission``) while every other team is graded.
 
+The walk itself, its rules and caps are :mod:`usar_replay.core.folder_walk`'s: the ROS 1 build
+hashes and copies a package from the same walk, so what is checked here is what is built, and
+a name that is not UTF-8 is hashed as its bytes (issue 33).
+
 The digest of an honest folder is the one ``usar batch`` always computed (sorted relative
 paths, each with its length and bytes), so finished runs are still recognised on resume.
 """
@@ -22,115 +26,56 @@ import stat
 from pathlib import Path
 
 from usar_replay.core.errors import UnusableSubmission
+from usar_replay.core.folder_walk import (
+    MAX_FILE_BYTES,
+    MAX_FILES,
+    MAX_TOTAL_BYTES,
+    SKIP_DIRS,
+    Entry,
+    shown,
+    stream,
+    walk,
+)
 
 __all__ = [
-    "MAX_FILE_BYTES",
     "MAX_FILES",
+    "MAX_FILE_BYTES",
     "MAX_TOTAL_BYTES",
+    "SKIP_DIRS",
     "UnusableSubmission",
     "submission_digest",
 ]
 
-MAX_FILE_BYTES = 256 * 1024 * 1024
-"""The largest file a team's folder may hold (256 MiB: a mission's code, a model of a few MiB)."""
-MAX_TOTAL_BYTES = 1024 * 1024 * 1024
-"""All of a team's files together (1 GiB)."""
-MAX_FILES = 20_000
-"""Files (and links) a team's folder may hold."""
-SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
-"""Folders left out of the digest (caches, version control), as are hidden names and .pyc."""
-_CHUNK = 1024 * 1024
 
-
-def _skipped(name: str) -> bool:
-    return name.startswith(".") or name.endswith(".pyc")
-
-
-def _entries(root: Path) -> list[tuple[str, Path, bool]]:
-    """(relative path, path, is a link) of every file and link under ``root``, never through a
-    link; special files raise."""
-    found: list[tuple[str, Path, bool]] = []
-    stack = [root]
-    while stack:
-        folder = stack.pop()
-        with os.scandir(folder) as it:
-            items = sorted(it, key=lambda e: e.name)
-        for e in items:
-            path = Path(e.path)
-            rel = path.relative_to(root).as_posix()
-            if e.is_symlink():
-                if not _skipped(e.name):
-                    found.append((rel, path, True))
-            elif e.is_dir(follow_symlinks=False):
-                if e.name not in SKIP_DIRS and not e.name.startswith("."):
-                    stack.append(path)
-            elif e.is_file(follow_symlinks=False):
-                if not _skipped(e.name):
-                    found.append((rel, path, False))
-            elif not e.name.startswith("."):
-                raise UnusableSubmission(f"{rel}: not a regular file (a FIFO, socket or device)")
-            if len(found) > MAX_FILES:
-                raise UnusableSubmission(f"more than {MAX_FILES} files")
-    return found
-
-
-def _link_text(root: Path, rel: str, path: Path) -> bytes:
-    """A link's target, when it stays inside ``root`` (resolved without opening anything)."""
-    target = os.readlink(path)
-    real = Path(os.path.realpath(path))
-    if not real.is_relative_to(os.path.realpath(root)):
-        raise UnusableSubmission(f"{rel}: a link leaving the team's folder (to {target})")
-    return os.fsencode(target)
-
-
-def _stream(h: hashlib._Hash, path: Path, rel: str, prefix: bytes, budget: int) -> int:
-    """Hash ``prefix``, the file's length and its bytes, read from a descriptor that is
-    checked to be a regular file; returns its size."""
+def _single(path: Path) -> Entry:
+    """A submission that is one file, checked like a folder's file."""
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+        st = os.lstat(path)
     except OSError as err:
-        raise UnusableSubmission(f"{rel}: cannot be opened ({err.strerror})") from None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise UnusableSubmission(f"{rel}: not a regular file")
-        size = st.st_size
-        if size > MAX_FILE_BYTES:
-            raise UnusableSubmission(f"{rel}: {size} bytes; a file is at most {MAX_FILE_BYTES}")
-        if size > budget:
-            raise UnusableSubmission(f"the team's files are over {MAX_TOTAL_BYTES} bytes")
-        if prefix:  # a folder's file: its name and length first (a single file: bytes only)
-            h.update(prefix + size.to_bytes(8, "little"))
-        left = size
-        while left > 0:
-            chunk = os.read(fd, min(_CHUNK, left))
-            if not chunk:
-                break
-            h.update(chunk)
-            left -= len(chunk)
-        if left or os.read(fd, 1):
-            raise UnusableSubmission(f"{rel}: changed while it was read")
-        return size
-    finally:
-        os.close(fd)
+        raise UnusableSubmission(f"{shown(path.name)}: {err.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise UnusableSubmission(f"{shown(path.name)}: not a regular file")
+    if st.st_size > MAX_FILE_BYTES:
+        raise UnusableSubmission(
+            f"{shown(path.name)}: {st.st_size} bytes; a file is at most {MAX_FILE_BYTES}"
+        )
+    return Entry(os.fsencode(path.name), path, st.st_size)
 
 
 def submission_digest(path: str | os.PathLike[str]) -> str:
-    """sha256 over every file of a submission (relative path and bytes, sorted), so that a
-    change in any helper module reruns the team; caches and hidden files are left out.
+    """sha256 over every file of a submission (relative path as bytes, and bytes, sorted), so
+    that a change in any helper module reruns the team; caches and hidden files are left out.
     :class:`UnusableSubmission` when the folder breaks a rule (see the module doc)."""
     root = Path(path)
     h = hashlib.sha256()
-    if not root.is_dir():
-        _stream(h, root, root.name, b"", MAX_FILE_BYTES)
+    if not root.is_dir() or root.is_symlink():
+        stream(_single(root), h.update)
         return h.hexdigest()
-    budget = MAX_TOTAL_BYTES
-    for rel, file, is_link in sorted(_entries(root), key=lambda x: x[0]):
-        name = rel.encode()
-        prefix = len(name).to_bytes(4, "little") + name
-        if is_link:
-            text = _link_text(root, rel, file)
-            h.update(prefix + len(text).to_bytes(8, "little") + text)
+    for entry in walk(root, what="the team's folder"):
+        prefix = len(entry.rel).to_bytes(4, "little") + entry.rel
+        if entry.link is not None:
+            h.update(prefix + len(entry.link).to_bytes(8, "little") + entry.link)
             continue
-        budget -= _stream(h, file, rel, prefix, budget)
+        h.update(prefix + entry.size.to_bytes(8, "little"))
+        stream(entry, h.update)
     return h.hexdigest()

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from usar_replay.core.errors import MissingTopic
+from usar_replay.core.safe_text import safe_line
 from usar_replay.core.settings import Thresholds, load
 from usar_replay.grading.rubrics import rubric_for
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, RubricGrader
@@ -34,8 +35,18 @@ __all__ = [
     "grade_file",
     "grade_run",
     "load_thresholds",
+    "never_ran",
     "observe_run",
 ]
+
+FAILED_OUTCOMES = {
+    "crashed": "crashed",
+    "hung": "hung",
+    "out_of_memory": "ran out of memory",
+    "refused": "was refused",
+    "build_failed": "did not build",
+}
+"""The verdicts that end a run because of the mission's code, with the words a line shows."""
 
 
 def load_thresholds(path: str | os.PathLike[str]) -> Thresholds:
@@ -81,6 +92,8 @@ class LiveGrade:
         self.rubric = rubric_for(scenario)
         self.grader = self.rubric.grader(scenario, thresholds)
         self._writer: BagWriter | None = None
+        self._last_ns = 0
+        """The latest log time fed (ground truth comes every tick): did sim time pass?"""
         self.seconds = 0.0
         """Wall seconds spent grading so far: a resource count for the batch's grade limit
         (a grade bomb costs its time while it records), never part of a verdict."""
@@ -93,10 +106,11 @@ class LiveGrade:
         writer.watch(self.rubric.grade_topics, self._feed, only_from=trusted)
         self._writer = writer
 
-    def _feed(self, *args: Any) -> None:
+    def _feed(self, topic: str, msg: Any, t_ns: int) -> None:
         began = time.perf_counter()
+        self._last_ns = max(self._last_ns, t_ns)
         try:
-            self.grader.feed(*args)
+            self.grader.feed(topic, msg, t_ns)
         finally:
             self.seconds += time.perf_counter() - began
 
@@ -109,7 +123,11 @@ class LiveGrade:
         :class:`MissingTopic` when a topic the rubric requires was never written)."""
         written = self._writer.topics if self._writer is not None else frozenset()
         _check_required(path, self.rubric.required_topics, written)
-        return self.grader.report(str(path), log_complete=True, log_problem="")
+        report = self.grader.report(str(path), log_complete=True, log_problem="")
+        if self._writer is None:
+            return report
+        w = self._writer
+        return never_ran(report, w.outcome, w.outcome_reason, self._last_ns - report.start_ns)
 
 
 def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
@@ -127,7 +145,39 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
     report: GradeReport = grader.report(
         str(run.path), log_complete=not problem, log_problem=problem
     )
+    if run.damage is None:
+        report = never_ran(report, run.outcome, run.outcome_reason, run.end_ns - run.start_ns)
     return replace(report, seconds=time.perf_counter() - began)
+
+
+def _gist(lines: list[str]) -> str:
+    """The line of a verdict's reason that says what happened: a traceback's last (the
+    exception), else the first, with the line it introduces (``...before it connected:``)."""
+    if lines[0].startswith("Traceback"):
+        return lines[-1]
+    if lines[0].endswith(":") and len(lines) > 1:
+        return f"{lines[0]} {lines[1]}"
+    return lines[0]
+
+
+def never_ran(report: GradeReport, outcome: str, reason: str, span_ns: int) -> GradeReport:
+    """``report`` with every line failed, saying why, when the mission's code ended the run
+    before its first tick was done (``outcome`` a failure and no sim time passed: a crash at
+    import, a graph that never got ready, a package that did not build). Why: such a log holds
+    only the world at t0 (issue 31: every log is gradable), and what the world shows by itself
+    then (the course's detector seeing a marker from the start) is not the team's work."""
+    words = FAILED_OUTCOMES.get(outcome)
+    if words is None or span_ns > 0:
+        return report
+    lines = [line.strip() for line in reason.splitlines() if line.strip()]
+    said = f"the mission {words} before its first tick"
+    if lines:
+        said += ": " + safe_line(_gist(lines))[:200]
+    checks = tuple(
+        replace(c, passed=False, points=0.0, measured=said, evidence_ns=None, evidence="")
+        for c in report.checks
+    )
+    return replace(report, checks=checks)
 
 
 def grade_file(path: str | os.PathLike[str], thresholds: Thresholds | None = None) -> GradeReport:

@@ -409,18 +409,24 @@ def _tick_loop(
     hidden = hide_from_mission(limits, str(writer.part_path))
     detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
     inputs = mission_inputs(asg, detector is not None)
+    # the first tick (the world's static facts, ground truth at t0) is written before the
+    # mission starts: a mission that never reaches its first tick (a crash at import, a ROS 1
+    # graph that never gets ready, a failed build) still leaves a gradable log (issue 31)
+    start = _observe(sim, scenario, asg, first)
+    _write_tick(writer, start, run, detector)
+    tick: _Observed | None = start
     with _attached(
         writer,
         run,
         process(target, params, sim_topics=inputs, sim_frames=asg.sim_frames, limits=hidden),
     ) as proc:
         latency = rs.actuation_latency_ticks
-        tick: _Observed | None = _observe(sim, scenario, asg, first)
         commands: list[tuple[str, msgs.Twist]] = []
+        written = True
         while tick is not None:
-            if detector is not None:  # after the previous tick's enable switch
-                tick.wire = detector.add_detections(tick.wire)
-            _write_inputs(writer, tick, run)
+            if not written:
+                _write_tick(writer, tick, run, detector)
+            written = False
             proc.send(tick.t, tick.wire)
             nxt: _Observed | None = None
             if latency:
@@ -448,6 +454,16 @@ def _attached(writer: bag.BagWriter, run: _Run, proc: MissionProcess) -> Iterato
     finally:
         for name, media_type, data in proc.attachments():
             writer.add_attachment(name, media_type, data, run.last_t)
+
+
+def _write_tick(
+    writer: bag.BagWriter, tick: _Observed, run: _Run, detector: CourseDetector | None
+) -> None:
+    """One tick's inputs into the log, with the course's detections (after the previous
+    tick's enable switch) added to what the mission will be sent."""
+    if detector is not None:
+        tick.wire = detector.add_detections(tick.wire)
+    _write_inputs(writer, tick, run)
 
 
 def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:

@@ -523,11 +523,25 @@ def replay(
     )
 
 
+def recorded_mission(run: Run) -> str:
+    """The mission the log says ran; :class:`LogError` (exit 3) when its ``mission.toml`` is
+    unreadable or names none. Why not the built-in mission then: a replay must run the code
+    that was recorded or the code the user names (``--mission``), never a guess (issue 33)."""
+    bad = [p for p in run.problems if contract.MISSION_ATTACHMENT in p]
+    if bad or not run.mission.target:
+        why = bad[0] if bad else f"no {contract.MISSION_ATTACHMENT} names the mission that ran"
+        raise LogError(
+            f"{run.path}: {safe(why)}; it cannot be replayed as recorded: "
+            "name the code with --mission FILE (or --mission builtin)"
+        )
+    return run.mission.target
+
+
 def _resolve_mission(run: Run, mission: str | None) -> MissionTarget:
     """``--mission``, else the mission the log names (which must be here to replay)."""
-    recorded_target = run.mission.target or "builtin"
+    recorded_target = mission or recorded_mission(run)
     try:
-        return resolve_target(mission or recorded_target)
+        return resolve_target(recorded_target)
     except UsageError as err:
         if mission is None:
             raise UsageError(

@@ -44,7 +44,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from usar_replay.core.errors import MissionEnded, UsageError
+from usar_replay.core.errors import MissionEnded, UnusableSubmission, UsageError
+from usar_replay.core.folder_walk import Entry, shown, stream, walk
 from usar_replay.ros1 import buildmsg, layout, tree
 from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 
@@ -52,6 +53,8 @@ __all__ = [
     "FIDUCIAL_MSGS",
     "BuildLimits",
     "Built",
+    "NoPackage",
+    "SeveralPackages",
     "Package",
     "build",
     "cache_root",
@@ -69,7 +72,9 @@ FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
 
 _NAME = re.compile(r"<name>\s*([A-Za-z0-9_]+)\s*</name>")
-_SKIP = {"build", "devel", "install", ".git", "__pycache__", "log", "logs"}
+_SKIP = frozenset({"build", "devel", "install", ".git", "__pycache__", "log", "logs"})
+"""Folders never read from a package: catkin's outputs (committed in many student
+repositories), version control, caches."""
 _RECORD = "built.json"
 """Beside ``ws/``: the manifest of the built workspace and its build time (usar's alone)."""
 
@@ -123,50 +128,145 @@ class Built:
         return ((str(self.workspace), self.at), *layout.mounts(self.underlays))
 
 
+_FOUND_MAX = 4000
+"""Folders :func:`find_package` looks into before it gives up (a repository, not a disk)."""
+_DEPTH = 5
+"""How deep a package may lie in the folder given (``repo/catkin_ws/src/group/pkg``)."""
+_ADD_EXECUTABLE = re.compile(r"^[^#\n]*\badd_executable\s*\(", re.MULTILINE | re.IGNORECASE)
+
+
+def _package_dirs(root: Path) -> list[Path]:
+    """The catkin packages under ``root`` as catkin finds them: a folder with ``package.xml``
+    is a package (not looked into further); catkin's outputs (``build/``, ``devel/``,
+    ``install/``, committed with the sources in many student repositories), hidden folders,
+    links and folders holding ``CATKIN_IGNORE`` are skipped."""
+    found: list[Path] = []
+    stack = [(root, 0)]
+    seen = 0
+    while stack:
+        folder, depth = stack.pop()
+        seen += 1
+        if seen > _FOUND_MAX:
+            break
+        try:
+            with os.scandir(folder) as it:
+                subs = sorted(Path(e.path) for e in it if e.is_dir(follow_symlinks=False))
+        except OSError:
+            continue
+        for sub in subs:
+            name = sub.name
+            if name.startswith(".") or name in _SKIP or (sub / "CATKIN_IGNORE").exists():
+                continue
+            if (sub / "package.xml").is_file() and not (sub / "package.xml").is_symlink():
+                found.append(sub)
+            elif depth + 1 < _DEPTH:
+                stack.append((sub, depth + 1))
+    return sorted(found)
+
+
+def _has_nodes(folder: Path) -> bool:
+    """Does the package build a node (``add_executable`` outside a comment)?"""
+    try:
+        text = (folder / "CMakeLists.txt").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return False
+    return _ADD_EXECUTABLE.search(text) is not None
+
+
+class NoPackage(UsageError):
+    """No catkin package in the folder given (a batch then looks for a Python mission)."""
+
+
+class SeveralPackages(UsageError):
+    """Several catkin packages build nodes in the folder given: the message lists them."""
+
+
 def find_package(path: str | os.PathLike[str]) -> Package:
-    """The catkin package at ``path``: a folder with ``package.xml``, or a workspace ``src/``
-    (or any folder) holding exactly one package other than ``fiducial_msgs``."""
+    """The catkin package at ``path``: a folder with ``package.xml``, or the one package found
+    in it as catkin would find it (a repository with the package in a subfolder, a catkin
+    workspace ``src/<pkg>``, committed ``build/`` and ``devel/`` ignored: issue 31). Of
+    several, the only one that builds a node; else a one-line usage error that lists the
+    candidates and says how to choose (``--ros1 PATH/<pkg>``). usar's own ``fiducial_msgs``,
+    as a workspace may hold it, is never the package."""
     root = Path(path)
     if not root.is_dir():
         raise UsageError(f"--ros1 {path}: no such folder (give a catkin package folder)")
-    found = [root / "package.xml"] if (root / "package.xml").is_file() else []
+    if (root / "package.xml").is_file():
+        found = [root]
+    else:
+        found = [p for p in _package_dirs(root) if _name(p) != "fiducial_msgs"]
+    if len(found) > 1:
+        found = [p for p in found if _has_nodes(p)] or found
     if not found:
-        found = sorted(p for p in root.glob("*/package.xml") if p.parent.name != "fiducial_msgs")
-        found = found or sorted(root.glob("*/*/package.xml"))
-    if len(found) != 1:
-        what = "no package.xml" if not found else f"{len(found)} packages"
-        raise UsageError(f"--ros1 {path}: {what} found; give one catkin package folder")
-    match = _NAME.search(found[0].read_text(encoding="utf-8", errors="replace"))
-    if match is None:
-        raise UsageError(f"--ros1 {path}: {found[0]} has no <name>")
-    return Package(found[0].parent, match.group(1))
+        raise NoPackage(f"--ros1 {path}: no package.xml found; give one catkin package folder")
+    if len(found) > 1:
+        rel = [p.relative_to(root).as_posix() for p in found]
+        listed = ", ".join(rel[:6]) + (f" and {len(rel) - 6} more" if len(rel) > 6 else "")
+        raise SeveralPackages(
+            f"--ros1 {path}: {len(found)} catkin packages build nodes ({listed}); "
+            f"choose one, e.g. --ros1 {root / rel[0]}"
+        )
+    name = _name(found[0])
+    if name is None:
+        raise UsageError(f"--ros1 {path}: {found[0] / 'package.xml'} has no <name>")
+    return Package(found[0], name)
 
 
-def _files(root: Path) -> list[Path]:
-    out = []
-    for p in sorted(root.rglob("*")):
-        rel = p.relative_to(root)
-        if p.is_file() and not p.is_symlink() and not (set(rel.parts[:-1]) & _SKIP):
-            out.append(p)
-    return out
+def _name(folder: Path) -> str | None:
+    """The ``<name>`` in ``folder/package.xml`` (None when it has none or cannot be read)."""
+    try:
+        text = (folder / "package.xml").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None
+    match = _NAME.search(text)
+    return match.group(1) if match else None
+
+
+def _files(pkg: Package) -> list[Entry]:
+    """The package's files by :mod:`usar_replay.core.folder_walk`'s walk (the one ``usar
+    batch`` checks a team's folder with: same rules, same caps), catkin's outputs left out:
+    what is hashed is what is copied and built. A folder that breaks a rule is the package's
+    ``build_failed``, its reason escaped text."""
+    try:
+        found = walk(pkg.path, skip_dirs=_SKIP, what=f"the folder of package {pkg.name}")
+    except UnusableSubmission as err:
+        raise MissionEnded("build_failed", f"package {pkg.name} cannot be built: {err}") from None
+    return [e for e in found if e.link is None]
 
 
 def package_sha256(pkg: Package) -> str:
-    """sha256 over the package's files (relative path and bytes, in sorted order): the log
-    says exactly which code ran (build outputs and ``.git`` left out)."""
+    """sha256 over the package's files (relative path as bytes and bytes, in sorted order):
+    the log says exactly which code ran (build outputs, ``.git``, hidden names left out:
+    :func:`_files`)."""
     h = hashlib.sha256()
-    for p in _files(pkg.path):
-        rel = p.relative_to(pkg.path).as_posix().encode()
-        data = p.read_bytes()
-        h.update(len(rel).to_bytes(8, "little") + rel + len(data).to_bytes(8, "little") + data)
+    try:
+        for e in _files(pkg):
+            h.update(len(e.rel).to_bytes(8, "little") + e.rel + e.size.to_bytes(8, "little"))
+            stream(e, h.update)
+    except UnusableSubmission as err:
+        raise MissionEnded("build_failed", f"package {pkg.name} cannot be built: {err}") from None
     return h.hexdigest()
 
 
 def _copy(pkg: Package, dest: Path) -> None:
-    for p in _files(pkg.path):
-        target = dest / p.relative_to(pkg.path)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(p, target)
+    """The package's files (:func:`_files`) into ``dest``, each read from a checked
+    descriptor and written to a new file (never through a link), with its mode bits."""
+    try:
+        for e in _files(pkg):
+            target = dest / e.rel_path
+            target.parent.mkdir(parents=True, exist_ok=True)
+            flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC
+            fd = os.open(target, flags, 0o600)
+            with os.fdopen(fd, "wb") as out:
+                mode = stream(e, out.write)
+                os.fchmod(out.fileno(), (mode & 0o755) | 0o600)
+    except UnusableSubmission as err:
+        raise MissionEnded("build_failed", f"package {pkg.name} cannot be built: {err}") from None
+    except OSError as err:  # a name too long, no space left: the package's verdict, said
+        where = shown(err.filename) if isinstance(err.filename, str | bytes) else "a file"
+        raise MissionEnded(
+            "build_failed", f"package {pkg.name} could not be copied: {where}: {err.strerror}"
+        ) from None
 
 
 def catkin_env() -> dict[str, str]:
@@ -310,18 +410,25 @@ def _private_root(root: Path) -> Path:
 
 
 def remove_tree(path: Path) -> None:
-    """Remove a (frozen) build folder: write bits back on its folders first, never through a
-    link, then the whole tree."""
-    if not path.is_dir() or path.is_symlink():
-        with contextlib.suppress(FileNotFoundError):
-            path.unlink()
+    """Remove a (frozen) build folder: write bits back on its real folders first, then the
+    whole tree. Never through a link, never a chmod of one (a build may leave links to
+    folders, in or out of its workspace: issue 33); a folder is opened ``O_NOFOLLOW`` and
+    changed through its descriptor."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
         return
-    for dirpath, dirnames, _ in os.walk(path):
-        with contextlib.suppress(OSError):
-            os.chmod(dirpath, 0o700, follow_symlinks=False)
-        for d in dirnames:
+    if not stat.S_ISDIR(st.st_mode):
+        path.unlink()
+        return
+    for dirpath, dirnames, _ in os.walk(path):  # os.walk never descends into a link
+        for folder in (dirpath, *(os.path.join(dirpath, d) for d in dirnames)):
             with contextlib.suppress(OSError):
-                os.chmod(os.path.join(dirpath, d), 0o700, follow_symlinks=False)
+                fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW | os.O_CLOEXEC)
+                try:
+                    os.fchmod(fd, 0o700)
+                finally:
+                    os.close(fd)
     shutil.rmtree(path, ignore_errors=True)
 
 

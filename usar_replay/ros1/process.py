@@ -93,15 +93,16 @@ def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits
     )
 
 
-def ros1_target(pkg: Package, options: Ros1Options) -> MissionTarget:
-    """What the log's ``mission.toml`` says: how the package was started and its sha256."""
+def ros1_target(pkg: Package, options: Ros1Options, *, hashed: bool = True) -> MissionTarget:
+    """What the log's ``mission.toml`` says: how the package was started and its sha256
+    ('' unless ``hashed``: a package whose folder could not be hashed is still logged)."""
     how = f"--launch {options.launch}" if options.launch else f"--node {options.node}"
     return MissionTarget(
         spec=f"ros1:{pkg.path} {how}".strip(),
         module=f"ros1:{pkg.name}",
         attribute=options.launch or options.node,
         path=str(pkg.path.resolve()),
-        sha256=package_sha256(pkg),
+        sha256=package_sha256(pkg) if hashed else "",
     )
 
 

@@ -79,7 +79,9 @@ def record_ros1(
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None
     process: Callable[..., Any]
+    target = ros1_target(pkg, opts, hashed=False)
     try:
+        target = ros1_target(pkg, opts)  # hashes the package: a folder it refuses is the verdict
         built: Built
         if opts.cache:
             built = cached_build(pkg, limits=build_limits, fixed=fixed)
@@ -97,7 +99,7 @@ def record_ros1(
             settings,
             progress,
             limits=limits,
-            target=ros1_target(pkg, opts),
+            target=target,
             process=process,
         )
     finally:

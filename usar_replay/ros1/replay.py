@@ -7,28 +7,33 @@ the first differing message, the rubric delta with ``--grade``). Where a package
 repeatable (it reads the wall clock, an unseeded ``rand()``), the comparison names the topic
 that diverged first and its sim time.
 
-Which package: the one the log names (``mission.toml``: ``ros1:PATH --launch FILE``), if it is
-here; or ``--ros1 PKG`` (``--launch``/``--node`` as for ``usar record``). Its sha256 against the
-recorded one says whether the code changed (a regression run then).
+Which package: ``--ros1 PKG`` (``--launch``/``--node`` as for ``usar record``; its sha256
+against the recorded one says whether the code changed: a regression run then); without it,
+the folder the log names (``mission.toml``: ``ros1:PATH --launch FILE``) only when it is here
+and its files hash to the recorded sha256, said on stderr before anything is built. Why so
+strict (issue 33): a log is input from anyone, and building a package runs its code, so a log
+must not choose which folder of this machine is built and run.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import sys
 from collections.abc import Callable
 from typing import Any
 
-from usar_replay.core.errors import UsageError
+from usar_replay.core.errors import MissionEnded, UsageError
+from usar_replay.core.safe_text import safe_line
 from usar_replay.log.run import Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.ros1 import debian
-from usar_replay.ros1.build import cached_build, find_package
+from usar_replay.ros1.build import Package, cached_build, find_package, package_sha256
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
 from usar_replay.ros1.record import choose_entry
 
-__all__ = ["recorded_entry", "ros1_process"]
+__all__ = ["recorded_entry", "recorded_package", "ros1_process"]
 
 
 def recorded_entry(target: str) -> tuple[str, str, str]:
@@ -54,16 +59,7 @@ def ros1_process(
     here; a package that does not build is :class:`MissionEnded` (``build_failed``, exit 4)."""
     debian.check()
     path, rec_launch, rec_node = recorded_entry(run.mission.target)
-    if package is None:
-        try:
-            pkg = find_package(path)
-        except UsageError:
-            raise UsageError(
-                f"{run.path} was recorded from the ROS 1 package {path}, which is not here; "
-                "give it with --ros1 PKG"
-            ) from None
-    else:
-        pkg = find_package(package)
+    pkg = find_package(package) if package is not None else recorded_package(run, path)
     if launch or node:
         options = Ros1Options(launch=launch or "", node=node or "")
     else:
@@ -76,3 +72,33 @@ def ros1_process(
     )
     factory: Any = functools.partial(Ros1Process, package=pkg, options=options, built=built)
     return dataclasses.replace(target), factory
+
+
+def recorded_package(run: Run, path: str) -> Package:
+    """The package folder the log names, when it is here and hashes to the recorded sha256
+    (said on stderr: the folder that will be built); else a one-line usage error that asks
+    for ``--ros1 PKG``."""
+    shown = safe_line(path)
+    ask = "give the package to replay with --ros1 PKG"
+    try:
+        pkg = find_package(path)
+    except UsageError:
+        raise UsageError(
+            f"{run.path} was recorded from the ROS 1 package {shown}, which is not here; {ask}"
+        ) from None
+    try:
+        digest = package_sha256(pkg)
+    except MissionEnded as err:
+        raise UsageError(f"{shown}: {safe_line(err.detail)}; {ask}") from None
+    if not run.mission.sha256 or digest != run.mission.sha256:
+        raise UsageError(
+            f"{run.path} was recorded from {shown}, whose files are not the recorded ones "
+            f"(sha256 {digest[:12]}, recorded {safe_line(run.mission.sha256[:12]) or 'none'}); "
+            f"{ask}"
+        )
+    print(
+        f"usar: replaying the recorded package {safe_line(str(pkg.path))}: "
+        f"its sha256 {digest[:12]} is the recorded one",
+        file=sys.stderr,
+    )
+    return pkg

@@ -24,6 +24,7 @@ import stat
 from pathlib import Path
 
 from usar_replay.core.errors import TreeRefused
+from usar_replay.core.folder_walk import shown
 
 __all__ = ["TreeRefused", "check", "freeze", "manifest", "verify", "write_new"]
 
@@ -58,11 +59,12 @@ def check(root: Path) -> None:
             target = os.readlink(os.path.join(root, rel))
             if not _inside(os.path.realpath(os.path.join(root, rel)), real_root):
                 raise TreeRefused(
-                    f"the build left a link that leaves its workspace: {rel} -> {target}"[:300]
+                    "the build left a link that leaves its workspace: "
+                    f"{shown(rel)} -> {shown(target)}"[:300]
                 )
         elif not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
             kind = "FIFO" if stat.S_ISFIFO(mode) else "socket" if stat.S_ISSOCK(mode) else "device"
-            raise TreeRefused(f"the build left a {kind} in its workspace: {rel}"[:300])
+            raise TreeRefused(f"the build left a {kind} in its workspace: {shown(rel)}"[:300])
 
 
 def freeze(root: Path) -> None:

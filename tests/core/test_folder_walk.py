@@ -1,0 +1,78 @@
+"""core/folder_walk: one walk of a handed-in folder decides what is read, on real files."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from usar_replay.core.errors import UnusableSubmission
+from usar_replay.core.folder_walk import MAX_FILE_BYTES, shown, stream, walk
+
+
+def _folder(root: Path) -> Path:
+    (root / "src").mkdir(parents=True)
+    (root / "CMakeLists.txt").write_text("project(x)\n", encoding="utf-8")
+    (root / "src" / "main.cpp").write_text("int main() {}\n", encoding="utf-8")
+    return root
+
+
+def test_names_are_bytes_and_a_name_that_is_not_utf8_is_walked(tmp_path: Path) -> None:
+    root = _folder(tmp_path / "team")
+    os.close(os.open(os.fsencode(root) + b"/caf\xe9.txt", os.O_CREAT | os.O_WRONLY, 0o644))
+    rels = [e.rel for e in walk(root)]
+    assert rels == [b"CMakeLists.txt", b"caf\xe9.txt", b"src/main.cpp"]
+    assert shown(b"caf\xe9.txt") == "caf\\xe9.txt"
+    assert shown("a\x1b[2Jb") == "a\\x1b[2Jb"  # a name never drives the terminal
+
+
+def test_hidden_names_caches_and_skipped_folders_are_never_read(tmp_path: Path) -> None:
+    root = _folder(tmp_path / "team")
+    (root / ".cache").mkdir()
+    with open(root / ".cache" / "blob.bin", "wb") as f:
+        f.truncate(2 * 1024**3)  # 2 GiB, sparse: over every cap, but hidden
+    os.mkfifo(root / ".pipe")
+    (root / "build").mkdir()
+    os.mkfifo(root / "build" / "fifo")
+    (root / "m.pyc").write_bytes(b"\0")
+    assert [e.rel for e in walk(root, skip_dirs=frozenset({"build"}))] == [
+        b"CMakeLists.txt",
+        b"src/main.cpp",
+    ]
+    with pytest.raises(UnusableSubmission, match=r"build/fifo: not a regular file"):
+        walk(root)  # not skipped: the FIFO is found, never opened
+
+
+def test_caps_are_checked_before_a_byte_is_read(tmp_path: Path) -> None:
+    root = _folder(tmp_path / "team")
+    with open(root / "big.bin", "wb") as f:
+        f.truncate(MAX_FILE_BYTES + 1)
+    with pytest.raises(UnusableSubmission, match=r"big.bin: \d+ bytes; a file is at most"):
+        walk(root)
+    with pytest.raises(UnusableSubmission, match=r"the files of the folder are over 20 bytes"):
+        walk(_folder(tmp_path / "other"), max_total_bytes=20)
+    with pytest.raises(UnusableSubmission, match=r"more than 1 files"):
+        walk(_folder(tmp_path / "third"), max_files=1)
+
+
+def test_links_are_kept_as_text_inside_and_refused_outside(tmp_path: Path) -> None:
+    root = _folder(tmp_path / "team")
+    (root / "alias.cpp").symlink_to("src/main.cpp")
+    (root / "src_link").symlink_to("src")  # a link to a folder: not walked into
+    found = {e.rel: e.link for e in walk(root)}
+    assert found[b"alias.cpp"] == b"src/main.cpp" and found[b"src_link"] == b"src"
+    (root / "out").symlink_to(tmp_path)
+    with pytest.raises(UnusableSubmission, match=r"out: a link leaving the folder"):
+        walk(root)
+
+
+def test_stream_reads_the_file_the_walk_saw(tmp_path: Path) -> None:
+    root = _folder(tmp_path / "team")
+    entries = walk(root)
+    chunks: list[bytes] = []
+    stream(entries[0], chunks.append)
+    assert b"".join(chunks) == b"project(x)\n"
+    (root / "CMakeLists.txt").write_text("project(longer)\n", encoding="utf-8")
+    with pytest.raises(UnusableSubmission, match=r"CMakeLists.txt: changed while it was read"):
+        stream(entries[0], chunks.append)
