@@ -89,7 +89,7 @@ DEBIAN: dict[str, str] = {
 }
 """ROS 1 package name -> the Debian 12 package with its CMake config (``find_package``)."""
 
-GAZEBO = "usar has no Gazebo: it simulates the world itself"
+GAZEBO = "usar has no Gazebo"
 """Why a package that uses Gazebo's API cannot build here (the hint's first words)."""
 
 _NAVIGATION = "ROS navigation, not in Debian 12; usar's move_base serves the action"

@@ -165,8 +165,12 @@ _MOVE_BASE = _launch(
 
 _AMCL = _launch(
     _args(
-        {"scan_topic": "scan", "initial_pose_x": "0.0", "initial_pose_y": "0.0",
-         "initial_pose_a": "0.0"}
+        {
+            "scan_topic": "scan",
+            "initial_pose_x": "0.0",
+            "initial_pose_y": "0.0",
+            "initial_pose_a": "0.0",
+        }
     )
     + '  <node pkg="amcl" type="amcl" name="amcl"/>\n'
 )
@@ -235,7 +239,10 @@ def files() -> dict[str, tuple[bytes, int]]:
     out: dict[str, tuple[bytes, int]] = {}
     for p in sorted(FIDUCIAL_MSGS.rglob("*")):
         if p.is_file() and not p.is_symlink():
-            out[f"fiducial_msgs/{p.relative_to(FIDUCIAL_MSGS).as_posix()}"] = (p.read_bytes(), 0o644)
+            out[f"fiducial_msgs/{p.relative_to(FIDUCIAL_MSGS).as_posix()}"] = (
+                p.read_bytes(),
+                0o644,
+            )
     for name, why in PACKAGES.items():
         out[f"{name}/package.xml"] = (_package_xml(name, why), 0o644)
         out[f"{name}/CMakeLists.txt"] = (_cmake(name), 0o644)
