@@ -164,7 +164,7 @@ def describe(run: Run, *, quick: bool = False) -> str:
     if ros1 is not None:
         lines.append("Parameters the package's nodes read:")
         for p in ros1.parameters:
-            value = p.value or "not set (the node's default)"
+            value = p.value or "not set by usar"  # the launch file's value, or the node's default
             lines.append(f"  {p.name} = {value}  ({', '.join(p.read_by)})"[:WIDTH])
         if not ros1.parameters:
             lines.append("  (none)")
