@@ -144,3 +144,24 @@ def test_a_plan_is_json_and_reads_back(tmp_path: Path) -> None:
     path.write_text(json.dumps(plan), encoding="utf-8")
     assert launch_filter.load_plan(path) == plan
     assert os.path.basename(plan["replaced_file"]) == "r.tsv"
+
+
+def test_a_launch_file_of_stand_ins_only_stops_with_one_line(tmp_path: Path) -> None:
+    """The course's multiple_robots.launch alone: nothing of the team's would run; roslaunch
+    stops at once with one line (the bridge shows it) instead of a graph that never starts."""
+    plan = _plan(tmp_path)
+    out = tmp_path / "output"
+    out.mkdir()
+    cmd = launch_output.launch_command(
+        out, tmp_path / "nodes.tsv", "final_project", "multiple_robots.launch", plan
+    )
+    done = subprocess.run(
+        ["bash", "-c", cmd], env=_env(tmp_path), capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines()[-1] == (
+        "usar: the launch file starts only nodes usar stands in for (amcl, aruco_detect, "
+        "gazebo_ros, map_server, move_base, robot_state_publisher, rviz): start the team's own "
+        "nodes in it"
+    )
+    assert not (tmp_path / "nodes.tsv").exists()

@@ -133,6 +133,12 @@ def main(argv: list[str]) -> None:
         config = load(*args, **kwargs)
         dropped = launch_filter.apply(config, plan)
         if output_dir != "-":
+            if dropped and not config.nodes:  # roslaunch would wait for nothing, for good
+                kinds = sorted({str(n.package) for n in dropped})
+                raise SystemExit(
+                    f"usar: the launch file starts only nodes usar stands in for "
+                    f"({', '.join(kinds)}): start the team's own nodes in it"
+                )
             if plan.get("replaced_file"):
                 with open(plan["replaced_file"], "w", encoding="utf-8") as f:
                     f.writelines(launch_filter.rows(dropped))
