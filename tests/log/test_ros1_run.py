@@ -19,6 +19,7 @@ RUN = ros1_run.Ros1Run(
     launch="usar_course.launch",
     build_seconds=12.3456,
     nodes=(ros1_run.Ros1Node("/explorer", "usar_course", "explorer_node"),),
+    replaced=(ros1_run.Ros1Node("/gazebo", "gazebo_ros", "gzserver"),),
     parameters=(ros1_run.ParameterRead("/mission/spin_speed", "0.1", ("/explorer",)),),
     applied_settings=("record", "mission.xy_tolerance"),
 )

@@ -9,7 +9,9 @@ from usar_replay.ros1 import buildmsg
 
 def test_hints_and_paths_for_a_missing_dependency_and_an_own_message() -> None:
     missing = 'Could not find a package configuration file provided by "tf3_ros" with any'
-    assert "'tf3_ros' is not installed here" in buildmsg.hint(missing, "pkg")
+    assert buildmsg.hint(missing, "pkg") == (
+        "hint: no Debian 12 package provides 'tf3_ros': check its name in find_package(...)"
+    )
     own = "src/a.cpp:2:10: fatal error: pkg/Thing.h: No such file or directory"
     assert "add_dependencies(TARGET ${${PROJECT_NAME}_EXPORTED_TARGETS})" in buildmsg.hint(
         own, "pkg"
@@ -63,3 +65,53 @@ def test_an_unknown_namespace_is_named_as_it_is() -> None:
     )
     ros = "undefined reference to `ros::init(int&, char**)'"
     assert "link roscpp:" in buildmsg.hint(ros, "pkg")
+
+
+def test_a_ros_package_debian_has_is_named_with_its_apt_line() -> None:
+    """Issue 31: the course template's ``tf`` without libtf-dev said "check its name"; the
+    name is right, the Debian package is missing."""
+    catkin = (
+        "-- Could not find the required component 'tf'. The following CMake error indicates "
+        "that you either need to install the package with the same name or change your "
+        "environment so that it can be found.\nCMake Error at /usr/share/catkin/cmake/"
+        "catkinConfig.cmake:82 (find_package):\n  Could not find a package configuration file"
+        ' provided by "tf" with any\n  of the following names:'
+    )
+    assert buildmsg.hint(catkin, "final_project") == (
+        "hint: install tf: apt-get install -y --no-install-recommends libtf-dev"
+    )
+    plain = 'Could not find a package configuration file provided by "laser_geometry" with'
+    assert buildmsg.hint(plain, "p").endswith(
+        "apt-get install -y --no-install-recommends liblaser-geometry-dev"
+    )
+    for ros, deb in (
+        ("std_srvs", "libstd-srvs-dev"),
+        ("cv_bridge", "libcv-bridge-dev"),
+        ("pcl_ros", "libpcl-ros-dev"),
+        ("rosgraph_msgs", "libros-rosgraph-msgs-dev"),
+    ):
+        said = buildmsg.hint(f"Could not find the required component '{ros}'.", "p")
+        assert said == f"hint: install {ros}: apt-get install -y --no-install-recommends {deb}"
+        assert len(said) <= 100
+
+
+def test_what_debian_lacks_says_what_usar_does_instead() -> None:
+    nav = buildmsg.hint("Could not find the required component 'costmap_2d'.", "p")
+    assert nav.startswith("hint: costmap_2d: ROS navigation, not in Debian 12; usar's move_base")
+    assert "remove it from find_package(...)" in nav
+    gz = buildmsg.hint('Could not find a package configuration file provided by "gazebo"', "p")
+    assert gz == "hint: gazebo: usar has no Gazebo: use cmd_vel, /odom and /tf, not Gazebo's API"
+
+
+def test_gazebo_api_and_stand_in_headers_get_their_own_hint() -> None:
+    """A plugin or node that includes Gazebo's headers cannot build here: usar has no Gazebo;
+    a stand-in package is a name only."""
+    said = "/ws/src/p/src/plugin.cpp:1:10: fatal error: gazebo/gazebo.hh: No such file or dir"
+    got = buildmsg.hint(said, "p")
+    assert got.startswith("hint: gazebo/gazebo.hh: usar has no Gazebo") and len(got) <= 100
+    msgs = "a.cpp:3:10: fatal error: gazebo_msgs/ModelStates.h: No such file or directory"
+    assert "usar has no Gazebo" in buildmsg.hint(msgs, "p")
+    amcl = "a.cpp:3:10: fatal error: move_base/move_base.h: No such file or directory"
+    assert buildmsg.hint(amcl, "p") == (
+        "hint: usar's move_base is a name only, for navigation: usar's move_base action servers"
+    )

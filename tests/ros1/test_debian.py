@@ -30,3 +30,28 @@ def test_check_names_exactly_what_is_missing() -> None:
     with pytest.raises(debian.MissingRos1) as caught:
         debian.check()
     assert str(caught.value).endswith(f"apt-get update && {debian.install_line(gone)}")
+
+
+def test_the_documented_apt_lines_install_every_package() -> None:
+    """README.md (twice), .ci/run and docs/ros1.md carry the apt-get line verbatim: each
+    installs exactly :data:`debian.APT_PACKAGES` (bubblewrap besides, where the tests run)."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    want = debian.install_line()
+    found = 0
+    for name in ("README.md", ".ci/run", "docs/ros1.md"):
+        for line in (root / name).read_text(encoding="utf-8").splitlines():
+            if "apt-get install" in line and "catkin" in line:
+                found += 1
+                words = line.split("&&")[1].split()
+                assert " ".join(w for w in words if w != "bubblewrap") == want, name
+    assert found == 4
+
+
+def test_the_course_templates_packages_are_in_the_line() -> None:
+    """What the course template's find_package lists and teams add (issue 31)."""
+    for name in ("libtf-dev", "libtf2-geometry-msgs-dev", "libstd-srvs-dev",
+                 "libimage-transport-dev", "libcv-bridge-dev", "libvisualization-msgs-dev",
+                 "libangles-dev"):
+        assert name in debian.APT_PACKAGES

@@ -32,7 +32,12 @@ def test_rosrun_command_names_the_nodes_file(tmp_path: Path) -> None:
     assert str(tmp_path / "explorer_node.out") in words
     launch = shlex.split(lo.launch_command(tmp_path, tmp_path / "nodes.tsv", "pkg", "a.launch"))
     assert launch[:3] == ["python3", "-P", str(Path(lo.__file__).resolve())]
-    assert launch[3:] == [str(tmp_path), str(tmp_path / "nodes.tsv"), "pkg", "a.launch"]
+    assert launch[3:] == [str(tmp_path), str(tmp_path / "nodes.tsv"), "-", "pkg", "a.launch"]
+    plan = tmp_path / "plan.json"
+    planned = shlex.split(lo.launch_command(tmp_path, tmp_path / "n.tsv", "p", "a.launch", plan))
+    assert planned[5:] == [str(plan), "p", "a.launch"]
+    nodes = shlex.split(lo.nodes_command("p", "a.launch", plan))
+    assert nodes[3:] == ["-", "-", str(plan), "--nodes", "p", "a.launch"]
 
 
 def test_without_prefix_shows_the_command_as_the_student_wrote_it(tmp_path: Path) -> None:

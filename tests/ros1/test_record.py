@@ -117,7 +117,7 @@ def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, st
     assert "settle_frames" not in settings and "mission.spin_speed" not in settings
     # what the nodes read: usar's values, a parameter usar did not set, no ROS internals
     assert "  /mission/settle_frames = 5  (/explorer)" in text  # the explorer reads it
-    assert "  /usar_two_nodes/standoff = not set (the node's default)  (/follower)" in text
+    assert "  /usar_two_nodes/standoff = not set by usar  (/follower)" in text
     assert "/tcp_keepalive" not in text and "/use_sim_time" not in text
     assert all(len(line) <= 100 for line in text.splitlines())
 

@@ -93,3 +93,13 @@ def test_the_launch_files_nodes_are_read_with_their_names_checked(tmp_path: Path
     (tmp_path / run_files.NODES_FILE).symlink_to(tmp_path / "elsewhere.tsv")
     (tmp_path / "elsewhere.tsv").write_text("/planted\tp\tt\n", encoding="utf-8")
     assert run_files.launch_nodes(tmp_path) == []  # a link planted there is not followed
+
+
+def test_the_replaced_nodes_are_read_as_the_launch_files_nodes(tmp_path: Path) -> None:
+    rows = "/gazebo\tgazebo_ros\tgzserver\n/explorer/spawn\tgazebo_ros\tspawn_model\nbad\tp\tt\n"
+    (tmp_path / run_files.REPLACED_FILE).write_text(rows, encoding="utf-8")
+    assert run_files.replaced_nodes(tmp_path) == [
+        ("/gazebo", "gazebo_ros", "gzserver"),
+        ("/explorer/spawn", "gazebo_ros", "spawn_model"),
+    ]
+    assert run_files.launch_nodes(tmp_path) == []  # a file of its own

@@ -109,6 +109,9 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
     lines += _field("Started with", ros1.started_with)
     nodes = [f"{n.name} ({n.package}/{n.type})" if n.type else n.name for n in ros1.nodes]
     lines += _field("Nodes", ", ".join(nodes) or "(none started)")
+    if ros1.replaced:
+        gone = [f"{n.name} ({n.package}/{n.type})" for n in ros1.replaced]
+        lines += _field("Replaced", "not started, usar stands in: " + ", ".join(gone))
     lines += _field("Build", ros1.build)
     kept = ros1_run.node_outputs(run)
     if kept:
@@ -169,7 +172,7 @@ def describe(run: Run, *, quick: bool = False) -> str:
     if ros1 is not None:
         lines.append("Parameters the package's nodes read:")
         for p in ros1.parameters:
-            value = p.value or "not set (the node's default)"
+            value = p.value or "not set by usar"  # the launch file's value, or the node's default
             lines.append(f"  {p.name} = {value}  ({', '.join(p.read_by)})"[:WIDTH])
         if not ros1.parameters:
             lines.append("  (none)")

@@ -59,6 +59,9 @@ class Ros1Run:
     build_seconds: float = 0.0
     build_cached: bool = False
     nodes: tuple[Ros1Node, ...] = ()
+    replaced: tuple[Ros1Node, ...] = ()
+    """The launch file's nodes usar did not start: its stand-ins did their job (Gazebo,
+    amcl, move_base, map_server, aruco_detect, rviz, ...)."""
     parameters: tuple[ParameterRead, ...] = ()
     applied_settings: tuple[str, ...] = ()
     """Prefixes of the settings that applied (``record``, ``mission.xy_tolerance``, ...)."""
@@ -92,6 +95,9 @@ class Ros1Run:
             "build_cached": self.build_cached,
             "applied_settings": list(self.applied_settings),
             "nodes": [{"name": n.name, "package": n.package, "type": n.type} for n in self.nodes],
+            "replaced": [
+                {"name": n.name, "package": n.package, "type": n.type} for n in self.replaced
+            ],
             "parameters": [
                 {"name": p.name, "value": p.value, "read_by": list(p.read_by)}
                 for p in self.parameters
@@ -111,10 +117,8 @@ class Ros1Run:
             build_seconds=float(data.get("build_seconds", 0.0)),
             build_cached=bool(data.get("build_cached", False)),
             applied_settings=tuple(str(s) for s in data.get("applied_settings", [])),
-            nodes=tuple(
-                Ros1Node(str(n.get("name", "")), str(n.get("package", "")), str(n.get("type", "")))
-                for n in data.get("nodes", [])
-            ),
+            nodes=_nodes(data.get("nodes", [])),
+            replaced=_nodes(data.get("replaced", [])),
             parameters=tuple(
                 ParameterRead(
                     str(p.get("name", "")),
@@ -124,6 +128,13 @@ class Ros1Run:
                 for p in data.get("parameters", [])
             ),
         )
+
+
+def _nodes(rows: Any) -> tuple[Ros1Node, ...]:
+    return tuple(
+        Ros1Node(str(n.get("name", "")), str(n.get("package", "")), str(n.get("type", "")))
+        for n in rows
+    )
 
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)?")

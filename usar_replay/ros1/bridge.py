@@ -62,7 +62,7 @@ from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, text_frame, unpack
 from usar_replay.node.wire_io import send_within
-from usar_replay.ros1 import run_files
+from usar_replay.ros1 import launch_filter, run_files, standins
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
 from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
@@ -116,7 +116,10 @@ class Graph:
         if config.get("launch"):
             what = f"roslaunch {config['package']} {config['launch']}"
             nodes = run / run_files.NODES_FILE
-            cmd = launch_command(self.output_dir, nodes, config["package"], config["launch"])
+            plan = run / run_files.LAUNCH_PLAN
+            cmd = launch_command(
+                self.output_dir, nodes, config["package"], config["launch"], plan
+            )
         else:
             what = f"rosrun {config['package']} {config['node']}"
             cmd = rosrun_command(self.output_dir, config["package"], config["node"])
@@ -202,6 +205,7 @@ class Bridge:
             # the nodes' screen lines without rosconsole's ${time} (wall time, then sim time):
             # their output, kept in the log, is the same on every recording (rospy reads it too)
             ROSCONSOLE_FORMAT=CONSOLE_FORMAT,
+            **standins.COURSE_ENV,  # as a course machine's shell has it
         )
         os.environ.update(
             {k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")}
@@ -278,10 +282,29 @@ class Bridge:
         self.quiet = Quiescence(own_tid=threading.get_native_id())
         expected: list[str] = []
         if self.config.get("launch"):
+            plan = self._write_launch_plan(ws)
             setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
-            expected = launch_nodes(setup, self.config["package"], self.config["launch"], self.env)
+            pkg, launch = self.config["package"], self.config["launch"]
+            expected = launch_nodes(setup, pkg, launch, self.env, plan)
         self.graph = Graph(self.config, self.env)
         self._wait_for_graph(master, expected, float(self.config.get("connect_timeout_s", 60.0)))
+
+    def _write_launch_plan(self, run: Path) -> Path:
+        """The plan roslaunch follows (:mod:`.launch_filter`): usar's stand-ins' nodes dropped,
+        the parameters usar set above winning over the launch file's."""
+        params = {
+            _ros_param(k): _xmlrpc_value(v) for k, v in self.parameters.items() if v is not None
+        }
+        params["/use_sim_time"] = True
+        plan = launch_filter.plan(
+            standins.REPLACED,
+            standins.WORLD_NAMESPACES,
+            params,
+            str(run / run_files.REPLACED_FILE),
+        )
+        path = run / run_files.LAUNCH_PLAN
+        path.write_text(json.dumps(plan, sort_keys=True), encoding="utf-8")
+        return path
 
     def _start_node(self) -> None:
         import rospy

@@ -1,8 +1,11 @@
-"""Private catkin workspaces: usar's ``fiducial_msgs`` as an underlay, the package in an overlay.
+"""Private catkin workspaces: usar's packages as an underlay, the package in an overlay.
 
 Why an underlay: a course machine has ``fiducial_msgs`` installed (built before the student's
 package, in another workspace), so a package's ``CMakeLists.txt`` that builds there builds here
 as it is: no ``add_dependencies(... ${catkin_EXPORTED_TARGETS})`` needed for usar's messages.
+The underlay also holds usar's stand-ins for what a course machine has and usar replaces
+(gazebo_ros, turtlebot3's, amcl, move_base, ...: :mod:`.standins`), so ``find_package`` and
+``$(find X)`` of those names resolve.
 The underlay is usar's own bytes, built once (in the sandbox all the same) and shared; the
 overlay holds a copy of the package alone, so the student's folder is never written to and
 nothing else on the machine can change the build.
@@ -46,7 +49,7 @@ from pathlib import Path
 
 from usar_replay.core.errors import MissionEnded, UnusableSubmission, UsageError
 from usar_replay.core.folder_walk import Entry, shown, stream, walk
-from usar_replay.ros1 import buildmsg, layout, tree
+from usar_replay.ros1 import buildmsg, layout, standins, tree
 from usar_replay.ros1.buildjail import BuildLimits, run_jailed
 
 __all__ = [
@@ -68,7 +71,7 @@ __all__ = [
     "underlay",
 ]
 
-FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
+FIDUCIAL_MSGS = standins.FIDUCIAL_MSGS
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
 
 _NAME = re.compile(r"<name>\s*([A-Za-z0-9_]+)\s*</name>")
@@ -435,7 +438,7 @@ def remove_tree(path: Path) -> None:
 def _usar_key(h: hashlib._Hash, fixed: bool) -> None:
     from usar_replay import __version__
 
-    h.update(package_sha256(Package(FIDUCIAL_MSGS, "fiducial_msgs")).encode())
+    h.update(standins.sha256().encode())  # fiducial_msgs and the stand-ins
     h.update(__version__.encode())
     h.update(str(shutil.which("g++")).encode())
     h.update((layout.VERSION if fixed else layout.HOST).encode())
@@ -479,18 +482,25 @@ def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -
 def underlay(
     root: Path | None = None, limits: BuildLimits | None = None, *, fixed: bool = False
 ) -> Path:
-    """usar's ``fiducial_msgs`` built in a workspace of its own (cached and verified like any
-    build: it is usar's own bytes, so every run may share it, and no sandbox can write it);
-    ``fixed``: at :data:`usar_replay.ros1.layout.UNDERLAY` in the sandbox (when there is one)."""
+    """usar's ``fiducial_msgs`` and stand-ins (:mod:`.standins`) built in a workspace of their
+    own (cached and verified like any build: they are usar's own bytes, so every run may share
+    them, and no sandbox can write them); ``fixed``: at
+    :data:`usar_replay.ros1.layout.UNDERLAY` in the sandbox (when there is one)."""
     root = _private_root(root or cache_root())
     fixed = fixed and sandboxed()
     h = hashlib.sha256(b"underlay")
     _usar_key(h, fixed)
-    msgs = Package(FIDUCIAL_MSGS, "fiducial_msgs")
     key = f"underlay-{h.hexdigest()[:20]}"
     at = layout.UNDERLAY if fixed else ""
-    built = _cached(root, key, msgs, lambda entry: build(msgs, entry, limits=limits, at=at))
-    return built.workspace
+
+    def make(entry: Path) -> Built:
+        with tempfile.TemporaryDirectory(prefix="usar-underlay-") as tmp:
+            source = Package(Path(tmp) / standins.UNDERLAY, standins.UNDERLAY)
+            standins.write(source.path)
+            return build(source, entry, limits=limits, at=at)
+
+    where = Package(root / key, standins.UNDERLAY)
+    return _cached(root, key, where, make).workspace
 
 
 def cached_build(

@@ -4,13 +4,18 @@ Why: usar builds a private copy of the package, so the compiler's and CMake's pa
 a workspace the student never made. Those paths are mapped back to the folder they gave
 (``--ros1 DIR``), and the mistakes a course package commonly makes (a ``find_package``
 component missing, a dependency that is not installed, a message header not generated yet) get
-one line saying what to change.
+one line saying what to change. A ROS package that is not installed is named with the Debian
+package that provides it and the ``apt-get install`` to run (:mod:`.ros_debian`); only a name
+no Debian package provides gets "check its name". Gazebo's API (``#include <gazebo/...>``, a
+Gazebo plugin) cannot build here at all: usar has no Gazebo, and the hint says so.
 """
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
+
+from usar_replay.ros1 import ros_debian, standins
 
 __all__ = ["errors", "hint", "student_paths"]
 
@@ -48,12 +53,46 @@ def errors(output: str, limit: int = 60) -> str:
     return "\n".join(picked[:limit])
 
 
+_MISSING = re.compile(
+    r"Could not find the required component '([A-Za-z0-9_]+)'"
+    r'|Could not find a package configuration file provided by\s+"([A-Za-z0-9_]+)"'
+)
+_GAZEBO_HEADER = re.compile(
+    r"fatal error: ((?:gazebo|gazebo_ros|gazebo_plugins|gazebo_msgs|sdf|ignition)/[^:\s]+): "
+    r"No such file"
+)
+
+
+def missing_package(name: str) -> str:
+    """The hint for a ROS package ``find_package`` did not find: the Debian package and the
+    ``apt-get install`` that provides it, why usar has none, or "check its name"."""
+    deb = ros_debian.debian_package(name)
+    if deb is not None:
+        return f"hint: install {name}: apt-get install -y --no-install-recommends {deb}"
+    why = ros_debian.not_in_debian(name)
+    if why == ros_debian.GAZEBO:
+        return f"hint: {name}: {gazebo()}"
+    if why:
+        return f"hint: {name}: {why}; remove it from find_package(...) and package.xml"
+    return f"hint: no Debian 12 package provides {name!r}: check its name in find_package(...)"
+
+
+def gazebo() -> str:
+    """What a package that uses Gazebo's API is told (after ``hint: ``)."""
+    return f"{ros_debian.GAZEBO}: use cmd_vel, /odom and /tf, not Gazebo's API"
+
+
 def hint(output: str, package: str) -> str:
     """One line (within 100 columns for usual names) saying what to change, or ''."""
-    m = re.search(r'Could not find a package configuration file provided by\s+"([^"]+)"', output)
+    m = _GAZEBO_HEADER.search(output)
     if m:
-        return f"hint: {m.group(1)!r} is not installed here: check its name in find_package(...)"
+        return f"hint: {m.group(1)}: {gazebo()}"
+    m = _MISSING.search(output)
+    if m:
+        return missing_package(m.group(1) or m.group(2))
     m = re.search(r"fatal error: ([A-Za-z0-9_]+)/[A-Za-z0-9_]+\.h: No such file", output)
+    if m and m.group(1) in standins.PACKAGES:
+        return f"hint: usar's {m.group(1)} is a name only, for {standins.PACKAGES[m.group(1)]}"
     if m and m.group(1) == package:
         return (
             "hint: generate the messages first: add_dependencies(TARGET "

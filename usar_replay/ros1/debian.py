@@ -3,8 +3,12 @@
 Why Debian's: Debian 12 packages ROS 1 (Noetic-era: roscpp, rospy, tf2_ros, actionlib,
 move_base_msgs, catkin, the message generators), so a course package builds and runs with
 ``apt-get install`` and nothing else; Gazebo, move_base, map_server and aruco_detect are what
-usar stands in for. The list is minimal: each package is there for a named reason, and apt pulls
-in the rest (roscpp's headers, the message packages' dependencies).
+usar stands in for (:mod:`.standins`). The list is what a course machine has that Debian
+packages and a course package asks for (the course template's ``find_package`` and what teams
+add to it: tf, tf2_geometry_msgs, std_srvs, image_transport, cv_bridge, ...); each package is
+there for a named reason, and apt pulls in the rest (roscpp's headers, the message packages'
+dependencies). For anything else a package asks for, the build's hint names the Debian package
+(:mod:`.ros_debian`).
 
 Python: Debian's ROS 1 Python packages live in ``/usr/lib/python3/dist-packages`` for Debian's
 ``/usr/bin/python3``, which is 3.11 like usar's. The bridge process runs usar's own interpreter
@@ -37,6 +41,14 @@ APT_PACKAGES: dict[str, str] = {
     "libmove-base-msgs-dev": "move_base_msgs for C++",
     "libnav-msgs-dev": "nav_msgs for C++ (odometry, the map)",
     "libsensor-msgs-dev": "sensor_msgs for C++ (camera image and info)",
+    "libgeometry-msgs-dev": "geometry_msgs for C++ (the course template's find_package)",
+    "libtf-dev": "tf (the course template's find_package; tf::TransformListener)",
+    "libtf2-geometry-msgs-dev": "tf2_geometry_msgs (tf2::doTransform, tf2::fromMsg)",
+    "libstd-srvs-dev": "std_srvs (Empty, Trigger, SetBool services between a team's nodes)",
+    "libimage-transport-dev": "image_transport (listed by teams that read the camera)",
+    "libcv-bridge-dev": "cv_bridge (the camera's images as OpenCV matrices)",
+    "libvisualization-msgs-dev": "visualization_msgs (markers a team publishes for rviz)",
+    "libangles-dev": "angles (angles::normalize_angle, shortest_angular_distance)",
     "python3-rosmaster": "the ROS master (a private one per run)",
     "python3-roslaunch": "roslaunch, to start the package's launch file",
     "rosbash": "rosrun, to start one node of the package (--node)",
@@ -63,6 +75,14 @@ _PROBES: dict[str, str] = {
     "libmove-base-msgs-dev": "/usr/include/move_base_msgs/MoveBaseAction.h",
     "libnav-msgs-dev": "/usr/include/nav_msgs/Odometry.h",
     "libsensor-msgs-dev": "/usr/include/sensor_msgs/Image.h",
+    "libgeometry-msgs-dev": "/usr/share/geometry_msgs/cmake/geometry_msgsConfig.cmake",
+    "libtf-dev": "/usr/include/tf/transform_listener.h",
+    "libtf2-geometry-msgs-dev": "/usr/include/tf2_geometry_msgs/tf2_geometry_msgs.h",
+    "libstd-srvs-dev": "/usr/include/std_srvs/Empty.h",
+    "libimage-transport-dev": "/usr/include/image_transport/image_transport.h",
+    "libcv-bridge-dev": "/usr/include/cv_bridge/cv_bridge.h",
+    "libvisualization-msgs-dev": "/usr/include/visualization_msgs/Marker.h",
+    "libangles-dev": "/usr/share/angles/cmake/anglesConfig.cmake",
     "python3-rosmaster": "/usr/bin/rosmaster",
     "python3-roslaunch": "/usr/bin/roslaunch",
     "rosbash": "/usr/bin/rosrun",

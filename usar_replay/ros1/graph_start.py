@@ -4,8 +4,8 @@ Why: a node that is still connecting when the first ``/clock`` arrives misses th
 messages, and how many it misses depends on the machine (the issue measured 4 to 8 ticks of
 difference between two recordings). So the bridge holds ``/clock`` until
 
-1. every node of the launch file (``roslaunch --nodes``; with ``rosrun``, at least one node)
-   has registered with the master;
+1. every node of the launch file (``roslaunch --nodes``, usar's stand-ins dropped:
+   :mod:`.launch_filter`; with ``rosrun``, at least one node) has registered with the master;
 2. every subscriber of every topic (the bridge's own subscriptions and the action clients'
    status, feedback and result included) is connected to every publisher of it, asked of each
    node through its slave API (``getBusInfo``: inbound connections per topic);
@@ -18,16 +18,22 @@ import subprocess
 import time
 import xmlrpc.client
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
+
+from usar_replay.ros1.launch_output import nodes_command
 
 __all__ = ["launch_nodes", "missing_connections", "registered_nodes", "wait_until_ready"]
 
 
-def launch_nodes(script_prefix: str, package: str, launch: str, env: dict[str, str]) -> list[str]:
-    """The node names a launch file starts (``roslaunch --nodes``), [] where it cannot say."""
+def launch_nodes(
+    script_prefix: str, package: str, launch: str, env: dict[str, str], plan: Path | None = None
+) -> list[str]:
+    """The node names a launch file starts (``roslaunch --nodes``, ``plan`` followed), []
+    where it cannot say."""
     try:
         done = subprocess.run(
-            ["bash", "-c", f'{script_prefix} && exec roslaunch --nodes "$0" "$1"', package, launch],
+            ["bash", "-c", f"{script_prefix} && exec {nodes_command(package, launch, plan)}"],
             env=env,
             stdin=subprocess.DEVNULL,
             capture_output=True,

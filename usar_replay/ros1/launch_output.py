@@ -9,6 +9,9 @@ in the order written, to ``OUTPUT_DIR/<node>.out`` and makes its stdout line-buf
 this module, run as a script by Debian's ``/usr/bin/python3`` (it imports only the standard
 library and roslaunch), wraps roslaunch's config loading and then runs ``roslaunch.main()``.
 It also writes the launch file's nodes (name, package, type) to a list, for ``usar info``.
+Before that, the loaded config goes through usar's plan (:mod:`.launch_filter`): the nodes usar
+stands in for are dropped (and listed in a file of their own), usar's parameters win.
+``--nodes`` (the bridge's list of nodes to wait for) goes through the same plan.
 
 ``rosrun PKG EXE`` (``--node``) gets the same redirection around ``rosrun`` itself.
 
@@ -18,14 +21,23 @@ recorder reads them as untrusted (:mod:`usar_replay.ros1.run_files`).
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import shlex
 import sys
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
-__all__ = ["OUTPUT_SUFFIX", "file_label", "launch_command", "rosrun_command", "without_prefix"]
+__all__ = [
+    "OUTPUT_SUFFIX",
+    "file_label",
+    "launch_command",
+    "nodes_command",
+    "rosrun_command",
+    "without_prefix",
+]
 
 OUTPUT_SUFFIX = ".out"
 STDBUF = "/usr/bin/stdbuf"
@@ -55,12 +67,22 @@ def _prefix(output: str) -> list[str]:
     return [*head, "/bin/sh", "-c", _REDIRECT, output]
 
 
-def launch_command(output_dir: Path, nodes_file: Path, package: str, launch: str) -> str:
-    """The shell words that run ``roslaunch PACKAGE LAUNCH`` through this module."""
+def launch_command(
+    output_dir: Path, nodes_file: Path, package: str, launch: str, plan: Path | None = None
+) -> str:
+    """The shell words that run ``roslaunch PACKAGE LAUNCH`` through this module, following
+    ``plan`` (:mod:`.launch_filter`) when given."""
     # -P: this file's folder (usar's ros1 modules: build.py, process.py, ...) is not put on
     # sys.path, where it could shadow a module roslaunch imports
     words = ["python3", "-P", str(Path(__file__).resolve()), str(output_dir), str(nodes_file)]
-    return shlex.join([*words, package, launch])
+    return shlex.join([*words, str(plan or "-"), package, launch])
+
+
+def nodes_command(package: str, launch: str, plan: Path | None = None) -> str:
+    """The shell words that print the nodes ``roslaunch PACKAGE LAUNCH`` starts (``roslaunch
+    --nodes``), ``plan`` followed."""
+    words = ["python3", "-P", str(Path(__file__).resolve()), "-", "-", str(plan or "-")]
+    return shlex.join([*words, "--nodes", package, launch])
 
 
 def rosrun_command(output_dir: Path, package: str, node: str) -> str:
@@ -83,18 +105,48 @@ def _prefixed(config: Any, output_dir: str, nodes_file: str) -> Any:
     return config
 
 
+def _sibling(name: str) -> ModuleType:
+    """usar's module ``name`` beside this file, loaded by path (this script runs in Debian's
+    Python, which has no usar, with ``-P``: its folder is not on ``sys.path``)."""
+    spec = importlib.util.spec_from_file_location(
+        f"usar_{name}", Path(__file__).resolve().parent / f"{name}.py"
+    )
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def main(argv: list[str]) -> None:
-    """``python3 launch_output.py OUTPUT_DIR NODES_FILE ROSLAUNCH_ARGS...``."""
+    """``python3 launch_output.py OUTPUT_DIR NODES_FILE PLAN ROSLAUNCH_ARGS...`` (``-`` for
+    OUTPUT_DIR and NODES_FILE with ``--nodes``, for PLAN when there is none)."""
     import roslaunch
     import roslaunch.config
+    import roslaunch.node_args
 
-    output_dir, nodes_file, rest = argv[1], argv[2], argv[3:]
+    output_dir, nodes_file, plan_file, rest = argv[1], argv[2], argv[3], argv[4:]
+    launch_filter = _sibling("launch_filter")
+    plan = launch_filter.load_plan(plan_file) if plan_file != "-" else {}
     load = roslaunch.config.load_config_default
 
-    def load_prefixed(*args: Any, **kwargs: Any) -> Any:
-        return _prefixed(load(*args, **kwargs), output_dir, nodes_file)
+    def load_planned(*args: Any, **kwargs: Any) -> Any:
+        config = load(*args, **kwargs)
+        dropped = launch_filter.apply(config, plan)
+        if output_dir != "-":
+            if dropped and not config.nodes:  # roslaunch would wait for nothing, for good
+                kinds = sorted({str(n.package) for n in dropped})
+                raise SystemExit(
+                    f"usar: the launch file starts only nodes usar stands in for "
+                    f"({', '.join(kinds)}): start the team's own nodes in it"
+                )
+            if plan.get("replaced_file"):
+                with open(plan["replaced_file"], "w", encoding="utf-8") as f:
+                    f.writelines(launch_filter.rows(dropped))
+            _prefixed(config, output_dir, nodes_file)
+        return config
 
-    roslaunch.config.load_config_default = load_prefixed
+    roslaunch.config.load_config_default = load_planned
+    roslaunch.node_args.load_config_default = load_planned  # ``--nodes`` took it by name
     roslaunch.main(["roslaunch", *rest])
 
 

@@ -232,6 +232,7 @@ class Ros1Process(MissionProcess):
             build_seconds=self.built.seconds,
             build_cached=self.built.cached,
             nodes=tuple(Ros1Node(*row) for row in nodes),
+            replaced=tuple(Ros1Node(*row) for row in run_files.replaced_nodes(self.run_dir)),
             parameters=tuple(read),
             applied_settings=run_files.APPLIED_SETTINGS,
         )

@@ -15,6 +15,9 @@ The files:
 * ``output/<node>.out``: a node's stdout and stderr, in the order written
   (:mod:`.launch_output`);
 * :data:`NODES_FILE`: the launch file's nodes, one ``name TAB package TAB type`` per line;
+* :data:`REPLACED_FILE`: the launch file's nodes usar did not start, its stand-ins doing their
+  job (:mod:`.launch_filter`), in the same form; :data:`LAUNCH_PLAN` is the bridge's plan for
+  them (written before the package runs, read by roslaunch's side only);
 * :data:`MASTER_LOG`: the ROS master's log of every API call, from which the parameters each
   node read (``getParam``, ``hasParam``, ``searchParam``, ``subscribeParam``) and the nodes that
   registered (for ``rosrun``, which has no launch file to list them) are taken.
@@ -33,6 +36,7 @@ from usar_replay.ros1.launch_output import OUTPUT_SUFFIX
 
 __all__ = [
     "APPLIED_SETTINGS",
+    "LAUNCH_PLAN",
     "MASTER_LOG",
     "NODES_FILE",
     "OUTPUT_DIR",
@@ -42,11 +46,15 @@ __all__ = [
     "node_outputs",
     "node_tails",
     "parameters_read",
+    "REPLACED_FILE",
     "registered_nodes",
+    "replaced_nodes",
 ]
 
 OUTPUT_DIR = "output"
 NODES_FILE = "launch_nodes.tsv"
+REPLACED_FILE = "launch_replaced.tsv"
+LAUNCH_PLAN = "launch_plan.json"
 MASTER_LOG = "master_api.log"
 OUTPUT_HEAD = 16 * 1024
 """Bytes kept from the start of a node's output (its start-up lines)."""
@@ -159,10 +167,10 @@ def node_tails(output_dir: Path, lines: int = 40) -> str:
     return text
 
 
-def launch_nodes(run_dir: Path) -> list[tuple[str, str, str]]:
+def launch_nodes(run_dir: Path, name: str = NODES_FILE) -> list[tuple[str, str, str]]:
     """The launch file's nodes as (name, package, type); empty for ``rosrun``."""
     with _dir(run_dir) as fd:
-        got = None if fd is None else _read(fd, NODES_FILE, 64 * 1024, 0)
+        got = None if fd is None else _read(fd, name, 64 * 1024, 0)
     if got is None:
         return []
     rows: list[tuple[str, str, str]] = []
@@ -171,6 +179,11 @@ def launch_nodes(run_dir: Path) -> list[tuple[str, str, str]]:
         if len(fields) == 3 and _NODE_NAME.fullmatch(fields[0]):
             rows.append((fields[0], fields[1][:200], fields[2][:200]))
     return rows[:MAX_NODES]
+
+
+def replaced_nodes(run_dir: Path) -> list[tuple[str, str, str]]:
+    """The launch file's nodes usar did not start, as (name, package, type)."""
+    return launch_nodes(run_dir, REPLACED_FILE)
 
 
 def _master_calls(run_dir: Path) -> list[tuple[str, str, str]]:
