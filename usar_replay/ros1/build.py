@@ -67,6 +67,8 @@ __all__ = [
 
 FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
+PACING = Path(__file__).resolve().parent / "catkin" / "usar_pacing"
+"""usar's pacing shim, preloaded into the package's nodes (:mod:`usar_replay.ros1.shim`)."""
 
 _NAME = re.compile(r"<name>\s*([A-Za-z0-9_]+)\s*</name>")
 _SKIP = {"build", "devel", "install", ".git", "__pycache__", "log", "logs"}
@@ -268,8 +270,10 @@ def build(
     jobs: int = 2,
     limits: BuildLimits | None = None,
     at: str = "",
+    beside: tuple[Package, ...] = (),
 ) -> Built:
-    """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``; in the
+    """Copy ``pkg`` (and the packages ``beside`` it: usar's underlay is two) into
+    ``entry/ws/src`` (a new folder) and build it on ``underlays``; in the
     sandbox at ``at`` (:data:`usar_replay.ros1.layout.WORKSPACE`, the underlays at theirs) or,
     with ``at`` '', at its host path.
 
@@ -279,7 +283,8 @@ def build(
     ws = entry / "ws"
     src = ws / "src"
     src.mkdir(parents=True)
-    _copy(pkg, src / pkg.name)
+    for each in (pkg, *beside):
+        _copy(each, src / each.name)
     _toplevel(src)
     start = time.perf_counter()  # for the build time shown to people only
     _catkin_make(ws, pkg.name, pkg.path, underlays, limits or BuildLimits(), jobs, at)
@@ -329,6 +334,7 @@ def _usar_key(h: hashlib._Hash, fixed: bool) -> None:
     from usar_replay import __version__
 
     h.update(package_sha256(Package(FIDUCIAL_MSGS, "fiducial_msgs")).encode())
+    h.update(package_sha256(Package(PACING, "usar_pacing")).encode())
     h.update(__version__.encode())
     h.update(str(shutil.which("g++")).encode())
     h.update((layout.VERSION if fixed else layout.HOST).encode())
@@ -372,8 +378,9 @@ def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -
 def underlay(
     root: Path | None = None, limits: BuildLimits | None = None, *, fixed: bool = False
 ) -> Path:
-    """usar's ``fiducial_msgs`` built in a workspace of its own (cached and verified like any
-    build: it is usar's own bytes, so every run may share it, and no sandbox can write it);
+    """usar's ``fiducial_msgs`` and ``usar_pacing`` built in a workspace of their own (cached
+    and verified like any build: it is usar's own bytes, so every run may share it, and no
+    sandbox can write it);
     ``fixed``: at :data:`usar_replay.ros1.layout.UNDERLAY` in the sandbox (when there is one)."""
     root = _private_root(root or cache_root())
     fixed = fixed and sandboxed()
@@ -382,7 +389,10 @@ def underlay(
     msgs = Package(FIDUCIAL_MSGS, "fiducial_msgs")
     key = f"underlay-{h.hexdigest()[:20]}"
     at = layout.UNDERLAY if fixed else ""
-    built = _cached(root, key, msgs, lambda entry: build(msgs, entry, limits=limits, at=at))
+    pacing = (Package(PACING, "usar_pacing"),)
+    built = _cached(
+        root, key, msgs, lambda entry: build(msgs, entry, limits=limits, at=at, beside=pacing)
+    )
     return built.workspace
 
 
