@@ -11,28 +11,22 @@
  */
 #include <tf2_ros/transform_listener.h>
 
+#include <memory>
 #include <string>
 
 #include "usar_course/robots.h"
-
-namespace {
-
-/** @brief `while (!connected) ROS_INFO(...)`: polls the action server without sleeping. */
-void busy_wait_for_server() {
-  usar_course::MoveBaseClient probe("/explorer/move_base", true);
-  while (ros::ok() && !probe.isServerConnected()) {
-    ROS_INFO("waiting for the explorer's move_base");
-  }
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "usar_course");
   ros::NodeHandle nh;
   std::string busy;
   ros::NodeHandle("~").param<std::string>("busy", busy, "");
-  if (busy == "wait") busy_wait_for_server();
+  std::unique_ptr<usar_course::MoveBaseClient> probe;  // kept for the run, as students keep it
+  if (busy == "wait") {
+    // `while (!connected) ROS_INFO(...)`: polls the action server without sleeping
+    probe = std::make_unique<usar_course::MoveBaseClient>("/explorer/move_base", true);
+    while (ros::ok() && !probe->isServerConnected()) ROS_INFO("waiting for move_base");
+  }
   tf2_ros::Buffer buffer(ros::Duration(60.0));
   tf2_ros::TransformListener listener(buffer);
   usar_course::Explorer explorer(&nh, &buffer);
