@@ -93,9 +93,11 @@ def main() -> None:
         result = python_record.record(scenario, out, RunSettings())
         wall = time.perf_counter() - start
         python_rtf = result.sim_duration_s / wall
+        report = grade_file(out)
         print(
-            f"built-in Python mission: {result.outcome}, {result.sim_duration_s:.1f} s sim in "
-            f"{wall:.1f} s wall: {python_rtf:.2f}x real time"
+            f"built-in Python mission: {result.outcome}, {report.points:g}/{report.max_points:g}"
+            f" points, {result.sim_duration_s:.1f} s sim in {wall:.1f} s wall: "
+            f"{python_rtf:.2f}x real time"
         )
         for what, rtf_reached in ros1:
             print(
