@@ -15,7 +15,8 @@
 //   - sim time changed since this thread's previous poll point: go on (a new tick);
 //   - the thread executed callbacks at its previous spin: go on (it is still reacting), with
 //     a new budget;
-//   - else count it; past a small budget per tick (kSpinBudget spins, kPrintBudget log lines,
+//   - else count it (log lines only on the main thread or a thread that spins itself: never
+//     on roscpp's own threads); past a small budget per tick (kSpinBudget spins, kPrintBudget log lines,
 //     so a node that logs a few lines in one go, or spins twice in one loop, is not delayed)
 //     the thread naps until sim time changes (or ros::ok() turns false).
 // Nothing here reads the wall clock to decide: how many times a loop body runs in a tick
@@ -30,7 +31,9 @@
 // register; the other arguments are forwarded untouched.
 
 #include <dlfcn.h>
+#include <sys/syscall.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <cstdarg>
 #include <cstdint>
@@ -84,6 +87,7 @@ struct Thread {
   int spins = 0;         // idle spins at this sim time
   int prints = 0;        // log lines at this sim time
   int depth = 0;         // inside a spin (callbacks run there are reactions, not polls)
+  bool spun = false;     // the thread polled the queue itself once (a loop of the package's)
 };
 
 thread_local Thread t_state;
@@ -118,9 +122,17 @@ int64_t wait_for_new_time(int64_t last) {
   }
 }
 
+// A thread whose log lines may be a busy loop's: the main thread, or one that spins a queue
+// itself. roscpp's own threads (network, XML-RPC, timers) never wait here for a warning burst.
+bool paced_printer(const Thread& s) {
+  return s.spun || syscall(SYS_gettid) == getpid();
+}
+
 void poll_point(Kind kind) {
   Thread& s = t_state;
   if (s.depth > 0) return;  // a callback's own log lines: a reaction
+  if (kind == Kind::kSpin) s.spun = true;
+  else if (!paced_printer(s)) return;
   int64_t now = sim_now();
   if (now < 0) return;
   if (s.seen && now == s.last && !s.reacted) {
