@@ -10,10 +10,10 @@ start-up gate gave up ("the graph did not go idle") or every tick waited for the
 usar's underlay builds ``usar_pacing`` (``catkin/usar_pacing/src/pacing.cpp``) beside
 ``fiducial_msgs``: a small library that the package's processes get through ``LD_PRELOAD``.
 It wraps roscpp's poll points (``ros::spinOnce()``, ``CallbackQueue::callAvailable()`` with
-no timeout, ``ros::console::print()``, ROS_INFO's entry, outside callbacks): a thread that
-reaches them again and again at the same sim time, having run no callback, naps as roscpp's
-own sim-time sleeps do (1 ms wall-clock naps) until ``ros::Time::now()`` changes. So a busy
-loop runs its body a fixed number of times per tick (a few spins or log lines of grace per
+no timeout, ``ros::console::print()``, ROS_INFO's entry, outside callbacks and not on
+roscpp's own threads): a thread that reaches them again and again at the same sim time,
+having run no callback, naps as roscpp's own sim-time sleeps do (1 ms wall-clock naps) until
+``ros::Time::now()`` changes. So a busy loop runs its body a fixed number of times per tick (a few spins or log lines of grace per
 tick, so a node that logs several lines in one go is not delayed) and the idle check sees it
 as it sees a node paced by ``ros::Rate``. Nothing there reads the wall clock to decide, so
 two recordings stay the same. With wall time (no ``/use_sim_time``) it never waits.
