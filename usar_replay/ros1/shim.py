@@ -13,10 +13,11 @@ It wraps roscpp's poll points (``ros::spinOnce()``, ``CallbackQueue::callAvailab
 no timeout, ``ros::console::print()``, ROS_INFO's entry, outside callbacks and not on
 roscpp's own threads): a thread that reaches them again and again at the same sim time,
 having run no callback, naps as roscpp's own sim-time sleeps do (1 ms wall-clock naps) until
-``ros::Time::now()`` changes. So a busy loop runs its body a fixed number of times per tick (a few spins or log lines of grace per
-tick, so a node that logs several lines in one go is not delayed) and the idle check sees it
-as it sees a node paced by ``ros::Rate``. Nothing there reads the wall clock to decide, so
-two recordings stay the same. With wall time (no ``/use_sim_time``) it never waits.
+``ros::Time::now()`` changes. So a busy loop runs its body a fixed number of times per tick
+(a few spins or log lines of grace per tick, so a node that logs several lines in one go is
+not delayed) and the idle check sees it as it sees a node paced by ``ros::Rate``. Nothing
+there reads the wall clock to decide, so two recordings stay the same. With wall time (no
+``/use_sim_time``) it never waits.
 
 The library links nothing of ROS (it finds the real functions with ``dlsym``), so in a
 process without roscpp (the ``bash`` and ``roslaunch`` that start the nodes, a rospy node)
