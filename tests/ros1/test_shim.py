@@ -13,6 +13,7 @@ second never passed the start-up gate.
 from __future__ import annotations
 
 import subprocess
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -114,7 +115,7 @@ def test_a_busy_scan_loop_runs_to_a_graded_end_the_same_twice(
     b = _record(tmp_path / "b.mcap", "busy_scan.launch")
     assert len(a) > 100
     assert a == b
-    # paced to a few passes of the loop per tick (not thousands): two cmd_vels a tick
+    # paced to a few passes of the loop per tick (not thousands of cmd_vels)
     sent = [t for t, topic, _ in a if topic == "/explorer/cmd_vel"]
     assert len(sent) <= 3 * len(set(sent))
 
@@ -130,5 +131,7 @@ def test_a_busy_scan_log_replays_bit_for_bit(
 
 def test_a_busy_wait_before_the_first_clock_runs_to_a_graded_end(tmp_path: Path) -> None:
     out = _record(tmp_path / "wait.mcap", "busy_wait.launch")
-    lines = [data for _, topic, data in out if topic == "/rosout"]
-    assert lines  # the busy wait's own log lines, a few per tick
+    per_tick = Counter(t for t, topic, _ in out if topic == "/rosout")
+    # the busy wait's own log lines, five a tick (where a tick had one more line: six), not
+    # thousands
+    assert per_tick.most_common(1)[0][1] in (5, 6) and sum(per_tick.values()) > 1000
