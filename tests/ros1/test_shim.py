@@ -134,4 +134,4 @@ def test_a_busy_wait_before_the_first_clock_runs_to_a_graded_end(tmp_path: Path)
     per_tick = Counter(t for t, topic, _ in out if topic == "/rosout")
     # the busy wait's own log lines: five in most ticks (not thousands), and every tick alike
     assert Counter(per_tick.values()).most_common(1)[0][0] == 5
-    assert max(per_tick.values()) <= 8
+    assert max(per_tick.values()) <= 20
