@@ -62,7 +62,7 @@ from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, text_frame, unpack
 from usar_replay.node.wire_io import send_within
-from usar_replay.ros1 import launch_filter, run_files, standins
+from usar_replay.ros1 import launch_filter, run_files, shim, standins
 from usar_replay.ros1.build import catkin_env
 from usar_replay.ros1.debian import DIST_PACKAGES
 from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
@@ -131,7 +131,8 @@ class Graph:
             self.proc = subprocess.Popen(
                 ["bash", "-c", script],
                 cwd=run,
-                env=env,
+                # the pacing shim in the package's processes only (:mod:`.shim`)
+                env=shim.preloaded(env, config.get("underlays", ())),
                 stdin=subprocess.DEVNULL,
                 stdout=log,
                 stderr=subprocess.STDOUT,

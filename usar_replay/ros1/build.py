@@ -73,6 +73,8 @@ __all__ = [
 
 FIDUCIAL_MSGS = standins.FIDUCIAL_MSGS
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
+PACING = standins.PACING
+"""usar's pacing shim, preloaded into the package's nodes (:mod:`usar_replay.ros1.shim`)."""
 
 _NAME = re.compile(r"<name>\s*([A-Za-z0-9_]+)\s*</name>")
 _SKIP = frozenset({"build", "devel", "install", ".git", "__pycache__", "log", "logs"})
@@ -482,7 +484,8 @@ def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -
 def underlay(
     root: Path | None = None, limits: BuildLimits | None = None, *, fixed: bool = False
 ) -> Path:
-    """usar's ``fiducial_msgs`` and stand-ins (:mod:`.standins`) built in a workspace of their
+    """usar's ``fiducial_msgs``, ``usar_pacing`` (the preloaded shim, :mod:`.shim`) and the
+    stand-ins (:mod:`.standins`) built in a workspace of their
     own (cached and verified like any build: they are usar's own bytes, so every run may share
     them, and no sandbox can write them); ``fixed``: at
     :data:`usar_replay.ros1.layout.UNDERLAY` in the sandbox (when there is one)."""

@@ -27,6 +27,7 @@ from pathlib import Path
 __all__ = [
     "COURSE_ENV",
     "FIDUCIAL_MSGS",
+    "PACING",
     "PACKAGES",
     "REPLACED",
     "UNDERLAY",
@@ -38,6 +39,8 @@ __all__ = [
 
 FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
+PACING = Path(__file__).resolve().parent / "catkin" / "usar_pacing"
+"""usar's pacing shim (:mod:`usar_replay.ros1.shim`), built in the underlay beside them."""
 
 UNDERLAY = "usar_underlay"
 """The folder in the underlay's ``src/`` that holds ``fiducial_msgs`` and the stand-ins."""
@@ -237,12 +240,13 @@ def files() -> dict[str, tuple[bytes, int]]:
     """The underlay's source tree: relative path -> (bytes, mode), ``fiducial_msgs`` and every
     stand-in package, in sorted order."""
     out: dict[str, tuple[bytes, int]] = {}
-    for p in sorted(FIDUCIAL_MSGS.rglob("*")):
-        if p.is_file() and not p.is_symlink():
-            out[f"fiducial_msgs/{p.relative_to(FIDUCIAL_MSGS).as_posix()}"] = (
-                p.read_bytes(),
-                0o644,
-            )
+    for shipped in (FIDUCIAL_MSGS, PACING):
+        for p in sorted(shipped.rglob("*")):
+            if p.is_file() and not p.is_symlink():
+                out[f"{shipped.name}/{p.relative_to(shipped).as_posix()}"] = (
+                    p.read_bytes(),
+                    0o644,
+                )
     for name, why in PACKAGES.items():
         out[f"{name}/package.xml"] = (_package_xml(name, why), 0o644)
         out[f"{name}/CMakeLists.txt"] = (_cmake(name), 0o644)

@@ -105,6 +105,11 @@ bool Explorer::step() {
   return false;
 }
 
+bool Explorer::driving() const {
+  return (state_ == State::kToTarget || state_ == State::kToHome) &&
+         !client_.getState().isDone();
+}
+
 void Explorer::next_target() {
   if (target_index_ >= targets_.size()) {
     state_ = State::kToHome;

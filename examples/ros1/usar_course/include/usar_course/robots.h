@@ -54,6 +54,8 @@ class Explorer {
   bool step();
   /** @brief The stored markers, by ID. */
   const std::map<int, MarkerPose>& markers() const { return markers_; }
+  /** @brief A move_base goal of the explorer's is under way. */
+  bool driving() const;
 
  private:
   enum class State { kStart, kToTarget, kSearch, kToHome, kHome };
@@ -93,6 +95,8 @@ class Follower {
   /** @brief One step; true once the follower is back home. */
   bool step();
   bool started() const { return started_; }
+  /** @brief A move_base goal of the follower's is under way. */
+  bool driving() const { return started_ && !client_.getState().isDone(); }
 
  private:
   void next_goal();

@@ -1,0 +1,137 @@
+"""The pacing shim (usar_replay/ros1/shim.py, catkin/usar_pacing): busy-polling nodes run.
+
+The library is built as usar's underlay builds it (a real catkin_make), checked to link
+nothing of ROS and to leave a process without roscpp alone; then the example package's busy
+shapes (``examples/ros1/usar_course``, ``~busy``) are recorded on the one-room world to a
+graded end: ``busy_scan.launch`` (``while (ros::ok()) { ...; publish; ros::spinOnce(); }``
+with no sleep) twice, identical message for message, and ``busy_wait.launch`` (``while
+(!connected) ROS_INFO(...)`` before the first clock, ``while (goal not done) ROS_INFO(...)``
+with no spin). Before the shim, the first ran at the wall cap (0.33x, not repeatable) and the
+second never passed the start-up gate.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from collections import Counter
+from pathlib import Path
+
+import pytest
+from clitools import usar
+from conftest import one_room
+
+from usar_replay.core.settings import RunSettings
+from usar_replay.grading.grade import grade_file
+from usar_replay.log.run import open_run
+from usar_replay.ros1 import build, shim
+from usar_replay.ros1.process import Ros1Options
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
+
+
+def test_preloaded_puts_the_shim_first_and_keeps_what_was_there(tmp_path: Path) -> None:
+    lib = tmp_path / "under" / shim.LIBRARY
+    lib.parent.mkdir(parents=True)
+    lib.write_bytes(b"")
+    env = shim.preloaded({"PATH": "/usr/bin", "LD_PRELOAD": "/x/libother.so"}, [tmp_path / "u"])
+    assert "LD_PRELOAD" in env and env["LD_PRELOAD"] == "/x/libother.so"  # no shim there
+    env = shim.preloaded({"PATH": "/usr/bin", "LD_PRELOAD": "/x/libother.so"}, [tmp_path / "under"])
+    assert env == {"PATH": "/usr/bin", "LD_PRELOAD": f"{lib}:/x/libother.so"}
+    assert shim.preloaded({}, [str(tmp_path / "under")]) == {"LD_PRELOAD": str(lib)}
+
+
+@pytest.fixture(scope="module")
+def library() -> Path:
+    """The shim as usar's underlay builds it (the build cache's, built once)."""
+    lib = shim.library([build.underlay()])
+    assert lib is not None
+    return lib
+
+
+def test_the_shim_wraps_roscpps_poll_points_and_links_nothing_of_ros(library: Path) -> None:
+    dynamic = subprocess.run(
+        ["readelf", "-d", str(library)], capture_output=True, text=True, check=True
+    ).stdout
+    needed = {line.split("[")[1].split("]")[0] for line in dynamic.splitlines() if "NEEDED" in line}
+    assert not [n for n in needed if "ros" in n or "console" in n], needed
+    symbols = subprocess.run(
+        ["nm", "-DC", "--defined-only", str(library)], capture_output=True, text=True, check=True
+    ).stdout
+    for name in (
+        "ros::spinOnce()",
+        "ros::CallbackQueue::callAvailable(ros::WallDuration)",
+        "ros::console::print(ros::console::FilterBase*",
+    ):
+        assert name in symbols, name
+
+
+def test_a_process_without_roscpp_runs_as_before(library: Path) -> None:
+    # roslaunch and a rospy node get the shim too (the package's environment): nothing changes
+    env = shim.preloaded(build.catkin_env(), [library.parents[2]])
+    done = subprocess.run(
+        ["/usr/bin/python3", "-c", "import rospy; print('rospy', rospy.__name__)"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert (done.returncode, done.stdout, done.stderr) == (0, "rospy rospy\n", "")
+
+
+def _record(out: Path, launch: str) -> list[tuple[int, str, bytes]]:
+    """One recording of the example package with ``launch`` on the one-room world, graded to
+    60/60; what the package and the bridge published (not the simulator's), tick by tick."""
+    from usar_replay.ros1.record import record_ros1
+
+    result = record_ros1(
+        one_room(), out, EXAMPLE, RunSettings(), options=Ros1Options(launch=launch)
+    )
+    run = open_run(out)
+    assert result.outcome == "done", result.outcome_reason
+    report = grade_file(out)
+    assert report.points == report.max_points == 60, [
+        (c.id, c.measured) for c in report.checks if not c.passed
+    ]
+    return [
+        (m.log_time_ns, m.topic, bytes(m.data))
+        for m in run.messages(decode=False)
+        if m.publisher == "mission"
+    ]
+
+
+@pytest.fixture(scope="module")
+def busy_scan(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> tuple[Path, list[tuple[int, str, bytes]]]:
+    """``busy_scan.launch`` recorded once: the log and its outputs."""
+    out = tmp_path_factory.mktemp("busy") / "scan.mcap"
+    return out, _record(out, "busy_scan.launch")
+
+
+def test_a_busy_scan_loop_runs_to_a_graded_end_the_same_twice(
+    tmp_path: Path, busy_scan: tuple[Path, list[tuple[int, str, bytes]]]
+) -> None:
+    _, a = busy_scan
+    b = _record(tmp_path / "b.mcap", "busy_scan.launch")
+    assert len(a) > 100
+    assert a == b
+    # paced to a few passes of the loop per tick (not thousands of cmd_vels)
+    sent = [t for t, topic, _ in a if topic == "/explorer/cmd_vel"]
+    assert len(sent) <= 3 * len(set(sent))
+
+
+def test_a_busy_scan_log_replays_bit_for_bit(
+    busy_scan: tuple[Path, list[tuple[int, str, bytes]]],
+) -> None:
+    log, _ = busy_scan
+    done = usar("replay", str(log))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "bit for bit" in done.stdout
+
+
+def test_a_busy_wait_before_the_first_clock_runs_to_a_graded_end(tmp_path: Path) -> None:
+    out = _record(tmp_path / "wait.mcap", "busy_wait.launch")
+    per_tick = Counter(t for t, topic, _ in out if topic == "/rosout")
+    # the busy wait's own log lines: five in most ticks (not thousands), and every tick alike
+    assert Counter(per_tick.values()).most_common(1)[0][0] == 5
+    assert max(per_tick.values()) <= 20
