@@ -86,7 +86,7 @@ class DetectError(UsarError):
 
 class MissingRos1(UsageError):
     """ROS 1 is not installed: the message is the ``apt-get install`` line to run. (Raised by
-    :mod:`usar_replay.ros1.debian`, which re-exports it.)"""
+    :mod:`usar_replay.ros1.build.debian`, which re-exports it.)"""
 
 
 class UnusableSubmission(UsarError):
@@ -97,7 +97,7 @@ class UnusableSubmission(UsarError):
 
 class TreeRefused(UsarError):
     """A built catkin workspace holds something usar will not use (a link leading out, a
-    special file); the message says what (one line). (Raised by :mod:`usar_replay.ros1.tree`:
+    special file); the message says what (one line). (Raised by :mod:`usar_replay.ros1.build.tree`:
     the build's verdict is ``build_failed``.)"""
 
     exit_code = 4

@@ -62,15 +62,17 @@ from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, text_frame, unpack
 from usar_replay.node.wire_io import send_within
-from usar_replay.ros1 import launch_filter, run_files, shim, standins
-from usar_replay.ros1.build import catkin_env
-from usar_replay.ros1.debian import DIST_PACKAGES
-from usar_replay.ros1.graph_start import launch_nodes, registered_nodes, wait_until_ready
+from usar_replay.ros1 import launch_filter, run_files
+from usar_replay.ros1.build import standins
+from usar_replay.ros1.build.debian import DIST_PACKAGES
+from usar_replay.ros1.build.workspace import catkin_env
 from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
-from usar_replay.ros1.proc_watch import ProcWatch
-from usar_replay.ros1.quiescence import Quiescence, children_map
-from usar_replay.ros1.scheduling import watching_elsewhere
-from usar_replay.ros1.shutdown_watch import ShutdownWatch, node_pids
+from usar_replay.ros1.pacing import shim
+from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
+from usar_replay.ros1.pacing.proc_watch import ProcWatch
+from usar_replay.ros1.pacing.quiescence import Quiescence, children_map
+from usar_replay.ros1.pacing.scheduling import watching_elsewhere
+from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.world.nav import grid_from_msg
 

@@ -6,7 +6,7 @@ tick protocol, the same checks on what comes back (a student's ``/tf`` that move
 is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is ``crashed``
 with its output, one that stops answering is ``hung``). The package was built before
 (:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only,
-in the kernel sandbox at the fixed paths they were built at (:mod:`usar_replay.ros1.layout`).
+in the kernel sandbox at the fixed paths they were built at (:mod:`usar_replay.ros1.build.layout`).
 """
 
 from __future__ import annotations
@@ -31,11 +31,11 @@ from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
-from usar_replay.ros1.build import BuildLimits, Built, Package, package_sha256
-from usar_replay.ros1.buildjail import BUILD_WALL_S
+from usar_replay.ros1.build.jail import BUILD_WALL_S
+from usar_replay.ros1.build.workspace import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
-from usar_replay.ros1.scheduling import OneCpu
+from usar_replay.ros1.pacing.scheduling import OneCpu
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 

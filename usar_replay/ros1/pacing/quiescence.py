@@ -33,7 +33,7 @@ import time
 from collections.abc import Collection
 from dataclasses import dataclass
 
-from usar_replay.ros1.sock_diag import SockDiag
+from usar_replay.ros1.pacing.sock_diag import SockDiag
 
 TCP_ESTABLISHED = 1
 

@@ -28,7 +28,7 @@ import os
 from collections.abc import Iterator
 from pathlib import Path
 
-from usar_replay.ros1.quiescence import descendants
+from usar_replay.ros1.pacing.quiescence import descendants
 
 __all__ = ["OneCpu", "watching_elsewhere"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from usar_replay.ros1 import debian
+from usar_replay.ros1.build import debian
 
 
 def test_missing_packages_are_named_in_one_apt_line() -> None:
@@ -37,7 +37,7 @@ def test_the_documented_apt_lines_install_every_package() -> None:
     installs exactly :data:`debian.APT_PACKAGES` (bubblewrap besides, where the tests run)."""
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     want = debian.install_line()
     found = 0
     for name in ("README.md", ".ci/run", "docs/ros1.md"):

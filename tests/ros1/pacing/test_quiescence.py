@@ -7,7 +7,7 @@ import threading
 from proctools import child as start_child
 from proctools import wait_for
 
-from usar_replay.ros1.quiescence import Quiescence
+from usar_replay.ros1.pacing.quiescence import Quiescence
 
 
 def test_a_thread_polling_the_clock_must_wake_before_the_graph_is_idle() -> None:
@@ -57,7 +57,8 @@ def test_bytes_in_a_socket_of_the_graph_keep_it_busy() -> None:
 
 
 def test_a_main_thread_joining_a_thread_is_noted_as_in_an_untimed_wait() -> None:
-    # ros::shutdown joins roscpp's threads so (:mod:`usar_replay.ros1.shutdown_watch`); a main
+    # ros::shutdown joins roscpp's threads so
+    # (:mod:`usar_replay.ros1.pacing.shutdown_watch`); a main
     # thread in timed naps is not
     joining = start_child(
         "import threading\nt = threading.Thread(target=threading.Event().wait)\nt.start()\nt.join()"
@@ -89,7 +90,7 @@ def test_one_walk_of_the_tree_answers_for_any_process_in_it() -> None:
     import os
     import signal
 
-    from usar_replay.ros1.quiescence import children_map, descendants
+    from usar_replay.ros1.pacing.quiescence import children_map, descendants
 
     parent = start_child(
         "import subprocess, sys, time\n"

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 from proctools import child as start_child
 
-from usar_replay.ros1.shutdown_watch import ShutdownWatch, exited, node_pids, reaped
+from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, exited, node_pids, reaped
 
 # a launcher as roslaunch: starts a node, collects it on a 0.1 s poll; the node exits when the
 # launcher closes its stdin, which it does when the test writes a line to the launcher

@@ -1,4 +1,4 @@
-"""netlink sock_diag (usar_replay.ros1.sock_diag): bytes waiting in real sockets of this
+"""netlink sock_diag (usar_replay.ros1.pacing.sock_diag): bytes waiting in real sockets of this
 process, found by inode, and what does not count (CLOSE-WAIT)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import socket
 
-from usar_replay.ros1.sock_diag import SockDiag, waiting
+from usar_replay.ros1.pacing.sock_diag import SockDiag, waiting
 
 
 def _ino(s: socket.socket) -> int:

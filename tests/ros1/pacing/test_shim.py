@@ -1,4 +1,4 @@
-"""The pacing shim (usar_replay/ros1/shim.py, catkin/usar_pacing): busy-polling nodes run.
+"""The pacing shim (usar_replay/ros1/pacing/shim.py, catkin/usar_pacing): busy-polling nodes run.
 
 The library is built as usar's underlay builds it (a real catkin_make), checked to link
 nothing of ROS and to leave a process without roscpp alone; then the example package's busy
@@ -23,10 +23,11 @@ from conftest import one_room
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
-from usar_replay.ros1 import build, shim
+from usar_replay.ros1.build import workspace as build
+from usar_replay.ros1.pacing import shim
 from usar_replay.ros1.process import Ros1Options
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
+EXAMPLE = Path(__file__).resolve().parents[3] / "examples" / "ros1" / "usar_course"
 
 
 def test_preloaded_puts_the_shim_first_and_keeps_what_was_there(tmp_path: Path) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from proctools import child as start_child
 from proctools import wait_for
 
-from usar_replay.ros1.proc_watch import ProcWatch
+from usar_replay.ros1.pacing.proc_watch import ProcWatch
 
 
 def test_the_end_is_seen_in_the_process_table_with_the_exit_code() -> None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import contextlib
 from dataclasses import dataclass, field
 
-from usar_replay.ros1.quiescence import descendants
+from usar_replay.ros1.pacing.quiescence import descendants
 
 __all__ = ["ProcWatch"]
 

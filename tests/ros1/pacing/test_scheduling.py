@@ -7,7 +7,7 @@ import os
 from proctools import child as start_child
 from proctools import wait_for
 
-from usar_replay.ros1.scheduling import OneCpu
+from usar_replay.ros1.pacing.scheduling import OneCpu
 
 
 def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
@@ -28,7 +28,7 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
 
 
 def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
-    from usar_replay.ros1.scheduling import watching_elsewhere
+    from usar_replay.ros1.pacing.scheduling import watching_elsewhere
 
     before = os.sched_getaffinity(0)
     cpus = sorted(before)

@@ -40,7 +40,7 @@ __all__ = [
 FIDUCIAL_MSGS = Path(__file__).resolve().parent / "catkin" / "fiducial_msgs"
 """aruco_detect's message package, as usar ships it (Debian has no fiducials)."""
 PACING = Path(__file__).resolve().parent / "catkin" / "usar_pacing"
-"""usar's pacing shim (:mod:`usar_replay.ros1.shim`), built in the underlay beside them."""
+"""usar's pacing shim (:mod:`usar_replay.ros1.pacing.shim`), built in the underlay beside them."""
 
 UNDERLAY = "usar_underlay"
 """The folder in the underlay's ``src/`` that holds ``fiducial_msgs`` and the stand-ins."""

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.batch.plan import discover
-from usar_replay.ros1.build import (
+from usar_replay.ros1.build.workspace import (
     NoPackage,
     SeveralPackages,
     _copy,
