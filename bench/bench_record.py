@@ -18,7 +18,7 @@ per sim-minute, frames rendered against frames recorded, and usar's CPU split by
 
 ``--camera 1920x1080@30`` records with another camera (size and rate; the field of view stays
 the scenario's): what the course's own camera (the TurtleBot3 waffle's in Gazebo) would cost
-against usar's default (issue #32; docs/scenario.md has the figures).
+against usar's default (issue #32; the figures are in docs/ros1.md, "The course's camera").
 
 The mission process (image decoding, ArUco detection, planning) is reported as one figure. The
 split is measured by wrapping those functions with CPU-time counters; the wrappers cost
