@@ -109,9 +109,10 @@ class CameraSettings:
     of 640x480 at 10 Hz, and 5 times the log; docs/ros1.md), while packages accept a detection
     on ``fiducial_area > 10000`` tuned on those images. So the course world renders a smaller
     image with the course's horizontal field of view, and the detector reports those two fields
-    as the course's camera would measure them: at the same field of view a width ``W'`` has ``W'/W`` times the focal length, so areas
-    scale by ``(W'/W)^2`` and reprojection errors by ``W'/W``. The images, their ``CameraInfo``
-    and the detected corners stay in the rendered image's pixels.
+    as the course's camera would measure them: at the same field of view a width ``W'`` has
+    ``W'/W`` times the focal length, so areas scale by ``(W'/W)^2`` and reprojection errors by
+    ``W'/W``. The images, their ``CameraInfo`` and the detected corners stay in the rendered
+    image's pixels.
     """
 
     width: int = 640
