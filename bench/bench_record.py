@@ -1,7 +1,7 @@
 """`usar record`'s speed and size, with where the time goes (printed, never asserted).
 
     python bench/bench_record.py [--course-seconds 120] [--only room|course] [--encoding E]
-                                 [--keep DIR] [--latency 0|1]
+                                 [--keep DIR] [--latency 0|1] [--camera WxH@HZ]
 
 Records the one-room world of the tests (the whole mission: explorer, then follower) and the
 first ``--course-seconds`` of sim time of the course world, into a temporary directory, and
@@ -15,6 +15,10 @@ per sim-minute, frames rendered against frames recorded, and usar's CPU split by
 * ``detect``: the course's ArUco detector (trusted, on usar's side: issue #21; before it, the
   mission process ran it);
 * ``rest``: tf, odometry, the process boundary and the loop itself.
+
+``--camera 1920x1080@30`` records with another camera (size and rate; the field of view stays
+the scenario's): what the course's own camera (the TurtleBot3 waffle's in Gazebo) would cost
+against usar's default (issue #32; the figures are in docs/ros1.md, "The course's camera").
 
 The mission process (image decoding, ArUco detection, planning) is reported as one figure. The
 split is measured by wrapping those functions with CPU-time counters; the wrappers cost
@@ -102,7 +106,8 @@ def bench(
     minutes = result.sim_duration_s / 60
     rendered = _calls["render"]
     print(
-        f"{label}: {result.sim_duration_s:.1f} s sim, {scenario.camera.encoding}, "
+        f"{label}: {result.sim_duration_s:.1f} s sim, {scenario.camera.width}x"
+        f"{scenario.camera.height} at {scenario.camera.rate_hz:g} Hz, {scenario.camera.encoding}, "
         f"mission {'done' if result.mission_done else 'not done'}, "
         f"markers {len(result.markers_found)}/{len(scenario.markers)}"
         + (
@@ -126,6 +131,16 @@ def bench(
     print(f"  usar's CPU: {split}  rest {100 * rest / cpu:4.1f}%")
 
 
+def _camera_arg(text: str) -> tuple[int, int, float]:
+    """``WxH@HZ`` -> (width, height, rate)."""
+    try:
+        size, hz = text.split("@")
+        w, h = size.split("x")
+        return int(w), int(h), float(hz)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not WxH@HZ (e.g. 1920x1080@30)") from None
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--course-seconds", type=float, default=120.0)
@@ -133,15 +148,20 @@ def main() -> None:
     ap.add_argument("--encoding", choices=("png", "jpeg"), help="default: the scenario's")
     ap.add_argument("--keep", type=Path, help="write the logs into this directory and keep them")
     ap.add_argument("--latency", type=int, default=0, choices=(0, 1), help="actuation latency")
+    ap.add_argument(
+        "--camera", type=_camera_arg, help="WxH@HZ, e.g. 1920x1080@30; default: the scenario's"
+    )
     args = ap.parse_args()
     _instrument()
 
     def world(scn: Scenario) -> Scenario:
-        if args.encoding is None:
-            return scn
-        return dataclasses.replace(
-            scn, camera=dataclasses.replace(scn.camera, encoding=args.encoding)
-        )
+        cam = scn.camera
+        if args.encoding is not None:
+            cam = dataclasses.replace(cam, encoding=args.encoding)
+        if args.camera is not None:
+            w, h, hz = args.camera
+            cam = dataclasses.replace(cam, width=w, height=h, rate_hz=hz)
+        return dataclasses.replace(scn, camera=cam)
 
     with tempfile.TemporaryDirectory(prefix="usar-bench-") as scratch:
         tmp = args.keep or Path(scratch)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
@@ -65,6 +66,26 @@ def test_detections_come_right_after_the_frame() -> None:
     assert [f.fiducial_id for f in found.transforms] == [7] and found.image_seq == 0
     empty = det.add_detections(_tick(USAR, None))  # aruco_detect: a message per searched frame
     assert cdr.decode(empty[2][2], empty[2][1]) == msgs.FiducialTransformArray(image_seq=1)
+
+
+def test_pixel_fields_are_in_the_course_cameras_pixels() -> None:
+    """With the world's ``pixel_scale`` (the course world: 1920 / 640 = 3) the published
+    ``fiducial_area`` is 9 times and ``image_error`` 3 times the frame's own; the pose is the
+    same."""
+
+    def first(scale: float) -> msgs.FiducialTransform:
+        det = CourseDetector.for_run(DetectorParams(), USAR, scale)
+        assert det is not None
+        out = det.add_detections(_tick(USAR, 7))
+        found = cdr.decode(out[2][2], out[2][1])
+        assert isinstance(found, msgs.FiducialTransformArray)
+        return found.transforms[0]
+
+    own, course = first(1.0), first(3.0)
+    assert own.fiducial_area == pytest.approx(120.0**2, rel=0.05)
+    assert course.fiducial_area == own.fiducial_area * 9
+    assert course.image_error == own.image_error * 3
+    assert (course.transform, course.object_error) == (own.transform, own.object_error)
 
 
 def test_the_missions_switch_acts_from_the_next_frame() -> None:

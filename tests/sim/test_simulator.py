@@ -113,12 +113,36 @@ def test_limits_and_odometry() -> None:
         odom = sim.odometry("explorer")
         assert odom.twist.twist.linear.x == pytest.approx(0.26)
         assert odom.twist.twist.angular.z == pytest.approx(1.82)
-        true = sim.true_pose("explorer").position
-        start = sim.scenario.explorer
-        # odom frame = start pose (yaw 0 in the course): odometry is the displacement from it
-        assert odom.pose.pose.position.x == pytest.approx(true.x - start.x, abs=1e-12)
-        assert odom.pose.pose.position.y == pytest.approx(true.y - start.y, abs=1e-12)
+        true = sim.true_pose("explorer")
+        # world-source odometry (gazebo_ros_diff_drive's default): the pose is the world pose
+        assert odom.pose.pose == true
         assert odom.header.frame_id == "explorer_tf/odom"
+
+
+def test_odometry_starts_at_the_start_pose_and_map_to_odom_is_the_identity() -> None:
+    """As the course's Gazebo publishes it: ``/explorer/odom`` begins at (-4, 2.5), not (0, 0),
+    ``odom -> base_footprint`` equals it, and ``map -> odom`` is the identity (what amcl,
+    started at the same pose, publishes), so ``map -> base_footprint`` is the true pose."""
+    with Simulator(course_world(), renderer="tiny") as sim:
+        sim.set_cmd_vel(
+            "follower", msgs.Twist(linear=msgs.Vector3(x=0.2), angular=msgs.Vector3(z=0.5))
+        )
+        first = sim.odometry("explorer").pose.pose.position
+        assert (first.x, first.y) == (sim.scenario.explorer.x, sim.scenario.explorer.y)
+        sim.step(150)
+        static = {t.child_frame_id: t.transform for t in sim.tf_static().transforms}
+        dynamic = {t.child_frame_id: t.transform for t in sim.tf().transforms}
+        for r in ("explorer", "follower"):
+            assert static[f"{r}_tf/odom"] == msgs.Transform()
+            link = dynamic[f"{r}_tf/base_footprint"]
+            pose = sim.odometry(r).pose.pose
+            assert (link.translation.x, link.translation.y) == (pose.position.x, pose.position.y)
+            assert link.rotation == pose.orientation
+            assert pose == sim.true_pose(r)
+        moved = sim.odometry("follower").pose.pose.position
+        assert (
+            math.hypot(moved.x - sim.scenario.follower.x, moved.y - sim.scenario.follower.y) > 0.2
+        )
 
 
 def test_acceleration_is_limited() -> None:

@@ -177,3 +177,43 @@ def test_the_same_bytes_reuse_the_detections_under_the_new_header(views: list) -
 def test_the_decoder_build_is_named() -> None:
     named = detect_module.image_codecs()
     assert named.startswith(f"opencv {cv2.__version__}; JPEG ") and "; PNG " in named
+
+
+def test_pixel_fields_in_the_course_cameras_pixels_match_a_render_at_its_size() -> None:
+    """The course world renders 640x480 but reports ``fiducial_area`` and ``image_error`` for
+    the course's 1920x1080 camera: the same view rendered at 1920x1080 measures an area within a
+    few percent of the scaled one (a package's ``fiducial_area > 10000`` means what it meant on
+    the course), while the pose does not depend on the size."""
+    scn = course_world()
+    assert (scn.camera.pixel_fields_width, scn.camera.pixel_scale()) == (1920, 3.0)
+    found = {}
+    for width, height in ((640, 480), (1920, 1080)):
+        cam = dataclasses.replace(scn.camera, width=width, height=height)
+        with Simulator(dataclasses.replace(scn, camera=cam), renderer="tiny") as sim:
+            tx, ty = scn.targets[0]
+            m = scn.marker_by_id(0)
+            sim.teleport("explorer", tx, ty, math.atan2(m.y - ty, m.x - tx) + 0.2)
+            frame = sim.render_camera()
+            info = sim.camera_info()
+        image = msgs.CompressedImage(header=info.header, format="png", data=encode_image(frame))
+        raw = detect(image, info, DetectorParams())
+        found[width] = detect_module.in_camera_pixels(raw, cam.pixel_scale()).transforms[0]
+        assert (info.width, info.height) == (width, height)  # CameraInfo is the images' size
+    small, course = found[640], found[1920]
+    assert course.fiducial_area > 10000 > small.fiducial_area / 9  # the raw 640 px area fails
+    assert small.fiducial_area == pytest.approx(course.fiducial_area, rel=0.03)
+    assert small.image_error < 3 * 3.0 and course.image_error < 3.0
+    assert small.object_error == pytest.approx(course.object_error, abs=1e-3)
+    a, b = small.transform.translation, course.transform.translation
+    assert math.dist((a.x, a.y, a.z), (b.x, b.y, b.z)) < 0.01
+
+
+def test_scale_one_changes_nothing_and_metres_never_scale(views: list) -> None:
+    image, info, *_ = views[0]
+    found = detect(image, info, DetectorParams())
+    assert detect_module.in_camera_pixels(found, 1.0) is found
+    scaled = detect_module.in_camera_pixels(found, 2.5)
+    f, g = found.transforms[0], scaled.transforms[0]
+    assert g.fiducial_area == f.fiducial_area * 6.25 and g.image_error == f.image_error * 2.5
+    assert (g.transform, g.object_error, g.fiducial_id) == (f.transform, f.object_error, 0)
+    assert (scaled.header, scaled.image_seq) == (found.header, found.image_seq)

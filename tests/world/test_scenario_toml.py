@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,19 @@ def test_toml_round_trip_course(tmp_path: Path) -> None:
     scenario_toml.save(c, path)
     assert scenario_toml.load(path) == c
     assert "[aruco_lookup_locations]" in path.read_text()
+
+
+def test_the_pixel_fields_width_travels_and_an_older_file_means_the_images_own() -> None:
+    """The course world writes ``pixel_fields_width = 1920``; a file from before the field (a
+    log recorded then) reads as 0, the images' own pixels, which is what its detector reported,
+    so its detections replay unchanged."""
+    text = scenario_toml.to_toml(scn.course_world())
+    assert "pixel_fields_width = 1920" in text
+    old = scenario_toml.from_toml(re.sub(r"(?m)^pixel_fields_width = 1920.*\n", "", text))
+    assert old.camera.pixel_fields_width == 0 and old.camera.pixel_scale() == 1.0
+    bad = text.replace("pixel_fields_width = 1920", "pixel_fields_width = -1")
+    with pytest.raises(InvalidScenario, match=r"camera\.pixel_fields_width"):
+        scenario_toml.from_toml(bad)
 
 
 finite = st.floats(min_value=-3.0, max_value=3.0, allow_nan=False)

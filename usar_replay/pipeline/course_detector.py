@@ -36,7 +36,7 @@ from collections.abc import Iterable, Sequence
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
 from usar_replay.world.assignment import Assignment
-from usar_replay.world.detect import aruco_markers, detect
+from usar_replay.world.detect import aruco_markers, detect, in_camera_pixels
 
 __all__ = ["CourseDetector", "mission_inputs"]
 
@@ -55,8 +55,11 @@ def mission_inputs(asg: Assignment, course_detections: bool) -> tuple[str, ...]:
 class CourseDetector:
     """aruco_detect on the recorder's side: one instance per run, fed tick by tick."""
 
-    def __init__(self, params: DetectorParams, asg: Assignment) -> None:
+    def __init__(self, params: DetectorParams, asg: Assignment, pixel_scale: float = 1.0) -> None:
         self.params = params
+        self.pixel_scale = pixel_scale
+        """``fiducial_area`` and ``image_error`` in the pixels of a camera this many times the
+        image's width (the world's ``camera.pixel_fields_width``: the course's 1920)."""
         self.topic = asg.course_detections
         self.image_topic = asg.image_topic
         self.info_topic = asg.camera_info_topic
@@ -70,9 +73,11 @@ class CourseDetector:
         self._info: tuple[bytes, msgs.CameraInfo] | None = None
 
     @classmethod
-    def for_run(cls, params: DetectorParams, asg: Assignment) -> CourseDetector | None:
+    def for_run(
+        cls, params: DetectorParams, asg: Assignment, pixel_scale: float = 1.0
+    ) -> CourseDetector | None:
         """The run's detector; None for an assignment whose world has none."""
-        return cls(params, asg) if asg.course_detections else None
+        return cls(params, asg, pixel_scale) if asg.course_detections else None
 
     def note_outputs(self, outputs: Iterable[tuple[str, msgs.Message]]) -> None:
         """The mission's outputs of a tick: an ``enable_detections`` switch acts from the next
@@ -96,7 +101,9 @@ class CourseDetector:
             elif topic == self.image_topic and self._info is not None:
                 image = cdr.decode(data, msgtype)
                 assert isinstance(image, msgs.CompressedImage)
-                found = detect(image, self._info[1], self.params, self.seq)
+                found = in_camera_pixels(
+                    detect(image, self._info[1], self.params, self.seq), self.pixel_scale
+                )
                 self.seq += 1
                 if not self.ros2_aruco:
                     out.insert(i + 1, (self.topic, _FIDUCIALS_TYPE, cdr.encode(found)))

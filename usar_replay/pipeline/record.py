@@ -407,7 +407,8 @@ def _tick_loop(
     params = mission_parameters(scenario, settings)
     # the log being written holds the truth: unreadable to the mission even next to its file
     hidden = hide_from_mission(limits, str(writer.part_path))
-    detector = CourseDetector.for_run(settings.detector, asg)  # the course's, trusted
+    # the course's, trusted; pixel fields in the course camera's pixels (CameraSettings)
+    detector = CourseDetector.for_run(settings.detector, asg, scenario.camera.pixel_scale())
     inputs = mission_inputs(asg, detector is not None)
     # the first tick (the world's static facts, ground truth at t0) is written before the
     # mission starts: a mission that never reaches its first tick (a crash at import, a ROS 1

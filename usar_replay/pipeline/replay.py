@@ -482,7 +482,9 @@ def replay(
     world_detects = bool(asg.course_detections) and SIM in run.reader.publishers(
         asg.course_detections
     )
-    redetect = CourseDetector(use.detector, asg) if world_detects else None
+    redetect = (
+        CourseDetector(use.detector, asg, scenario.camera.pixel_scale()) if world_detects else None
+    )
     replayer.never_graded = frozenset({asg.course_detections} - {""})
     crashed: MissionEnded | None = None
     last: _Tick | None = None

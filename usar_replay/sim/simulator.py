@@ -26,11 +26,19 @@ this runs on):
   ``fx = fy = (H/2) / tan(fov_v/2)``; TinyRenderer's optical axis falls on OpenCV pixel
   ``(W/2, H/2 - 1)``. :meth:`Simulator.camera_info` publishes exactly that K.
 
-Frames (REP-105): ``map -> <robot>_tf/odom`` (the robot's start pose, static, on ``/tf_static``:
-this world has no localisation drift to correct, so the course's map->odom is constant) ``->
+Frames (REP-105): ``map -> <robot>_tf/odom`` (identity, static, on ``/tf_static``) ``->
 <robot>_tf/base_footprint`` (odometry, on ``/tf``) ``-> <robot>_tf/camera_rgb_frame`` (static,
 forward-looking, x forward) ``-> <robot>_tf/camera_rgb_optical_frame`` (static, rpy
 (-pi/2, 0, -pi/2): z forward, x right, y down).
+
+**Odometry is world-source, as the course's Gazebo publishes it.** The TurtleBot3 waffle's
+``turtlebot3_waffle.gazebo.xacro`` loads ``libgazebo_ros_diff_drive.so`` without an
+``<odometrySource>``, and gazebo_ros_diff_drive's default is ``world``: its ``/odom`` and its
+``odom -> base_footprint`` are the model's Gazebo world pose. The course spawns the robots at
+their starts, so ``/explorer/odom`` begins at (-4, 2.5), not (0, 0), and packages that compare
+odometry positions with map targets work. amcl (started at the same pose) then publishes
+``map -> odom`` as the identity, up to its estimation error; this world has no drift to correct,
+so usar's ``map -> odom`` is exactly the identity and static. docs/ros1.md names the sources.
 """
 
 from __future__ import annotations
@@ -188,7 +196,6 @@ class _RobotState:
     name: str
     frames: contract.RobotFrames
     body: int
-    start: tuple[float, float, float]
     x: float
     y: float
     yaw: float
@@ -448,9 +455,7 @@ class Simulator:
             baseOrientation=_quat_yaw(yaw),
             physicsClientId=c,
         )
-        return _RobotState(
-            name=frames.robot, frames=frames, body=body, start=(x, y, yaw), x=x, y=y, yaw=yaw
-        )
+        return _RobotState(name=frames.robot, frames=frames, body=body, x=x, y=y, yaw=yaw)
 
     # -- driving -----------------------------------------------------------------------------
 
@@ -517,14 +522,13 @@ class Simulator:
         return msgs.Pose(position=msgs.Point(x=r.x, y=r.y), orientation=_msg_quat(_quat_yaw(r.yaw)))
 
     def _odom_pose(self, r: _RobotState) -> tuple[float, float, float]:
-        sx, sy, syaw = r.start
-        dx, dy = r.x - sx, r.y - sy
-        c, s = math.cos(-syaw), math.sin(-syaw)
-        yaw = math.atan2(math.sin(r.yaw - syaw), math.cos(r.yaw - syaw))
-        return (c * dx - s * dy, s * dx + c * dy, yaw)
+        """The pose odometry reports: the true world pose (gazebo_ros_diff_drive's ``world``
+        source; the module's docstring says why)."""
+        return (r.x, r.y, r.yaw)
 
     def odometry(self, robot: str) -> msgs.Odometry:
-        """Odometry in the robot's odom frame (exact: the kinematic model has no slip)."""
+        """Odometry in the robot's odom frame, which is ``map`` (world-source odometry; exact:
+        the kinematic model has no slip)."""
         r = self.robots[robot]
         x, y, yaw = self._odom_pose(r)
         return msgs.Odometry(
@@ -539,13 +543,13 @@ class Simulator:
         )
 
     def tf_static(self) -> msgs.TFMessage:
-        """``map -> <odom>``, the camera mounts and the extra static frames, for ``/tf_static``."""
+        """``map -> <odom>`` (the identity: odometry is world-source), the camera mounts and
+        the extra static frames, for ``/tf_static``."""
         t = self.now_ns
         out = []
         for r in self.robots.values():
-            sx, sy, syaw = r.start
             f = r.frames
-            out.append(_tf(contract.MAP, f.odom, t, (sx, sy, 0.0), _quat_yaw(syaw)))
+            out.append(_tf(contract.MAP, f.odom, t, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
             out.append(_tf(f.base, f.camera, t, CAMERA_MOUNT, (0.0, 0.0, 0.0, 1.0)))
             out.append(
                 _tf(

@@ -50,6 +50,7 @@ __all__ = [
     "detect",
     "detect_with_corners",
     "image_codecs",
+    "in_camera_pixels",
 ]
 
 log = logging.getLogger("usar_replay.world.detect")
@@ -285,6 +286,32 @@ def detect(
 ) -> msgs.FiducialTransformArray:
     """Markers in one compressed frame, their poses in the camera's optical frame."""
     return detect_with_corners(image, info, params, image_seq)[0]
+
+
+def in_camera_pixels(
+    found: msgs.FiducialTransformArray, scale: float
+) -> msgs.FiducialTransformArray:
+    """The detections with their pixel-unit fields as a camera with the same field of view and
+    ``scale`` times the image's width would measure them: ``fiducial_area`` times ``scale**2``,
+    ``image_error`` times ``scale``. The pose and ``object_error`` (metres) do not depend on the
+    resolution. Why: packages threshold ``fiducial_area`` at values tuned on the course's
+    1920x1080 camera, which usar renders smaller (``CameraSettings.pixel_fields_width``)."""
+    if scale == 1.0:
+        return found
+    return msgs.FiducialTransformArray(
+        header=found.header,
+        image_seq=found.image_seq,
+        transforms=tuple(
+            msgs.FiducialTransform(
+                fiducial_id=f.fiducial_id,
+                transform=f.transform,
+                image_error=f.image_error * scale,
+                object_error=f.object_error,
+                fiducial_area=f.fiducial_area * scale * scale,
+            )
+            for f in found.transforms
+        ),
+    )
 
 
 def aruco_markers(found: msgs.FiducialTransformArray) -> msgs.ArucoMarkers:

@@ -26,6 +26,7 @@ __all__ = [
     "Marker",
     "RobotStart",
     "CameraSettings",
+    "COURSE_CAMERA",
     "Scenario",
     "course_world",
     "WALL_THICKNESS",
@@ -99,13 +100,38 @@ class RobotStart:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class CameraSettings:
-    """The explorer's RGB camera: image size, rate, horizontal FOV, encoding of recorded frames."""
+    """The explorer's RGB camera: image size, rate, horizontal FOV, encoding of recorded frames.
+
+    ``pixel_fields_width``: the width of the camera whose pixels the detector's pixel-unit
+    fields (``fiducial_area``, ``image_error``) are in; 0 means the images' own. The course's
+    TurtleBot3 waffle camera in Gazebo is 1920x1080 at 30 Hz (:data:`COURSE_CAMERA`), which a
+    CPU renderer cannot afford (bench/bench_record.py --camera: 6.6 times the recorder's CPU
+    of 640x480 at 10 Hz, and 5 times the log; docs/ros1.md), while packages accept a detection
+    on ``fiducial_area > 10000`` tuned on those images. So the course world renders a smaller
+    image with the course's horizontal field of view, and the detector reports those two fields
+    as the course's camera would measure them: at the same field of view a width ``W'`` has
+    ``W'/W`` times the focal length, so areas scale by ``(W'/W)^2`` and reprojection errors by
+    ``W'/W``. The images, their ``CameraInfo`` and the detected corners stay in the rendered
+    image's pixels.
+    """
 
     width: int = 640
     height: int = 480
     rate_hz: float = 10.0
     hfov: float = 1.3439
     encoding: str = "jpeg"
+    pixel_fields_width: int = 0
+
+    def pixel_scale(self) -> float:
+        """How many of the pixel fields' pixels one rendered pixel spans (1.0: the same)."""
+        return self.pixel_fields_width / self.width if self.pixel_fields_width else 1.0
+
+
+COURSE_CAMERA = (1920, 1080, 30.0)
+"""(width, height, rate in Hz) of the course's camera: the ``realsense_R200`` sensor of
+turtlebot3_description's ``turtlebot3_waffle.gazebo.xacro`` (ROBOTIS-GIT/turtlebot3, melodic and
+noetic branches: ``<horizontal_fov>1.3439``, ``<width>1920``, ``<height>1080``, the
+``gazebo_ros_openni_kinect`` plugin's ``<updateRate>30.0``)."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -156,7 +182,13 @@ class Scenario:
                 f"cylinders, {len(self.spheres)} spheres",
                 f"markers {ids} ({self.markers[0].dictionary if self.markers else '-'})",
                 f"targets {targets}",
-                f"camera {cam.width}x{cam.height}@{cam.rate_hz:g} Hz {cam.encoding}, "
+                f"camera {cam.width}x{cam.height}@{cam.rate_hz:g} Hz {cam.encoding}"
+                + (
+                    f" (pixel fields as {cam.pixel_fields_width} px wide)"
+                    if cam.pixel_fields_width
+                    else ""
+                )
+                + ", "
                 f"time limit {self.time_limit_s:g} s",
             ]
         )
@@ -243,6 +275,7 @@ def course_world() -> Scenario:
         spheres=spheres,
         markers=markers,
         targets=targets,
+        camera=CameraSettings(pixel_fields_width=COURSE_CAMERA[0]),
     )
 
 
@@ -272,6 +305,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "camera.height": (16, 4096, "px"),
     "camera.rate_hz": (0.5, 60.0, "Hz"),
     "camera.hfov": (0.1, 3.0, "rad"),
+    "camera.pixel_fields_width": (0, 8192, "px"),
     "time_limit_s": (1.0, 3600.0, "s"),
     "seed": (0, 2**32 - 1, ""),
 }
@@ -378,6 +412,7 @@ def check_ranges(scn: Scenario, source: str = "scenario") -> None:
         ("camera.height", cam.height, "camera.height"),
         ("camera.rate_hz", cam.rate_hz, "camera.rate_hz"),
         ("camera.hfov", cam.hfov, "camera.hfov"),
+        ("camera.pixel_fields_width", cam.pixel_fields_width, "camera.pixel_fields_width"),
         ("time_limit_s", scn.time_limit_s, "time_limit_s"),
     ]
     if scn.seed is not None:

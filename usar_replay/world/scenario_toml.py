@@ -54,7 +54,8 @@ _T = TypeVar("_T")
 #   time_limit_s = 600.0
 #   seed = 3                      # optional: the variant seed this world came from
 #   world_key = "0123abcd..."     # optional: digest of the world key of a hidden variant
-#   [camera]        width, height, rate_hz, hfov, encoding ("png" | "jpeg")
+#   [camera]        width, height, rate_hz, hfov, encoding ("png" | "jpeg"),
+#                   pixel_fields_width (0: the images' own)
 #   [robots.explorer] / [robots.follower]   x, y, yaw
 #   [aruco_lookup_locations]      target_1 = [x, y], target_2 = [x, y], ... (as the course's
 #                                 ROS parameter file names them)
@@ -153,7 +154,13 @@ def _parse_camera(src: str, cam_t: Any) -> CameraSettings:
     """``[camera]``: each field defaults to :class:`CameraSettings`'s."""
     if not isinstance(cam_t, dict):
         raise field_error(src, "camera", "must be a table")
-    _check_keys(src, "camera", cam_t, ["width", "height", "rate_hz", "hfov", "encoding"], [])
+    _check_keys(
+        src,
+        "camera",
+        cam_t,
+        ["width", "height", "rate_hz", "hfov", "encoding", "pixel_fields_width"],
+        [],
+    )
     d = CameraSettings()
     hfov = _num(src, "camera.hfov", cam_t.get("hfov", d.hfov), positive=True)
     if hfov >= math.pi:
@@ -167,6 +174,12 @@ def _parse_camera(src: str, cam_t: Any) -> CameraSettings:
         rate_hz=_num(src, "camera.rate_hz", cam_t.get("rate_hz", d.rate_hz), positive=True),
         hfov=hfov,
         encoding=encoding,
+        pixel_fields_width=_int(
+            src,
+            "camera.pixel_fields_width",
+            cam_t.get("pixel_fields_width", d.pixel_fields_width),
+            minimum=0,
+        ),
     )
 
 
@@ -457,6 +470,7 @@ def _head_tables(scn: Scenario) -> dict[str, Any]:
         "rate_hz": cam.rate_hz,
         "hfov": cam.hfov,
         "encoding": cam.encoding,
+        "pixel_fields_width": cam.pixel_fields_width,
     }
     if scn.assignment == "usar":
         data["robots"] = {
@@ -520,6 +534,7 @@ _LINE_COMMENTS: dict[tuple[str, str], str] = {
     ("camera", "rate_hz"): "Hz, frames per second (0.5..60)",
     ("camera", "hfov"): "rad, horizontal field of view (0.1..3.0)",
     ("camera", "encoding"): "recorded frames: png (lossless) or jpeg",
+    ("camera", "pixel_fields_width"): "px, detections' pixel fields as this wide (0: own)",
     ("robots", "x"): "m",
     ("robots", "y"): "m",
     ("robots", "yaw"): "rad",

@@ -1,0 +1,168 @@
+"""A class's ROS 1 packages on the course world, at a glance (printed, never asserted).
+
+    python bench/bench_class.py [FOLDER] [--world course|room] [--max-sim-time S] [--rtf 0.5]
+
+Each sub-folder of FOLDER (default: examples/ros1) that holds one catkin package is built and
+recorded as ``usar record --ros1 PKG`` does it (catkin_make into the build cache, the package's
+launch file, usar's simulator, move_base and aruco_detect in the course's place), and its log
+graded as ``usar grade`` does it, one package after the other. Then one row per package:
+
+* ``built``: ``catkin_make``'s wall seconds, ``cached``, or ``FAILED``;
+* ``outcome``: how the run ended (``done``, ``time_limit``, ``crashed``, ``build_failed``, ...);
+* ``verdict``, ``points``: the rubric's (docs/reports.md), PASS only with every required line;
+* ``sim s``: the run's sim time; ``wall s``: build + run + grade, the instructor's wait;
+* ``failed lines``: the ids of the rubric lines that failed (wrapped under the column).
+
+Why a script and not ``usar batch``: a batch grades Python and ROS 1 teams on many worlds into a
+folder of files; this is the one-screen view of a folder of packages on one world, for
+docs/ros1.md and for an instructor trying a class before the real batch. The logs go to a
+temporary folder (``--keep DIR`` keeps them). The date, the machine's load average before and
+after, and the CPU count are printed with the table: wall times depend on them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import textwrap
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from usar_replay.core.errors import UsageError
+from usar_replay.core.settings import RecordSettings, RunSettings
+from usar_replay.grading.grade import grade_file
+from usar_replay.ros1.build import find_package
+from usar_replay.ros1.record import record_ros1
+from usar_replay.world.scenario import Scenario, course_world
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from conftest import one_room  # noqa: E402
+
+COLUMNS = (
+    ("package", 16),
+    ("built", 7),
+    ("outcome", 12),
+    ("verdict", 7),
+    ("points", 7),
+    ("sim s", 6),
+    ("wall s", 6),
+)
+"""(header, width) of each fixed column, one space apart; ``failed lines`` takes the rest of
+100 columns (32, enough for the longest rubric line id, ``marker_frame.only_on_detection``)."""
+WIDTH = 100
+
+
+@dataclass(frozen=True, slots=True)
+class Row:
+    """One package's result."""
+
+    package: str
+    built: str
+    outcome: str
+    verdict: str
+    points: str
+    sim_s: float
+    wall_s: float
+    failed: tuple[str, ...]
+
+
+def packages(folder: Path) -> list[Path]:
+    """The sub-folders of ``folder`` holding one catkin package each (sorted by name), or
+    ``folder`` itself when it is a package."""
+    if (folder / "package.xml").is_file():
+        return [folder]
+    out = []
+    for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
+        try:
+            find_package(sub)
+        except UsageError:
+            continue
+        out.append(sub)
+    return out
+
+
+def run_one(scenario: Scenario, pkg: Path, out: Path, settings: RunSettings) -> Row:
+    """Build, record and grade one package."""
+    start = time.perf_counter()
+    result = record_ros1(scenario, out, pkg, settings)
+    report = grade_file(out)
+    wall = time.perf_counter() - start
+    if result.build == "failed":
+        built = "FAILED"
+    elif result.build == "cached":
+        built = "cached"
+    else:  # "catkin_make 14.2 s"
+        built = result.build.removeprefix("catkin_make ").removesuffix(" s") + " s"
+    return Row(
+        package=pkg.name,
+        built=built,
+        outcome=result.outcome,
+        verdict="PASS" if report.passed and report.log_complete else "FAIL",
+        points=f"{report.points:.4g}/{report.max_points:.4g}",
+        sim_s=result.sim_duration_s,
+        wall_s=wall,
+        failed=tuple(c.id for c in report.checks if not c.passed),
+    )
+
+
+def table(rows: list[Row]) -> list[str]:
+    """The rows as lines of at most :data:`WIDTH` columns (failed lines wrap under their
+    column)."""
+    fixed = sum(w + 1 for _, w in COLUMNS)
+    rest = WIDTH - fixed
+    head = "".join(f"{h:<{w}} " for h, w in COLUMNS) + "failed lines"
+    lines = [head, "-" * WIDTH]
+    for r in rows:
+        cells = (
+            r.package[:16],
+            r.built,
+            r.outcome[:12],
+            r.verdict,
+            r.points,
+            f"{r.sim_s:.1f}",
+            f"{r.wall_s:.0f}",
+        )
+        left = "".join(f"{c:<{w}} " for c, (_, w) in zip(cells, COLUMNS, strict=True))
+        wrapped = textwrap.wrap(
+            ", ".join(r.failed) or "-", rest, break_on_hyphens=False, break_long_words=False
+        )
+        lines.append(left + wrapped[0])
+        lines += [" " * fixed + more for more in wrapped[1:]]
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folder", nargs="?", default=str(ROOT / "examples" / "ros1"))
+    ap.add_argument("--world", choices=("course", "room"), default="course")
+    ap.add_argument("--max-sim-time", type=float, help="stop each run at this sim time (s)")
+    ap.add_argument("--keep", type=Path, help="write the logs into this folder and keep them")
+    args = ap.parse_args()
+    pkgs = packages(Path(args.folder))
+    if not pkgs:
+        sys.exit(f"usar: error: {args.folder}: no catkin package in it or in its sub-folders")
+    scenario = course_world() if args.world == "course" else one_room()
+    settings = RunSettings(record=RecordSettings(max_sim_time_s=args.max_sim_time))
+    load0 = os.getloadavg()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="usar-bench-class-") as scratch:
+        logs = args.keep or Path(scratch)
+        logs.mkdir(parents=True, exist_ok=True)
+        for pkg in pkgs:
+            print(f"{pkg.name}: building and recording on the {args.world} world ...", flush=True)
+            rows.append(run_one(scenario, pkg, logs / f"{pkg.name}.mcap", settings))
+    load1 = os.getloadavg()
+    print()
+    print("\n".join(table(rows)))
+    print(
+        f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {args.world} world, "
+        f"{os.cpu_count()} CPUs, load average {load0[0]:.1f} before, {load1[0]:.1f} after"
+    )
+
+
+if __name__ == "__main__":
+    main()
