@@ -9,6 +9,13 @@ the same every run. SCHED_RR (priority 1, the kernel's long round-robin slice) i
 plain SCHED_FIFO livelocked once at start-up in the issue's probes, so not that. Real-time
 priority also keeps two CPU hogs beside the run from starving it.
 
+Real-time priority stays inside the run's own CPU set (:mod:`usar_replay.node.cpu_sets`):
+the graph's CPU is the set's last, no other run is given it, and a node that widens its
+affinity only reaches the set's other CPUs. Without a set of its own the graph is only pinned
+(no SCHED_RR: it could starve a CPU someone else needs). The policy carries
+SCHED_RESET_ON_FORK, so a node's children and new threads start as ordinary ones until the
+next tick's :meth:`OneCpu.apply` (an RR parent cannot hand RR on to a fork bomb).
+
 Set from the recorder, which is root outside the sandbox (a sandboxed process may not raise its
 own policy): every thread of the run, the bridge's included, found in the run's cgroup
 (``tasks``) or, without one, as the bridge's descendants. New threads are picked up before each
@@ -33,19 +40,33 @@ from usar_replay.ros1.quiescence import descendants
 __all__ = ["OneCpu", "watching_elsewhere"]
 
 PRIORITY = 1
+_POLICY = os.SCHED_RR | os.SCHED_RESET_ON_FORK
+"""SCHED_RR whose processes and threads start as SCHED_OTHER: real-time priority is given by
+the recorder, thread by thread, and never inherited (clearing the flag needs CAP_SYS_NICE,
+which nothing in the sandbox has)."""
 
 
 class OneCpu:
     """Pins the threads of one run (its cgroup, or the tree under ``root``) to one CPU under
     SCHED_RR; call :meth:`apply` again to catch new threads."""
 
-    def __init__(self, root: int, cgroup: str | None = None, cpu: int | None = None) -> None:
+    def __init__(
+        self,
+        root: int,
+        cgroup: str | None = None,
+        cpu: int | None = None,
+        *,
+        realtime: bool = True,
+    ) -> None:
         self.root = root
+        self.realtime = realtime
+        """SCHED_RR too (only inside the run's own CPU set: never on a CPU another run or the
+        host needs)."""
         self.tasks = Path(cgroup, "tasks") if cgroup else None
         mine = sorted(os.sched_getaffinity(0))
         self.cpu = mine[-1] if cpu is None else cpu
         self.done: set[int] = set()
-        self.refused = ""
+        self.refused = "" if realtime else "no CPU set of the run's own"
         """Why the policy could not be set (empty while it could)."""
 
     def _tids(self) -> list[int]:
@@ -66,7 +87,7 @@ class OneCpu:
             try:
                 os.sched_setaffinity(tid, {self.cpu})
                 if not self.refused:
-                    os.sched_setscheduler(tid, os.SCHED_RR, os.sched_param(PRIORITY))
+                    os.sched_setscheduler(tid, _POLICY, os.sched_param(PRIORITY))
             except ProcessLookupError:
                 continue
             except PermissionError as err:
