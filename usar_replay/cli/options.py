@@ -161,12 +161,24 @@ def limits(args: argparse.Namespace) -> MissionLimits:
         raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
     if args.max_log_mib < 0:
         raise UsageError(f"--max-log-mib {args.max_log_mib}: expected MiB >= 0 (0: none)")
+    check_run_limits(args)
     return MissionLimits(
         tick_timeout_s=args.tick_timeout,
         memory_mb=args.mission_memory,
         max_log_mib=args.max_log_mib,
+        run_memory_mb=args.run_memory,
+        processes=args.processes,
+        run_folder_mb=args.run_folder,
         hidden=grader_paths(args),
     )
+
+
+def check_run_limits(args: argparse.Namespace) -> None:
+    """``--run-memory``, ``--processes``, ``--run-folder``: one line for a bad value."""
+    if args.run_memory < 0 or args.run_folder < 0:
+        raise UsageError("--run-memory and --run-folder: expected MiB >= 0 (0: none)")
+    if args.processes < 1:
+        raise UsageError(f"--processes {args.processes}: expected 1 or more")
 
 
 def grader_paths(args: argparse.Namespace) -> tuple[str, ...]:

@@ -100,6 +100,33 @@ def mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
         metavar="MIB",
         help="byte budget of the run's log in MiB; past it the run is 'refused' (2048; 0: none)",
     )
+    run_limit_options(p)
+
+
+def run_limit_options(p: argparse.ArgumentParser) -> None:
+    """The limits of a run as a whole (its cgroups and its folder; docs/batch.md)."""
+    p.add_argument(
+        "--run-memory",
+        type=int,
+        default=3072,
+        metavar="MIB",
+        help="memory of the whole run, its tmpfs files included, MiB; past it 'out_of_memory' "
+        "(3072; 0: none)",
+    )
+    p.add_argument(
+        "--processes",
+        type=int,
+        default=256,
+        metavar="N",
+        help="processes and threads of the run; reaching it: 'refused' (256)",
+    )
+    p.add_argument(
+        "--run-folder",
+        type=int,
+        default=512,
+        metavar="MIB",
+        help="size of the run's writable folder, MiB; filling it: 'refused' (512; 0: no limit)",
+    )
 
 
 def grade_outputs(p: argparse.ArgumentParser) -> None:

@@ -68,6 +68,7 @@ the bridge, the team's nodes) uses well under 1 GiB."""
 DEFAULT_PROCESSES = 256
 """Processes and threads of one run (``--processes``)."""
 
+
 @dataclass(frozen=True, slots=True)
 class MissionLimits:
     """What a mission process may use. Wall-clock limits only decide *verdicts*; they never
