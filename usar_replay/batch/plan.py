@@ -129,6 +129,10 @@ class JobLimits:
     """Processes and threads of the run (reaching it: ``refused``)."""
     run_folder_mb: int = 512
     """Size of the run's writable folder, MiB (filling it: ``refused``)."""
+    max_holds: int = 20
+    """ROS 1 ticks held for a node's shutdown (past it: ``hung``)."""
+    max_capped: int = 600
+    """ROS 1 ticks that reach their wall cap (past it: ``hung``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -201,6 +201,8 @@ def grade_job(
 def _mission_limits(job: RunJob) -> Any:
     from usar_replay.node.audit_guard import GuardPolicy
     from usar_replay.node.mission_process import (
+        DEFAULT_MAX_CAPPED,
+        DEFAULT_MAX_HOLDS,
         DEFAULT_PROCESSES,
         DEFAULT_RUN_MEMORY_MB,
         MissionLimits,
@@ -228,6 +230,8 @@ def _mission_limits(job: RunJob) -> Any:
         processes=int(lim.get("processes", DEFAULT_PROCESSES)),
         run_folder_mb=int(lim.get("run_folder_mb", DEFAULT_RUN_FOLDER_MB)),
         cpus=int(lim.get("cpus", 0)),
+        max_holds=int(lim.get("max_holds", DEFAULT_MAX_HOLDS)),
+        max_capped=int(lim.get("max_capped", DEFAULT_MAX_CAPPED)),
         guard=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident

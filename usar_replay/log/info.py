@@ -103,6 +103,7 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
     nodes = [f"{n.name} ({n.package}/{n.type})" if n.type else n.name for n in ros1.nodes]
     lines += _field("Nodes", ", ".join(nodes) or "(none started)")
     lines += _field("Build", ros1.build)
+    lines += _field("Pacing", ros1.pacing)
     kept = ros1_run.node_outputs(run)
     if kept:
         text = f"{', '.join(kept)}: `usar log {run.path} --output [--node NAME]`"

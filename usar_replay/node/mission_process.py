@@ -33,6 +33,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -52,6 +53,8 @@ from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
 from usar_replay.node.wire_io import send_within
 
 __all__ = [
+    "DEFAULT_MAX_CAPPED",
+    "DEFAULT_MAX_HOLDS",
     "DEFAULT_PROCESSES",
     "DEFAULT_RUN_MEMORY_MB",
     "MissionEnded",
@@ -67,6 +70,10 @@ DEFAULT_RUN_MEMORY_MB = 3072
 the bridge, the team's nodes) uses well under 1 GiB."""
 DEFAULT_PROCESSES = 256
 """Processes and threads of one run (``--processes``)."""
+DEFAULT_MAX_HOLDS = 20
+"""Shutdown holds of one ROS 1 run (``--max-holds``): an honest package holds once or twice."""
+DEFAULT_MAX_CAPPED = 600
+"""Capped ticks of one ROS 1 run (``--max-capped``): 2 min of wall time at the default pace."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,6 +122,14 @@ class MissionLimits:
     run_folder_mb: int = DEFAULT_RUN_FOLDER_MB
     """Size of the run's writable folder, MiB (a tmpfs; 0: a plain folder); filling it:
     ``refused`` (:mod:`usar_replay.node.run_folder`)."""
+    max_holds: int = DEFAULT_MAX_HOLDS
+    """Ticks the ROS 1 bridge may hold for a node's shutdown (each up to 6 s of wall time);
+    past it the run is ``hung`` (0: no budget)."""
+    max_capped: int = DEFAULT_MAX_CAPPED
+    """Ticks whose wall cap may run out before the ROS 1 graph goes idle; past it: ``hung``
+    (0: no budget)."""
+    wall_s: float = 0.0
+    """Wall seconds for the whole run, start-up included (0: none); past it: ``wall_limit``."""
     cpus: int = 0
     """CPUs of the run's own CPU set (:mod:`usar_replay.node.cpu_sets`; 0: two when free, else
     one). A batch gives each run its share."""
@@ -210,6 +225,11 @@ class MissionProcess:
         self.boundary = BoundaryCheck(self.policy)
         self.budget = LogBudget(self.limits.max_log_mib)
         self.shutdown_requested = False
+        self.holds = 0
+        """Ticks the ROS 1 bridge held for a shutdown (:data:`protocol.FLAG_HELD`)."""
+        self.capped = 0
+        """Ticks whose wall cap ran out (:data:`protocol.FLAG_CAPPED`)."""
+        self._started = time.monotonic()  # verdicts only: never reaches a message
         self._work: str | None = None
         self._own_work = False
         self._folder: RunFolder | None = None
@@ -539,8 +559,39 @@ class MissionProcess:
         if limit is not None:
             self._proc.kill()
             raise limit
-        self.shutdown_requested = self.shutdown_requested or bool(flag)
+        self.shutdown_requested = self.shutdown_requested or bool(flag & protocol.FLAG_DONE)
+        self.holds += bool(flag & protocol.FLAG_HELD)
+        self.capped += bool(flag & protocol.FLAG_CAPPED)
+        over_time = self._time_budget()
+        if over_time is not None:
+            self._proc.kill()
+            raise over_time
         return out
+
+    def _time_budget(self) -> MissionEnded | None:
+        """The run's time budgets (holds, capped ticks, wall time) as a verdict once one is
+        used up (None: none is)."""
+        lim = self.limits
+        if lim.max_holds and self.holds > lim.max_holds:
+            return MissionEnded(
+                "hung",
+                f"the ROS graph held {self.holds} ticks for a shutdown (its budget is "
+                f"{lim.max_holds}: --max-holds); a node that forks or waits like ros::shutdown() "
+                "every tick never ends",
+            )
+        if lim.max_capped and self.capped > lim.max_capped:
+            return MissionEnded(
+                "hung",
+                f"the ROS graph never went idle within its wall cap in {self.capped} ticks "
+                f"(its budget is {lim.max_capped}: --max-capped)",
+            )
+        wall = time.monotonic() - self._started
+        if lim.wall_s and wall > lim.wall_s:
+            return MissionEnded(
+                "wall_limit",
+                f"the run took more than {lim.wall_s:g} s of wall time (--wall-limit)",
+            )
+        return None
 
     def tick(self, t_ns: int, inputs: Sequence[Wire]) -> list[tuple[str, str, bytes, msgs.Message]]:
         """One tick, closed loop (live recording): send and wait for the outputs."""

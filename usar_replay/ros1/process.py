@@ -241,6 +241,8 @@ class Ros1Process(MissionProcess):
             nodes=tuple(Ros1Node(*row) for row in nodes),
             parameters=tuple(read),
             applied_settings=run_files.APPLIED_SETTINGS,
+            holds=self.holds,
+            capped=self.capped,
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
         prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX

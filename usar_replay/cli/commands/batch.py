@@ -117,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
         run_memory_mb=args.run_memory,
         processes=args.processes,
         run_folder_mb=args.run_folder,
+        max_holds=args.max_holds,
+        max_capped=args.max_capped,
     )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
