@@ -17,7 +17,8 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
         wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
         assert os.sched_getaffinity(child.pid) == {pin.cpu}
         if os.geteuid() == 0:
-            assert os.sched_getscheduler(child.pid) == os.SCHED_RR
+            policy = os.sched_getscheduler(child.pid)
+            assert policy == os.SCHED_RR | os.SCHED_RESET_ON_FORK  # never inherited
         else:
             assert pin.refused
     finally:
@@ -25,6 +26,17 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
         child.wait()
 
 
+def test_without_a_cpu_set_of_its_own_the_graph_is_only_pinned() -> None:
+    """No SCHED_RR outside a run's own CPU set: it could starve a CPU someone else needs."""
+    child = start_child("import time\ntime.sleep(60)")
+    try:
+        pin = OneCpu(child.pid, realtime=False)
+        wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
+        assert os.sched_getaffinity(child.pid) == {pin.cpu}
+        assert os.sched_getscheduler(child.pid) == os.SCHED_OTHER and pin.refused
+    finally:
+        child.kill()
+        child.wait()
 
 
 def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
