@@ -213,6 +213,9 @@ class RayEngine:
         if not jobs:
             return
         task = ray.remote(num_cpus=1, max_retries=0)(execute)
+        # one CPU set of one CPU per run, as Ray counts them (a run that took two when free
+        # would make the next one on the node wait for its set)
+        jobs = [replace(j, limits={**j.limits, "cpus": 1}) for j in jobs]
         refs = {task.remote(j.to_json()): j for j in jobs}
         pending = list(refs)
         try:
