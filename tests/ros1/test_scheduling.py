@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
+import pytest
 from proctools import child as start_child
 from proctools import wait_for
 
@@ -58,3 +62,26 @@ def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
             assert os.sched_getaffinity(0) == before
     finally:
         os.sched_setaffinity(0, before)
+
+
+def test_the_named_process_passes_real_time_priority_on_and_no_other_does(
+    tmp_path: Path,
+) -> None:
+    """The bridge's threads (usar's code) get plain SCHED_RR, so rospy's new connection
+    threads are real-time from birth; every other process's carry the reset flag."""
+    if os.geteuid() != 0:
+        pytest.skip("no SCHED_RR without root")
+    (tmp_path / "fake_bridge.py").write_text("import time\ntime.sleep(60)\n")
+    bridge = subprocess.Popen([sys.executable, "-m", "fake_bridge"], cwd=tmp_path)
+    other = start_child("import time\ntime.sleep(60)")
+    try:
+        pin = OneCpu(bridge.pid, realtime=True, passes_on=b"fake_bridge")
+        wait_for(lambda: pin.apply() > 0 or bridge.pid in pin.done, "the bridge's threads")
+        pin.root = other.pid
+        wait_for(lambda: pin.apply() > 0 or other.pid in pin.done, "the other's threads")
+        assert os.sched_getscheduler(bridge.pid) == os.SCHED_RR
+        assert os.sched_getscheduler(other.pid) == os.SCHED_RR | os.SCHED_RESET_ON_FORK
+    finally:
+        for proc in (bridge, other):
+            proc.kill()
+            proc.wait()

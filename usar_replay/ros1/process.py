@@ -195,6 +195,7 @@ class Ros1Process(MissionProcess):
                     box.cgroup if box else None,
                     cpu=cpus.graph_cpu if cpus else None,
                     realtime=cpus is not None,
+                    passes_on=b"usar_replay.ros1.bridge",
                 )
             self._one_cpu.apply()
         super().send(t_ns, inputs)

@@ -57,8 +57,14 @@ class OneCpu:
         cpu: int | None = None,
         *,
         realtime: bool = True,
+        passes_on: bytes = b"",
     ) -> None:
         self.root = root
+        self.passes_on = passes_on
+        """A word of the command line of the one process whose threads get SCHED_RR without
+        the reset flag (the bridge, usar's own code: rospy starts a thread per new connection,
+        which must be real-time from birth as before); its pid once found."""
+        self._heir: int | None = None
         self.realtime = realtime
         """SCHED_RR too (only inside the run's own CPU set: never on a CPU another run or the
         host needs)."""
@@ -79,15 +85,31 @@ class OneCpu:
                 out += [int(t) for t in os.listdir(f"/proc/{pid}/task")]
         return out
 
+    def _policy(self, tid: int) -> int:
+        """RR with the reset flag, or plain RR for the threads of the process named by
+        :attr:`passes_on`."""
+        if not self.passes_on:
+            return _POLICY
+        with contextlib.suppress(OSError, ValueError):
+            status = Path(f"/proc/{tid}/status").read_text()
+            tgid = int(status.split("\nTgid:", 1)[1].split()[0])
+            if self._heir is None:
+                argv = Path(f"/proc/{tgid}/cmdline").read_bytes().split(b"\0")
+                if argv[1:3] == [b"-m", self.passes_on]:  # python -m ... (not bwrap's argv)
+                    self._heir = tgid  # the first such process: started before the graph
+            if tgid == self._heir:
+                return os.SCHED_RR
+        return _POLICY
+
     def apply(self) -> int:
         """Pin the threads not pinned yet; returns how many were."""
-        new = [t for t in self._tids() if t not in self.done]
+        new = sorted(t for t in self._tids() if t not in self.done)
         for tid in new:
             self.done.add(tid)
             try:
                 os.sched_setaffinity(tid, {self.cpu})
                 if not self.refused:
-                    os.sched_setscheduler(tid, _POLICY, os.sched_param(PRIORITY))
+                    os.sched_setscheduler(tid, self._policy(tid), os.sched_param(PRIORITY))
             except ProcessLookupError:
                 continue
             except PermissionError as err:
