@@ -393,8 +393,9 @@ def test_output_inside_the_submissions_is_refused(tmp_path: Path) -> None:
 def test_a_batch_runs_no_more_runs_at_once_than_free_cpus_and_shares_them_out() -> None:
     from usar_replay.batch.engines import share_cpus
 
-    assert share_cpus(2, 2) == (2, 1)  # one CPU per run
-    assert share_cpus(1, 2) == (1, 2)  # the one run gets both
-    assert share_cpus(4, 2) == (2, 1)  # fewer at once rather than sharing
-    assert share_cpus(3, 8) == (3, 2)
-    assert share_cpus(2, 0) == (2, 0)  # no CPU sets here: as asked, none claimed
+    assert share_cpus(2, 2, 2) == (2, 1)  # one CPU per run
+    assert share_cpus(1, 2, 2) == (1, 2)  # the one run gets both
+    assert share_cpus(4, 2, 2) == (2, 1)  # fewer at once rather than sharing
+    assert share_cpus(3, 8, 8) == (3, 2)
+    assert share_cpus(2, 0, 2) == (1, 1)  # all held by other runs: one at a time, waiting
+    assert share_cpus(2, 0, 0) == (2, 0)  # no CPU sets here: as asked, none claimed

@@ -141,15 +141,16 @@ class Engine(Protocol):
     def run(self, jobs: Sequence[RunJob], on_result: Callable[[RunResult], None]) -> None: ...
 
 
-def share_cpus(jobs: int, free: int) -> tuple[int, int]:
+def share_cpus(jobs: int, free: int, usable: int) -> tuple[int, int]:
     """(runs at a time, CPUs per run) for ``--jobs`` on ``free`` CPUs no other usar run holds
-    (0: no CPU sets here). Each run gets a CPU set of its own (:mod:`usar_replay.node.cpu_sets`),
-    so a batch never runs more runs at once than there are free CPUs, and splits them evenly:
-    on 2 CPUs ``--jobs 2`` is one each, ``--jobs 1`` two for the one run."""
-    if free <= 0:
+    out of ``usable`` ones (0: no CPU sets here, nothing claimed). Each run gets a CPU set of its
+    own (:mod:`usar_replay.node.cpu_sets`), so a batch never runs more runs at once than there
+    are free CPUs (one at a time, waiting for a set, when none is free now), and splits them
+    evenly: on 2 CPUs ``--jobs 2`` is one each, ``--jobs 1`` two for the one run."""
+    if usable <= 0:
         return jobs, 0
     slots = max(1, min(jobs, free))
-    return slots, free // slots
+    return slots, max(1, free // slots)
 
 
 class LocalEngine:
@@ -160,7 +161,8 @@ class LocalEngine:
         if jobs < 1:
             raise UsageError(f"--jobs {jobs}: expected 1 or more")
         self.jobs = jobs
-        self.slots, self.cpus = share_cpus(jobs, len(cpu_sets.free_cpus()))
+        free, usable = len(cpu_sets.free_cpus()), len(cpu_sets.usable_cpus())
+        self.slots, self.cpus = share_cpus(jobs, free, usable)
         """Runs at a time and CPUs per run (0: no CPU sets on this machine)."""
 
     def run(self, jobs: Sequence[RunJob], on_result: Callable[[RunResult], None]) -> None:
