@@ -388,3 +388,14 @@ def test_output_inside_the_submissions_is_refused(tmp_path: Path) -> None:
     (tmp_path / "a.py").write_text("def main(): pass\n")
     with pytest.raises(UsageError, match="must not contain each other"):
         plan_class(tmp_path, tmp_path / "graded", settings_toml="")
+
+
+def test_a_batch_runs_no_more_runs_at_once_than_free_cpus_and_shares_them_out() -> None:
+    from usar_replay.batch.engines import share_cpus
+
+    assert share_cpus(2, 2, 2) == (2, 1)  # one CPU per run
+    assert share_cpus(1, 2, 2) == (1, 2)  # the one run gets both
+    assert share_cpus(4, 2, 2) == (2, 1)  # fewer at once rather than sharing
+    assert share_cpus(3, 8, 8) == (3, 2)
+    assert share_cpus(2, 0, 2) == (1, 1)  # all held by other runs: one at a time, waiting
+    assert share_cpus(2, 0, 0) == (2, 0)  # no CPU sets here: as asked, none claimed

@@ -22,6 +22,8 @@ RUN = ros1_run.Ros1Run(
     replaced=(ros1_run.Ros1Node("/gazebo", "gazebo_ros", "gzserver"),),
     parameters=(ros1_run.ParameterRead("/mission/spin_speed", "0.1", ("/explorer",)),),
     applied_settings=("record", "mission.xy_tolerance"),
+    holds=2,
+    capped=7,
 )
 
 
@@ -39,6 +41,8 @@ def test_the_facts_round_trip_through_toml() -> None:
     assert back == ros1_run.Ros1Run(**{**_fields(RUN), "build_seconds": 12.346})
     assert RUN.started_with == "roslaunch usar_course usar_course.launch"
     assert RUN.build == "12.3 s (catkin_make, wall time)"
+    assert RUN.pacing == "2 shutdown holds, 7 capped ticks"
+    assert ros1_run.Ros1Run.from_toml('package = "p"').pacing.startswith("0 shutdown holds")
     rosrun = ros1_run.Ros1Run(package="p", node="n", build_cached=True)
     assert rosrun.started_with == "rosrun p n"
     assert rosrun.build.startswith("cached")

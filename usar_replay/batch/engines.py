@@ -22,14 +22,15 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any, Protocol
 
 from usar_replay.batch.plan import RunJob, RunResult, read_json
 from usar_replay.core.errors import UsageError
+from usar_replay.node import cpu_sets
 
-__all__ = ["Engine", "LocalEngine", "RayEngine", "execute", "make_engine"]
+__all__ = ["Engine", "LocalEngine", "RayEngine", "execute", "make_engine", "share_cpus"]
 
 GRACE_S = 60.0
 """Seconds a run may take to close its log after SIGTERM/SIGINT before its group is killed."""
@@ -140,19 +141,37 @@ class Engine(Protocol):
     def run(self, jobs: Sequence[RunJob], on_result: Callable[[RunResult], None]) -> None: ...
 
 
+def share_cpus(jobs: int, free: int, usable: int) -> tuple[int, int]:
+    """(runs at a time, CPUs per run) for ``--jobs`` on ``free`` CPUs no other usar run holds
+    out of ``usable`` ones (0: no CPU sets here, nothing claimed). Each run gets a CPU set of its
+    own (:mod:`usar_replay.node.cpu_sets`), so a batch never runs more runs at once than there
+    are free CPUs (one at a time, waiting for a set, when none is free now), and splits them
+    evenly: on 2 CPUs ``--jobs 2`` is one each, ``--jobs 1`` two for the one run."""
+    if usable <= 0:
+        return jobs, 0
+    slots = max(1, min(jobs, free))
+    return slots, max(1, free // slots)
+
+
 class LocalEngine:
-    """``--jobs N`` runs at a time on this machine (threads that each wait on a run's process)."""
+    """``--jobs N`` runs at a time on this machine (threads that each wait on a run's process),
+    no more than there are free CPUs (:func:`share_cpus`; :attr:`slots`)."""
 
     def __init__(self, jobs: int) -> None:
         if jobs < 1:
             raise UsageError(f"--jobs {jobs}: expected 1 or more")
         self.jobs = jobs
+        free, usable = len(cpu_sets.free_cpus()), len(cpu_sets.usable_cpus())
+        self.slots, self.cpus = share_cpus(jobs, free, usable)
+        """Runs at a time and CPUs per run (0: no CPU sets on this machine)."""
 
     def run(self, jobs: Sequence[RunJob], on_result: Callable[[RunResult], None]) -> None:
         _stop.clear()
         if not jobs:
             return
-        with ThreadPoolExecutor(max_workers=min(self.jobs, len(jobs))) as pool:
+        if self.cpus:  # each run's share, claimed by the run itself as it starts
+            jobs = [replace(j, limits={**j.limits, "cpus": self.cpus}) for j in jobs]
+        with ThreadPoolExecutor(max_workers=min(self.slots, len(jobs))) as pool:
             pending: set[Future[dict[str, Any]]] = {pool.submit(execute, j.to_json()) for j in jobs}
             try:
                 while pending:
@@ -196,6 +215,9 @@ class RayEngine:
         if not jobs:
             return
         task = ray.remote(num_cpus=1, max_retries=0)(execute)
+        # one CPU set of one CPU per run, as Ray counts them (a run that took two when free
+        # would make the next one on the node wait for its set)
+        jobs = [replace(j, limits={**j.limits, "cpus": 1}) for j in jobs]
         refs = {task.remote(j.to_json()): j for j in jobs}
         pending = list(refs)
         try:

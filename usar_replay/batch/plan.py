@@ -124,6 +124,16 @@ class JobLimits:
     """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
     grade_s: float = 600.0
     """Wall seconds to grade one log (past it: the grade says ``grade_limit``)."""
+    run_memory_mb: int = 3072
+    """Memory of the whole run, its tmpfs files included, MiB (past it: ``out_of_memory``)."""
+    processes: int = 256
+    """Processes and threads of the run (reaching it: ``refused``)."""
+    run_folder_mb: int = 512
+    """Size of the run's writable folder, MiB (filling it: ``refused``)."""
+    max_holds: int = 20
+    """ROS 1 ticks held for a node's shutdown (past it: ``hung``)."""
+    max_capped: int = 600
+    """ROS 1 ticks that reach their wall cap (past it: ``hung``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -200,7 +200,14 @@ def grade_job(
 
 def _mission_limits(job: RunJob) -> Any:
     from usar_replay.node.audit_guard import GuardPolicy
-    from usar_replay.node.mission_process import MissionLimits
+    from usar_replay.node.mission_process import (
+        DEFAULT_MAX_CAPPED,
+        DEFAULT_MAX_HOLDS,
+        DEFAULT_PROCESSES,
+        DEFAULT_RUN_MEMORY_MB,
+        MissionLimits,
+    )
+    from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB
 
     lim = job.limits
     guard = None
@@ -219,6 +226,12 @@ def _mission_limits(job: RunJob) -> Any:
         memory_mb=int(lim["memory_mb"]),
         cpu_s=int(lim["cpu_s"]),
         max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
+        run_memory_mb=int(lim.get("run_memory_mb", DEFAULT_RUN_MEMORY_MB)),
+        processes=int(lim.get("processes", DEFAULT_PROCESSES)),
+        run_folder_mb=int(lim.get("run_folder_mb", DEFAULT_RUN_FOLDER_MB)),
+        cpus=int(lim.get("cpus", 0)),
+        max_holds=int(lim.get("max_holds", DEFAULT_MAX_HOLDS)),
+        max_capped=int(lim.get("max_capped", DEFAULT_MAX_CAPPED)),
         guard=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident

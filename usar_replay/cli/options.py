@@ -161,12 +161,31 @@ def limits(args: argparse.Namespace) -> MissionLimits:
         raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
     if args.max_log_mib < 0:
         raise UsageError(f"--max-log-mib {args.max_log_mib}: expected MiB >= 0 (0: none)")
+    check_run_limits(args)
     return MissionLimits(
         tick_timeout_s=args.tick_timeout,
         memory_mb=args.mission_memory,
         max_log_mib=args.max_log_mib,
+        run_memory_mb=args.run_memory,
+        processes=args.processes,
+        run_folder_mb=args.run_folder,
+        max_holds=args.max_holds,
+        max_capped=args.max_capped,
+        wall_s=args.wall_limit,
         hidden=grader_paths(args),
     )
+
+
+def check_run_limits(args: argparse.Namespace) -> None:
+    """``--run-memory``, ``--processes``, ``--run-folder``: one line for a bad value."""
+    if args.run_memory < 0 or args.run_folder < 0:
+        raise UsageError("--run-memory and --run-folder: expected MiB >= 0 (0: none)")
+    if args.processes < 1:
+        raise UsageError(f"--processes {args.processes}: expected 1 or more")
+    if args.max_holds < 0 or args.max_capped < 0:
+        raise UsageError("--max-holds and --max-capped: expected 0 (no budget) or more")
+    if getattr(args, "wall_limit", 0.0) < 0:
+        raise UsageError(f"--wall-limit {args.wall_limit:g}: expected seconds >= 0 (0: none)")
 
 
 def grader_paths(args: argparse.Namespace) -> tuple[str, ...]:

@@ -100,6 +100,54 @@ def mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
         metavar="MIB",
         help="byte budget of the run's log in MiB; past it the run is 'refused' (2048; 0: none)",
     )
+    p.add_argument(
+        "--wall-limit",
+        type=float,
+        default=3600.0,
+        metavar="S",
+        help="wall seconds for the whole run; past it 'wall_limit' (3600; 0: none)",
+    )
+    run_limit_options(p)
+
+
+def run_limit_options(p: argparse.ArgumentParser) -> None:
+    """The limits of a run as a whole (its cgroups and its folder; docs/batch.md)."""
+    p.add_argument(
+        "--run-memory",
+        type=int,
+        default=3072,
+        metavar="MIB",
+        help="memory of the whole run, its tmpfs files included, MiB; past it 'out_of_memory' "
+        "(3072; 0: none)",
+    )
+    p.add_argument(
+        "--processes",
+        type=int,
+        default=256,
+        metavar="N",
+        help="processes and threads of the run; reaching it: 'refused' (256)",
+    )
+    p.add_argument(
+        "--run-folder",
+        type=int,
+        default=512,
+        metavar="MIB",
+        help="size of the run's writable folder, MiB; filling it: 'refused' (512; 0: no limit)",
+    )
+    p.add_argument(
+        "--max-holds",
+        type=int,
+        default=20,
+        metavar="N",
+        help="ROS 1 ticks held for a node's shutdown; past it 'hung' (20; 0: no budget)",
+    )
+    p.add_argument(
+        "--max-capped",
+        type=int,
+        default=600,
+        metavar="N",
+        help="ROS 1 ticks that reach their wall cap; past it 'hung' (600; 0: no budget)",
+    )
 
 
 def grade_outputs(p: argparse.ArgumentParser) -> None:

@@ -113,6 +113,7 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
         gone = [f"{n.name} ({n.package}/{n.type})" for n in ros1.replaced]
         lines += _field("Replaced", "not started, usar stands in: " + ", ".join(gone))
     lines += _field("Build", ros1.build)
+    lines += _field("Pacing", ros1.pacing)
     kept = ros1_run.node_outputs(run)
     if kept:
         text = f"{', '.join(kept)}: `usar log {run.path} --output [--node NAME]`"

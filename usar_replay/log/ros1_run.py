@@ -65,6 +65,15 @@ class Ros1Run:
     parameters: tuple[ParameterRead, ...] = ()
     applied_settings: tuple[str, ...] = ()
     """Prefixes of the settings that applied (``record``, ``mission.xy_tolerance``, ...)."""
+    holds: int = 0
+    """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
+    capped: int = 0
+    """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
+
+    @property
+    def pacing(self) -> str:
+        """The holds and capped ticks as ``usar info`` and the end summary say them."""
+        return f"{self.holds} shutdown holds, {self.capped} capped ticks"
 
     @property
     def started_with(self) -> str:
@@ -94,6 +103,8 @@ class Ros1Run:
             "build_seconds": round(self.build_seconds, 3),
             "build_cached": self.build_cached,
             "applied_settings": list(self.applied_settings),
+            "holds": self.holds,
+            "capped": self.capped,
             "nodes": [{"name": n.name, "package": n.package, "type": n.type} for n in self.nodes],
             "replaced": [
                 {"name": n.name, "package": n.package, "type": n.type} for n in self.replaced
@@ -117,6 +128,8 @@ class Ros1Run:
             build_seconds=float(data.get("build_seconds", 0.0)),
             build_cached=bool(data.get("build_cached", False)),
             applied_settings=tuple(str(s) for s in data.get("applied_settings", [])),
+            holds=int(data.get("holds", 0)),
+            capped=int(data.get("capped", 0)),
             nodes=_nodes(data.get("nodes", [])),
             replaced=_nodes(data.get("replaced", [])),
             parameters=tuple(

@@ -39,6 +39,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
+from usar_replay.node.cpu_sets import CpuSet
+
 __all__ = [
     "INSTALL_HINT",
     "KernelSandbox",
@@ -80,6 +82,11 @@ class SandboxLimits:
     """Open file descriptors per process (RLIMIT_NOFILE)."""
     tmp_mb: int = 512
     """Size of the private ``/tmp`` and ``/dev/shm`` (memory-backed file systems), MiB."""
+    run_memory_mb: int = 0
+    """Memory of the whole run, MiB (0: none): its memory cgroup's ``memory.limit_in_bytes``
+    (v1) or ``memory.max`` (v2), which counts every process of the run and the pages of the
+    tmpfs mounts it writes (``/tmp``, ``/dev/shm``, a size-limited run folder). Past it the
+    kernel's OOM killer ends a process of the run, and the run is ``out_of_memory``."""
 
 
 def _bwrap() -> str | None:
@@ -280,13 +287,16 @@ class KernelSandbox:
     ``pass_fds``), call :meth:`started` right after, have the program inside call
     :func:`apply_rlimits` with :meth:`rlimits`, and :meth:`close` once bwrap has ended."""
 
-    def __init__(self, limits: SandboxLimits | None = None) -> None:
+    def __init__(self, limits: SandboxLimits | None = None, cpus: CpuSet | None = None) -> None:
         self.limits = limits or SandboxLimits()
+        self.cpus = cpus
+        """The run's CPU set (:mod:`.cpu_sets`): its processes start in it and cannot leave;
+        :meth:`close` gives it back."""
         self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
-        self.memory_cgroup = _make_memory_cgroup(self.cgroup)
-        """The run's memory cgroup (no limit: RLIMIT_AS is the limit): where the kernel counts
-        the run's processes it killed for memory (:meth:`oom_killed`); None when none can be
-        made here (then a killed process is never called out of memory)."""
+        self.memory_cgroup = _make_memory_cgroup(self.cgroup, self.limits.run_memory_mb)
+        """The run's memory cgroup (limited to :attr:`SandboxLimits.run_memory_mb`): where the
+        kernel counts the run's processes it killed for memory (:meth:`oom_killed`); None when
+        none can be made here (then RLIMIT_AS per process is the only memory limit)."""
         self._info_r, self.info_fd = os.pipe()
         """Pass to :func:`sandbox_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
         self._pidfd: int | None = None
@@ -312,7 +322,8 @@ class KernelSandbox:
         itself into the cgroup and becomes bwrap, so every process of the run is counted from
         the first. (No ``preexec_fn``: Python code between fork and exec can deadlock a
         recorder whose renderer runs threads.)"""
-        groups = [g for g in (self.cgroup, self.memory_cgroup) if g]
+        cpuset = self.cpus.path if self.cpus else None
+        groups = [g for g in (self.cgroup, self.memory_cgroup, cpuset) if g]
         if not groups:
             return list(argv)
         procs = [os.path.join(g, "cgroup.procs") for g in dict.fromkeys(groups)]
@@ -331,6 +342,18 @@ class KernelSandbox:
                     key, _, value = line.partition(" ")
                     if key == "oom_kill":
                         return int(value) > 0
+        return False
+
+    def processes_refused(self) -> bool:
+        """Whether the run's pids cgroup refused a fork or a thread (``pids.events``: the
+        ``max`` count): the run reached its process limit. Read it before :meth:`close`."""
+        if not self.cgroup:
+            return False
+        with contextlib.suppress(OSError, ValueError):
+            for line in Path(self.cgroup, "pids.events").read_text().splitlines():
+                key, _, value = line.partition(" ")
+                if key == "max":
+                    return int(value) > 0
         return False
 
     def rlimits(self) -> dict[str, int]:
@@ -370,6 +393,9 @@ class KernelSandbox:
             if group:
                 _remove_cgroup(group)
         self.cgroup = self.memory_cgroup = None
+        if self.cpus is not None:
+            self.cpus.release()
+            self.cpus = None
 
     def __enter__(self) -> KernelSandbox:
         return self
@@ -430,22 +456,31 @@ def _controller_root(controller: str) -> str | None:
     return None
 
 
-def _make_memory_cgroup(pids_cgroup: str | None) -> str | None:
-    """The run's memory cgroup, only to read its OOM count: in cgroup v2 the pids cgroup
-    itself when the memory controller is on there; in v1 a fresh one in the memory
-    hierarchy; else None."""
+def _make_memory_cgroup(pids_cgroup: str | None, limit_mb: int) -> str | None:
+    """The run's memory cgroup, limited to ``limit_mb`` MiB (0: no limit) and read for its OOM
+    count: in cgroup v2 the pids cgroup itself when the memory controller is on there; in v1 a
+    fresh one in the memory hierarchy; else None."""
     if pids_cgroup and os.path.exists(os.path.join(pids_cgroup, "memory.events")):
-        return pids_cgroup
-    root = _controller_root("memory")
-    if root is None or not os.access(root, os.W_OK):
-        return None  # no memory controller of ours: no per-run record
-    global _counter
-    _counter += 1
-    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
-    try:
-        os.mkdir(path)
-    except OSError:
-        return None
+        path = pids_cgroup
+        limits = ["memory.max", "memory.swap.max"]
+    else:
+        root = _controller_root("memory")
+        if root is None or not os.access(root, os.W_OK):
+            return None  # no memory controller of ours: no per-run record
+        global _counter
+        _counter += 1
+        path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
+        try:
+            os.mkdir(path)
+        except OSError:
+            return None
+        # memory, then memory + swap (v1 wants the second no lower than the first)
+        limits = ["memory.limit_in_bytes", "memory.memsw.limit_in_bytes"]
+    if limit_mb > 0:
+        for name in limits:
+            value = str(limit_mb * 1024 * 1024) if "swap.max" not in name else "0"
+            with contextlib.suppress(OSError):
+                Path(path, name).write_text(value)
     return path
 
 

@@ -33,7 +33,7 @@ import signal
 import socket
 import subprocess
 import sys
-import tempfile
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -41,7 +41,7 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissionEnded, ProtocolMismatch, UsageError
-from usar_replay.node import hide, kernel_sandbox, protocol
+from usar_replay.node import cpu_sets, hide, kernel_sandbox, protocol
 from usar_replay.node.audit_guard import GuardPolicy
 from usar_replay.node.boundary_check import MAX_FRAME_BYTES, BoundaryCheck, OutputRefused
 from usar_replay.node.executor import PublishPolicy
@@ -49,15 +49,31 @@ from usar_replay.node.kernel_sandbox import KernelSandbox, SandboxLimits
 from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import FrameKind, Wire
+from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
 from usar_replay.node.wire_io import send_within
 
 __all__ = [
+    "DEFAULT_MAX_CAPPED",
+    "DEFAULT_MAX_HOLDS",
+    "DEFAULT_PROCESSES",
+    "DEFAULT_RUN_MEMORY_MB",
     "MissionEnded",
     "MissionLimits",
     "MissionProcess",
     "hide_from_mission",
     "uses_kernel_sandbox",
 ]
+
+
+DEFAULT_RUN_MEMORY_MB = 3072
+"""The whole run's memory in MiB (``--run-memory-mb``): a ROS 1 graph (master, roslaunch, rosout,
+the bridge, the team's nodes) uses well under 1 GiB."""
+DEFAULT_PROCESSES = 256
+"""Processes and threads of one run (``--processes``)."""
+DEFAULT_MAX_HOLDS = 20
+"""Shutdown holds of one ROS 1 run (``--max-holds``): an honest package holds once or twice."""
+DEFAULT_MAX_CAPPED = 600
+"""Capped ticks of one ROS 1 run (``--max-capped``): 2 min of wall time at the default pace."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,6 +114,25 @@ class MissionLimits:
     max_log_mib: int = DEFAULT_MAX_LOG_MIB
     """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
     (:mod:`usar_replay.node.log_budget`)."""
+    run_memory_mb: int = DEFAULT_RUN_MEMORY_MB
+    """Memory of the whole run in the kernel sandbox, MiB (0: none): every process of it and
+    the files it writes to its tmpfs mounts (its memory cgroup); past it: ``out_of_memory``."""
+    processes: int = DEFAULT_PROCESSES
+    """Processes and threads of the run together (its pids cgroup); reaching it: ``refused``."""
+    run_folder_mb: int = DEFAULT_RUN_FOLDER_MB
+    """Size of the run's writable folder, MiB (a tmpfs; 0: a plain folder); filling it:
+    ``refused`` (:mod:`usar_replay.node.run_folder`)."""
+    max_holds: int = DEFAULT_MAX_HOLDS
+    """Ticks the ROS 1 bridge may hold for a node's shutdown (each up to 6 s of wall time);
+    past it the run is ``hung`` (0: no budget)."""
+    max_capped: int = DEFAULT_MAX_CAPPED
+    """Ticks whose wall cap may run out before the ROS 1 graph goes idle; past it: ``hung``
+    (0: no budget)."""
+    wall_s: float = 0.0
+    """Wall seconds for the whole run, start-up included (0: none); past it: ``wall_limit``."""
+    cpus: int = 0
+    """CPUs of the run's own CPU set (:mod:`usar_replay.node.cpu_sets`; 0: two when free, else
+    one). A batch gives each run its share."""
 
 
 def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimits:
@@ -190,8 +225,14 @@ class MissionProcess:
         self.boundary = BoundaryCheck(self.policy)
         self.budget = LogBudget(self.limits.max_log_mib)
         self.shutdown_requested = False
+        self.holds = 0
+        """Ticks the ROS 1 bridge held for a shutdown (:data:`protocol.FLAG_HELD`)."""
+        self.capped = 0
+        """Ticks whose wall cap ran out (:data:`protocol.FLAG_CAPPED`)."""
+        self._started = time.monotonic()  # verdicts only: never reaches a message
         self._work: str | None = None
         self._own_work = False
+        self._folder: RunFolder | None = None
         self._sandbox: KernelSandbox | None = None
         guard = self._prepare_sandbox()
         setup = {
@@ -224,19 +265,41 @@ class MissionProcess:
         guard = self.limits.guard
         if not _use_kernel_sandbox(self.limits):
             return guard
-        # the mission's own writable folder (its working directory), removed at close
+        # the mission's own writable folder (its working directory, a size-limited tmpfs),
+        # removed at close
         self._own_work = not self.limits.work_dir
-        self._work = self.limits.work_dir or tempfile.mkdtemp(prefix="usar-mission-")
+        if self._own_work:
+            self._folder = RunFolder("usar-mission-", self.limits.run_folder_mb)
+        self._work = self._folder.path if self._folder else self.limits.work_dir
         if guard is not None:
             guard = replace(
                 guard,
                 write_roots=(*guard.write_roots, self._work),
                 own_roots=(*guard.own_roots, self._work),
             )
+        # the run's own CPUs, and the recorder's with them (:mod:`.cpu_sets`)
+        try:
+            cpus = cpu_sets.claim(self.limits.cpus)
+        except TimeoutError as err:
+            self._cleanup()
+            raise UsageError(f"{err}: other usar runs hold every CPU") from None
+        if cpus is not None:
+            cpus.pin_caller()
         self._sandbox = KernelSandbox(
-            SandboxLimits(memory_mb=self.limits.memory_mb, cpu_s=self.limits.cpu_s)
+            SandboxLimits(
+                memory_mb=self.limits.memory_mb,
+                cpu_s=self.limits.cpu_s,
+                processes=self.limits.processes,
+                run_memory_mb=self.limits.run_memory_mb,
+            ),
+            cpus=cpus,
         )
         return guard
+
+    def run_folder(self) -> RunFolder | None:
+        """The run's size-limited folder, if it has one (a front end that makes its own, the
+        ROS 1 bridge's, returns that)."""
+        return self._folder
 
     def _start(self) -> tuple[subprocess.Popen[bytes], multiprocessing.connection.Connection]:
         """Start :meth:`command` (in the kernel sandbox when there is one) with one end of a
@@ -345,7 +408,9 @@ class MissionProcess:
         if self._sandbox is not None:
             self._sandbox.close()
         if self._work is not None:
-            if self._own_work:
+            if self._folder is not None:
+                self._folder.close()
+            elif self._own_work:
                 shutil.rmtree(self._work, ignore_errors=True)
             self._work = None
 
@@ -375,6 +440,9 @@ class MissionProcess:
                 f"the kernel's out-of-memory killer ended the mission process ({name}) "
                 f"while {doing}",
             )
+        limit = self._limit_reached()
+        if limit is not None:
+            return limit
         # what happened, and no more: a SIGKILL is not called out of memory unless the
         # kernel's record says so (a ROS 1 node may kill its bridge)
         return MissionEnded(
@@ -402,8 +470,36 @@ class MissionProcess:
             raise self._died(doing) from None
         verdict = _TEXT_VERDICTS.get(frame[:1])
         if verdict is not None:
-            raise MissionEnded(verdict, protocol.text_of(frame))
+            # a node that died of a run-wide limit (a child OOM-killed, a failed fork) crashes
+            # the graph: the limit is the verdict
+            raise self._limit_reached() or MissionEnded(verdict, protocol.text_of(frame))
         return frame
+
+    def _limit_reached(self) -> MissionEnded | None:
+        """The run-wide limit the run reached, as its verdict (None: none). Each is a counter
+        the kernel keeps for the run's cgroups or its folder: a few reads per tick."""
+        box, lim = self._sandbox, self.limits
+        if box is None:
+            return None
+        if box.oom_killed():
+            return MissionEnded(
+                "out_of_memory",
+                f"the run used up its memory ({lim.run_memory_mb} MiB for all its processes "
+                "and the files they write to /tmp, /dev/shm and its folder): the kernel's "
+                "out-of-memory killer ended one of its processes",
+            )
+        if box.processes_refused():
+            return MissionEnded(
+                "refused",
+                f"the run reached its limit of {lim.processes} processes and threads "
+                "(the kernel refused a fork)",
+            )
+        folder = self.run_folder()
+        if folder is not None and folder.full():
+            return MissionEnded(
+                "refused", f"the run filled its folder (its limit is {folder.size_mb} MiB)"
+            )
+        return None
 
     def _refuse(self, reason: str) -> MissionEnded:
         """End the process now (what it sends is not read any more) and say why."""
@@ -459,8 +555,43 @@ class MissionProcess:
         over = self.budget.outputs(items)
         if over:
             raise self._refuse(over)
-        self.shutdown_requested = self.shutdown_requested or bool(flag)
+        limit = self._limit_reached()
+        if limit is not None:
+            self._proc.kill()
+            raise limit
+        self.shutdown_requested = self.shutdown_requested or bool(flag & protocol.FLAG_DONE)
+        self.holds += bool(flag & protocol.FLAG_HELD)
+        self.capped += bool(flag & protocol.FLAG_CAPPED)
+        over_time = self._time_budget()
+        if over_time is not None:
+            self._proc.kill()
+            raise over_time
         return out
+
+    def _time_budget(self) -> MissionEnded | None:
+        """The run's time budgets (holds, capped ticks, wall time) as a verdict once one is
+        used up (None: none is)."""
+        lim = self.limits
+        if lim.max_holds and self.holds > lim.max_holds:
+            return MissionEnded(
+                "hung",
+                f"the ROS graph held {self.holds} ticks for a shutdown (its budget is "
+                f"{lim.max_holds}: --max-holds); a node that forks or waits like ros::shutdown() "
+                "every tick never ends",
+            )
+        if lim.max_capped and self.capped > lim.max_capped:
+            return MissionEnded(
+                "hung",
+                f"the ROS graph never went idle within its wall cap in {self.capped} ticks "
+                f"(its budget is {lim.max_capped}: --max-capped)",
+            )
+        wall = time.monotonic() - self._started
+        if lim.wall_s and wall > lim.wall_s:
+            return MissionEnded(
+                "wall_limit",
+                f"the run took more than {lim.wall_s:g} s of wall time (--wall-limit)",
+            )
+        return None
 
     def tick(self, t_ns: int, inputs: Sequence[Wire]) -> list[tuple[str, str, bytes, msgs.Message]]:
         """One tick, closed loop (live recording): send and wait for the outputs."""

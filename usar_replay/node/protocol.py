@@ -16,7 +16,9 @@ its :class:`FrameKind`:
       kind    1 byte
       t_ns    int64, little-endian    the tick's sim time
       count   uint32, little-endian   the number of items
-      flag    1 byte                  outputs: 1 when the mission said it is done
+      flag    1 byte                  outputs: bit 0 the mission said it is done; the
+                                      ROS 1 bridge's pacing: bit 1 the tick held for a
+                                      shutdown, bit 2 its wall cap ran out
       count items, each:
         topic_len uint16 LE, type_len uint16 LE, data_len uint32 LE,
         topic (UTF-8), type (UTF-8, a ROS 2 type name), data (CDR)
@@ -43,6 +45,9 @@ from typing import NamedTuple
 from usar_replay.core.errors import ProtocolMismatch
 
 __all__ = [
+    "FLAG_CAPPED",
+    "FLAG_DONE",
+    "FLAG_HELD",
     "PROTOCOL_VERSION",
     "Frame",
     "FrameKind",
@@ -107,8 +112,17 @@ def tick_frame(t_ns: int, inputs: Sequence[Wire]) -> bytes:
     return pack(FrameKind.TICK, t_ns, inputs)
 
 
+FLAG_DONE = 1
+"""Outputs flag: the mission said it is done."""
+FLAG_HELD = 2
+"""Outputs flag: the ROS 1 bridge held the tick for a node's shutdown (counted, budgeted)."""
+FLAG_CAPPED = 4
+"""Outputs flag: the tick's wall cap ran out before the ROS 1 graph went idle."""
+
+
 def outputs_frame(t_ns: int, outputs: Sequence[Wire], done: bool | int = False) -> bytes:
-    """The child's answer to a tick: what the mission published, and whether it is done."""
+    """The child's answer to a tick: what the mission published, and whether it is done
+    (with the pacing flags: :data:`FLAG_HELD`, :data:`FLAG_CAPPED`)."""
     return pack(FrameKind.OUTPUTS, t_ns, outputs, int(done))
 
 

@@ -126,6 +126,9 @@ class RecordResult:
     build: str = ""
     """A ROS 1 package's build, apart from the run's wall time (``catkin_make 14.2 s``,
     ``cached``, ``failed``); '' for a Python mission."""
+    pacing: str = ""
+    """A ROS 1 run's shutdown holds and capped ticks (``2 shutdown holds, 0 capped ticks``);
+    '' for a Python mission."""
     stored_on: str = contract.MARKER_POSES
     """The topics the stored markers were read from; where they were looked for, when none."""
 
@@ -573,6 +576,7 @@ def print_summary(result: RecordResult, file: TextIO | None = None) -> None:
         *([f"Build: {result.build} (not counted in the run's wall time)"] if result.build else []),
         f"Sim duration {result.sim_duration_s:.1f} s in {result.wall_time_s:.1f} s wall:"
         f" {result.real_time_factor:.2f}x real time (renderer {result.renderer})",
+        *([f"Pacing: {result.pacing}"] if result.pacing else []),
         f"Mission {result.mission}: {OUTCOMES.get(result.outcome, result.outcome)}",
         f"Markers found: {len(result.found)}/{result.markers_total} (as `usar grade` counts them)",
     ]

@@ -60,7 +60,15 @@ from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.core.tf_tree import BufferCore, TransformException
 from usar_replay.node import kernel_sandbox
-from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, text_frame, unpack
+from usar_replay.node.protocol import (
+    FLAG_CAPPED,
+    FLAG_HELD,
+    FrameKind,
+    outputs_frame,
+    ready_frame,
+    text_frame,
+    unpack,
+)
 from usar_replay.node.wire_io import send_within
 from usar_replay.ros1 import launch_filter, run_files
 from usar_replay.ros1.build import standins
@@ -234,6 +242,9 @@ class Bridge:
         self.quiet: Quiescence | None = None
         self.capped = 0
         """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
+        self.holds = 0
+        """Ticks held for a shutdown; both counts go to the recorder with each tick's outputs
+        (:data:`usar_replay.node.protocol.FLAG_HELD`, ``FLAG_CAPPED``), which budgets them."""
         self.waited_s = 0.0
         """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
         self._master: Any = None
@@ -596,6 +607,7 @@ class Bridge:
             if frame[:1] == FrameKind.STOP:
                 return
             _, t_ns, items, _ = unpack(frame)
+            capped, holds = self.capped, self.holds
             outputs = self.tick(t_ns, items)
             assert self.graph is not None
             ended = self._ended()
@@ -611,6 +623,8 @@ class Bridge:
                     return
                 done = 1
             wire = [wire_item(topic, m) for topic, m in outputs]
+            done |= FLAG_HELD if self.holds > holds else 0
+            done |= FLAG_CAPPED if self.capped > capped else 0
             if not send_within(self.conn, outputs_frame(t_ns, wire, done), self.write_timeout_s):
                 return
 
@@ -642,6 +656,7 @@ class Bridge:
         # hold /clock until the shutdown has played out: the processes exited and roslaunch
         # collected them (and acted: a required node's death stops the launch)
         held = self.shutdown.hold(shutting | exits, poll=watch.ended)
+        self.holds += 1
         print(
             f"usar shutdown hold at {self.last_t or 0} ns: pids {list(held.pids)}, exited "
             f"{list(held.exited)}, {held.wall_s * 1000:.0f} ms{' (capped)' if held.capped else ''}",

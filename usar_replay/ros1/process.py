@@ -15,10 +15,8 @@ import contextlib
 import dataclasses
 import json
 import os
-import shutil
 import signal
 import sys
-import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -29,6 +27,7 @@ from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
+from usar_replay.node.run_folder import RunFolder
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.build.jail import BUILD_WALL_S
@@ -133,10 +132,13 @@ class Ros1Process(MissionProcess):
         self.parameters = dict(parameters)
         self._kept: list[tuple[str, str, bytes]] = []
         self._one_cpu: OneCpu | None = None
-        self.run_dir = Path(tempfile.mkdtemp(prefix="usar-ros1-"))
+        limits = limits or MissionLimits()
+        # the run's folder: a size-limited tmpfs (kept on disk, unlimited, with keep_workspace)
+        size = 0 if options.keep_workspace else limits.run_folder_mb
+        self._bridge_folder = RunFolder("usar-ros1-", size)
+        self.run_dir = Path(self._bridge_folder.path)
         self.built = built
         try:
-            limits = limits or MissionLimits()
             if built.at and not uses_kernel_sandbox(limits):
                 raise ValueError(f"{built.workspace} was built for the kernel sandbox's {built.at}")
             # the paths the bridge sees: the sandbox's fixed ones (.layout) or the host's
@@ -188,7 +190,14 @@ class Ros1Process(MissionProcess):
         if self.options.one_cpu:
             if self._one_cpu is None:
                 box = self.kernel_sandbox
-                self._one_cpu = OneCpu(self.pid, box.cgroup if box else None)
+                cpus = box.cpus if box else None
+                self._one_cpu = OneCpu(
+                    self.pid,
+                    box.cgroup if box else None,
+                    cpu=cpus.graph_cpu if cpus else None,
+                    realtime=cpus is not None,
+                    passes_on=b"usar_replay.ros1.bridge",
+                )
             self._one_cpu.apply()
         super().send(t_ns, inputs)
 
@@ -235,12 +244,17 @@ class Ros1Process(MissionProcess):
             replaced=tuple(Ros1Node(*row) for row in run_files.replaced_nodes(self.run_dir)),
             parameters=tuple(read),
             applied_settings=run_files.APPLIED_SETTINGS,
+            holds=self.holds,
+            capped=self.capped,
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
         prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX
         kept += [(f"{prefix}{label}.txt", "text/plain", data) for label, data in outputs]
         return kept
 
+    def run_folder(self) -> RunFolder | None:
+        """The bridge's run folder (the graph's files, ROS logs included) is the run's."""
+        return self._bridge_folder
+
     def _remove_run_dir(self) -> None:
-        if not self.options.keep_workspace:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
+        self._bridge_folder.close(keep=self.options.keep_workspace)

@@ -79,6 +79,7 @@ def record_ros1(
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None
     process: Callable[..., Any]
+    made: list[Ros1Process] = []  # the run's process, for its pacing counts
     target = ros1_target(pkg, opts, hashed=False)
     try:
         target = ros1_target(pkg, opts)  # hashes the package: a folder it refuses is the verdict
@@ -87,7 +88,11 @@ def record_ros1(
             built = cached_build(pkg, limits=build_limits, fixed=fixed)
         else:  # a folder of its own, never inside the run's (which the run may write)
             built, holder = private_build(pkg, limits=build_limits, fixed=fixed)
-        process = functools.partial(Ros1Process, package=pkg, options=opts, built=built)
+
+        def process(*args: Any, **kwargs: Any) -> Ros1Process:
+            made.append(Ros1Process(*args, package=pkg, options=opts, built=built, **kwargs))
+            return made[-1]
+
         note = "cached" if built.cached else f"catkin_make {built.seconds:.1f} s"
     except MissionEnded as failed:
         process = functools.partial(_failed_build, failed)
@@ -105,7 +110,8 @@ def record_ros1(
     finally:
         if holder is not None and not opts.keep_workspace:
             remove_tree(holder)
-    return dataclasses.replace(result, build=note)
+    pacing = f"{made[0].holds} shutdown holds, {made[0].capped} capped ticks" if made else ""
+    return dataclasses.replace(result, build=note, pacing=pacing)
 
 
 def _failed_build(failed: MissionEnded, *_args: Any, **_kwargs: Any) -> Any:

@@ -1,9 +1,13 @@
-"""ros1/scheduling: the graph's threads on one CPU under SCHED_RR."""
+"""ros1/pacing/scheduling: the graph's threads on one CPU under SCHED_RR."""
 
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
+import pytest
 from proctools import child as start_child
 from proctools import wait_for
 
@@ -17,7 +21,8 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
         wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
         assert os.sched_getaffinity(child.pid) == {pin.cpu}
         if os.geteuid() == 0:
-            assert os.sched_getscheduler(child.pid) == os.SCHED_RR
+            policy = os.sched_getscheduler(child.pid)
+            assert policy == os.SCHED_RR | os.SCHED_RESET_ON_FORK  # never inherited
         else:
             assert pin.refused
     finally:
@@ -25,6 +30,17 @@ def test_the_graph_runs_on_one_cpu_under_sched_rr() -> None:
         child.wait()
 
 
+def test_without_a_cpu_set_of_its_own_the_graph_is_only_pinned() -> None:
+    """No SCHED_RR outside a run's own CPU set: it could starve a CPU someone else needs."""
+    child = start_child("import time\ntime.sleep(60)")
+    try:
+        pin = OneCpu(child.pid, realtime=False)
+        wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
+        assert os.sched_getaffinity(child.pid) == {pin.cpu}
+        assert os.sched_getscheduler(child.pid) == os.SCHED_OTHER and pin.refused
+    finally:
+        child.kill()
+        child.wait()
 
 
 def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
@@ -46,3 +62,26 @@ def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
             assert os.sched_getaffinity(0) == before
     finally:
         os.sched_setaffinity(0, before)
+
+
+def test_the_named_process_passes_real_time_priority_on_and_no_other_does(
+    tmp_path: Path,
+) -> None:
+    """The bridge's threads (usar's code) get plain SCHED_RR, so rospy's new connection
+    threads are real-time from birth; every other process's carry the reset flag."""
+    if os.geteuid() != 0:
+        pytest.skip("no SCHED_RR without root")
+    (tmp_path / "fake_bridge.py").write_text("import time\ntime.sleep(60)\n")
+    bridge = subprocess.Popen([sys.executable, "-m", "fake_bridge"], cwd=tmp_path)
+    other = start_child("import time\ntime.sleep(60)")
+    try:
+        pin = OneCpu(bridge.pid, realtime=True, passes_on=b"fake_bridge")
+        wait_for(lambda: pin.apply() > 0 or bridge.pid in pin.done, "the bridge's threads")
+        pin.root = other.pid
+        wait_for(lambda: pin.apply() > 0 or other.pid in pin.done, "the other's threads")
+        assert os.sched_getscheduler(bridge.pid) == os.SCHED_RR
+        assert os.sched_getscheduler(other.pid) == os.SCHED_RR | os.SCHED_RESET_ON_FORK
+    finally:
+        for proc in (bridge, other):
+            proc.kill()
+            proc.wait()

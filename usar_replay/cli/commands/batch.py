@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from usar_replay.cli import options
+from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
 from usar_replay.core.errors import UsageError
 
@@ -47,6 +47,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--max-log-mib", type=int, default=2048, metavar="MIB", help="log budget (2048; 0: none)"
     )
+    parser_parts.run_limit_options(p)
     p.add_argument(
         "--grade-limit", type=float, default=600.0, metavar="S", help="wall s to grade a log (600)"
     )
@@ -96,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(
             "--mission-memory, --cpu-limit and --max-log-mib: expected 0 (none) or more"
         )
+    options.check_run_limits(args)
     base = RunSettings()
     if args.max_sim_time is not None:
         base = dc.replace(base, record=dc.replace(base.record, max_sim_time_s=args.max_sim_time))
@@ -112,6 +114,11 @@ def run(args: argparse.Namespace) -> int:
         sandbox=not args.no_sandbox,
         max_log_mib=args.max_log_mib,
         grade_s=args.grade_limit,
+        run_memory_mb=args.run_memory,
+        processes=args.processes,
+        run_folder_mb=args.run_folder,
+        max_holds=args.max_holds,
+        max_capped=args.max_capped,
     )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -127,6 +134,10 @@ def run(args: argparse.Namespace) -> int:
         world_key=options.world_key(args),
     )
     engine = make_engine(args.engine, jobs, args.address) if plan.jobs else None
+    slots = getattr(engine, "slots", jobs)
+    if slots < jobs and not args.quiet:
+        print(f"usar: {slots} runs at a time: {slots} CPUs are free (one CPU set per run)",
+              file=sys.stderr)  # fmt: skip
     try:
         summary = grade_class(
             plan,

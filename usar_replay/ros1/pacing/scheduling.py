@@ -9,6 +9,13 @@ the same every run. SCHED_RR (priority 1, the kernel's long round-robin slice) i
 plain SCHED_FIFO livelocked once at start-up in the issue's probes, so not that. Real-time
 priority also keeps two CPU hogs beside the run from starving it.
 
+Real-time priority stays inside the run's own CPU set (:mod:`usar_replay.node.cpu_sets`):
+the graph's CPU is the set's last, no other run is given it, and a node that widens its
+affinity only reaches the set's other CPUs. Without a set of its own the graph is only pinned
+(no SCHED_RR: it could starve a CPU someone else needs). The policy carries
+SCHED_RESET_ON_FORK, so a node's children and new threads start as ordinary ones until the
+next tick's :meth:`OneCpu.apply` (an RR parent cannot hand RR on to a fork bomb).
+
 Set from the recorder, which is root outside the sandbox (a sandboxed process may not raise its
 own policy): every thread of the run, the bridge's included, found in the run's cgroup
 (``tasks``) or, without one, as the bridge's descendants. New threads are picked up before each
@@ -33,19 +40,39 @@ from usar_replay.ros1.pacing.quiescence import descendants
 __all__ = ["OneCpu", "watching_elsewhere"]
 
 PRIORITY = 1
+_POLICY = os.SCHED_RR | os.SCHED_RESET_ON_FORK
+"""SCHED_RR whose processes and threads start as SCHED_OTHER: real-time priority is given by
+the recorder, thread by thread, and never inherited (clearing the flag needs CAP_SYS_NICE,
+which nothing in the sandbox has)."""
 
 
 class OneCpu:
     """Pins the threads of one run (its cgroup, or the tree under ``root``) to one CPU under
     SCHED_RR; call :meth:`apply` again to catch new threads."""
 
-    def __init__(self, root: int, cgroup: str | None = None, cpu: int | None = None) -> None:
+    def __init__(
+        self,
+        root: int,
+        cgroup: str | None = None,
+        cpu: int | None = None,
+        *,
+        realtime: bool = True,
+        passes_on: bytes = b"",
+    ) -> None:
         self.root = root
+        self.passes_on = passes_on
+        """A word of the command line of the one process whose threads get SCHED_RR without
+        the reset flag (the bridge, usar's own code: rospy starts a thread per new connection,
+        which must be real-time from birth as before); its pid once found."""
+        self._heir: int | None = None
+        self.realtime = realtime
+        """SCHED_RR too (only inside the run's own CPU set: never on a CPU another run or the
+        host needs)."""
         self.tasks = Path(cgroup, "tasks") if cgroup else None
         mine = sorted(os.sched_getaffinity(0))
         self.cpu = mine[-1] if cpu is None else cpu
         self.done: set[int] = set()
-        self.refused = ""
+        self.refused = "" if realtime else "no CPU set of the run's own"
         """Why the policy could not be set (empty while it could)."""
 
     def _tids(self) -> list[int]:
@@ -58,15 +85,31 @@ class OneCpu:
                 out += [int(t) for t in os.listdir(f"/proc/{pid}/task")]
         return out
 
+    def _policy(self, tid: int) -> int:
+        """RR with the reset flag, or plain RR for the threads of the process named by
+        :attr:`passes_on`."""
+        if not self.passes_on:
+            return _POLICY
+        with contextlib.suppress(OSError, ValueError):
+            status = Path(f"/proc/{tid}/status").read_text()
+            tgid = int(status.split("\nTgid:", 1)[1].split()[0])
+            if self._heir is None:
+                argv = Path(f"/proc/{tgid}/cmdline").read_bytes().split(b"\0")
+                if argv[1:3] == [b"-m", self.passes_on]:  # python -m ... (not bwrap's argv)
+                    self._heir = tgid  # the first such process: started before the graph
+            if tgid == self._heir:
+                return os.SCHED_RR
+        return _POLICY
+
     def apply(self) -> int:
         """Pin the threads not pinned yet; returns how many were."""
-        new = [t for t in self._tids() if t not in self.done]
+        new = sorted(t for t in self._tids() if t not in self.done)
         for tid in new:
             self.done.add(tid)
             try:
                 os.sched_setaffinity(tid, {self.cpu})
                 if not self.refused:
-                    os.sched_setscheduler(tid, os.SCHED_RR, os.sched_param(PRIORITY))
+                    os.sched_setscheduler(tid, self._policy(tid), os.sched_param(PRIORITY))
             except ProcessLookupError:
                 continue
             except PermissionError as err:

@@ -1,0 +1,117 @@
+"""Red team: one run cannot touch another (issue #33, point 1): a team's log is the same
+whoever runs beside it.
+
+The course example package (``examples/ros1/usar_course``) is recorded on the one-room world
+alone (``usar record --ros1``), then graded by ``usar batch --jobs 2`` twice: beside a copy of
+itself, and beside a Python team that burns CPU (a thread that spins and asks for every CPU,
+and a busy timer callback). Every message of every one of the package's logs must be the same
+bytes at the same log time: each run has its own CPU set (usar_replay/node/cpu_sets.py), the
+graph's real-time priority never leaves it, and pacing follows the graph, not the machine.
+
+Needs bubblewrap, Debian's ROS 1 and root (the CPU sets); slow (four ROS 1 runs and a build).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+from pathlib import Path
+
+import pytest
+from clitools import run_batch, usar
+from conftest import one_room
+
+from usar_replay.log import bag
+from usar_replay.node import cpu_sets
+from usar_replay.node.kernel_sandbox import bwrap_available
+from usar_replay.ros1.build import debian
+from usar_replay.world.scenario_toml import save
+
+ROOT = Path(__file__).resolve().parents[2]
+COURSE = ROOT / "examples" / "ros1" / "usar_course"
+
+SPINNER = """
+import os, threading, time
+
+from usar_replay.api import Node
+
+START = time.monotonic()
+
+
+def spin() -> None:
+    try:
+        os.sched_setaffinity(0, range(os.cpu_count() or 1))
+    except OSError:
+        pass
+    while time.monotonic() - START < 120:  # longer than the honest team's run
+        pass
+    os._exit(1)  # then it crashes: the batch ends
+
+
+class Spinner(Node):
+    def __init__(self) -> None:
+        super().__init__("spinner")
+        self.create_timer(0.1, self.burn)
+
+    def burn(self) -> None:
+        n = 0
+        for _ in range(300_000):
+            n += 1
+
+
+def main() -> None:
+    threading.Thread(target=spin, daemon=True).start()
+    Spinner()
+"""
+
+
+def _ready() -> str:
+    if not bwrap_available()[0]:
+        return "no kernel sandbox here"
+    if len(cpu_sets.free_cpus()) < 2:
+        return "fewer than 2 free CPUs with cpuset cgroups here (root, cgroup v1)"
+    try:
+        debian.check()
+    except Exception as err:  # noqa: BLE001 - the reason to skip
+        return f"no ROS 1 here: {err}"
+    return ""
+
+
+def messages(log: Path) -> list[tuple[str, int, str]]:
+    """(topic, log time, digest of the bytes) of every message, in the file's order."""
+    return [
+        (m.topic, m.log_time_ns, hashlib.sha256(m.data).hexdigest())
+        for m in bag.BagReader(log).messages(decode_messages=False)
+    ]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(bool(_ready()), reason=_ready() or "ready")
+def test_a_teams_log_is_the_same_whoever_runs_beside_it(
+    tmp_path: Path, module_build_cache: Path
+) -> None:
+    room = tmp_path / "room.toml"
+    save(one_room(), room)
+    alone = tmp_path / "alone.mcap"
+    done = usar("record", "--scenario", str(room), "--ros1", str(COURSE), "--out", str(alone))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "Pacing: " in done.stdout
+    expected = messages(alone)
+    assert len(expected) > 1000
+
+    pair = tmp_path / "pair"
+    for team in ("a", "b"):
+        shutil.copytree(COURSE, pair / team)
+    code, said = run_batch(pair, room, tmp_path / "pair_out", "--jobs", "2", "--quiet")
+    assert code == 0, said
+    for team in ("a", "b"):
+        got = messages(tmp_path / "pair_out" / team / "room.mcap")
+        assert got == expected, f"team {team} beside itself: {len(got)} vs {len(expected)}"
+
+    spun = tmp_path / "spun"
+    shutil.copytree(COURSE, spun / "honest")
+    (spun / "spinner.py").write_text(SPINNER, encoding="utf-8")
+    code, said = run_batch(spun, room, tmp_path / "spun_out", "--jobs", "2", "--quiet")
+    assert code in (0, 1), said
+    got = messages(tmp_path / "spun_out" / "honest" / "room.mcap")
+    assert got == expected, f"beside a spinning team: {len(got)} vs {len(expected)}"

@@ -1,0 +1,256 @@
+"""Red team: run-wide limits and time budgets (issue #33, points 1, 6 and 7).
+
+Each attack is a tiny mission run through the real recorder in the kernel sandbox: a node that
+asks for every CPU and looks for the cgroup files (its CPU set holds), a memory hog spread over
+three children, ``/dev/shm`` and ``/tmp`` (the run's memory cgroup ends it ``out_of_memory``),
+a fork bomb (the pids cgroup: ``refused``), a disk filler (the run folder's tmpfs: ``refused``),
+a process that flags every tick a shutdown hold or a capped tick (the budget: ``hung``), and a
+run past its wall limit (``wall_limit``). Each ends in a closed log. The SCHED_RR test starts a
+real process in a claimed CPU set, gives it real-time priority as the recorder does, and shows
+its children and new threads do not inherit it.
+
+Needs bubblewrap and root (cgroups, tmpfs): skipped where either is missing. Each run is a few
+seconds of sim time; the limits are small so that each attack ends within a few ticks.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import one_room
+from proctools import wait_for
+
+from usar_replay.core import msgs
+from usar_replay.core.settings import RunSettings
+from usar_replay.log.run import open_run
+from usar_replay.node import cpu_sets
+from usar_replay.node.kernel_sandbox import (
+    KernelSandbox,
+    SandboxLimits,
+    bwrap_available,
+    python_binds,
+    sandbox_argv,
+)
+from usar_replay.node.mission_process import MissionLimits
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.ros1.pacing.scheduling import OneCpu
+
+_OK, _WHY = bwrap_available()
+pytestmark = pytest.mark.skipif(
+    not _OK or os.geteuid() != 0, reason=f"needs bubblewrap and root: {_WHY or 'not root'}"
+)
+RUN = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_s=3.0))
+
+
+def _record(tmp_path: Path, source: str, **limits: object) -> tuple[Path, RecordResult]:
+    mission = tmp_path / "attack.py"
+    mission.write_text(source, encoding="utf-8")
+    out = tmp_path / "attack.mcap"
+    lim = MissionLimits(kernel_sandbox="required", **limits)  # type: ignore[arg-type]
+    result = record(one_room(), out, RUN, mission=str(mission), limits=lim)
+    run = open_run(out)
+    assert run.file_state == "complete" and run.outcome == result.outcome
+    return out, result
+
+
+def _said(log: Path) -> list[str]:
+    """The mission's log lines (/rosout)."""
+    return [m.msg.msg for m in open_run(log).messages(["/rosout"]) if isinstance(m.msg, msgs.Log)]
+
+
+ESCAPE = """
+import os
+
+from usar_replay.api import Node
+
+
+def main() -> None:
+    node = Node("escape")
+    try:
+        os.sched_setaffinity(0, range(os.cpu_count() or 1))
+        said = "asked"
+    except OSError as err:
+        said = type(err).__name__
+    cpus = sorted(os.sched_getaffinity(0))
+    node.get_logger().info(f"ATTACK affinity {said}: {len(cpus)}")
+    seen = os.path.exists("/sys/fs/cgroup/cpuset") or os.path.exists("/sys/fs/cgroup/unified")
+    node.get_logger().info(f"ATTACK cgroup files {'SEEN' if seen else 'hidden'}")
+"""
+
+
+def test_a_mission_cannot_leave_its_cpu_set_or_see_its_cgroup(tmp_path: Path) -> None:
+    if not cpu_sets.free_cpus():
+        pytest.skip("no free CPU set here")
+    out, _ = _record(tmp_path, ESCAPE, cpus=1)
+    lines = _said(out)
+    assert any(line.startswith("ATTACK affinity") and line.endswith(": 1") for line in lines), lines
+    assert "ATTACK cgroup files hidden" in lines
+
+
+HOG = """
+import os, time
+
+from usar_replay.api import Node
+
+with open("/tmp/fill", "wb") as f:
+    f.write(b"t" * (100 << 20))
+with open("/dev/shm/fill", "wb") as f:
+    f.write(b"s" * (100 << 20))
+for _ in range(3):
+    if os.fork() == 0:
+        data = b"c" * (150 << 20)
+        time.sleep(600)
+        os._exit(0)
+
+
+def main() -> None:
+    Node("hog")
+"""
+
+
+def test_a_memory_hog_over_children_and_tmpfs_is_out_of_memory(tmp_path: Path) -> None:
+    _out, result = _record(tmp_path, HOG, run_memory_mb=384)
+    assert result.outcome == "out_of_memory", result.outcome_reason
+    assert "384 MiB" in result.outcome_reason or "out-of-memory killer" in result.outcome_reason
+
+
+FORK_BOMB = """
+import os, time
+
+from usar_replay.api import Node
+
+for _ in range(200):
+    try:
+        if os.fork() == 0:
+            time.sleep(600)
+            os._exit(0)
+    except OSError:
+        break
+
+
+def main() -> None:
+    Node("bomb")
+"""
+
+
+def test_a_fork_bomb_is_refused_at_the_process_limit(tmp_path: Path) -> None:
+    _out, result = _record(tmp_path, FORK_BOMB, processes=32)
+    assert result.outcome == "refused", result.outcome_reason
+    assert "limit of 32 processes" in result.outcome_reason
+
+
+FILLER = """
+from usar_replay.api import Node
+
+try:
+    for i in range(1000):
+        with open(f"fill{i}", "wb") as f:
+            f.write(b"d" * (1 << 20))
+except OSError:
+    pass
+
+
+def main() -> None:
+    Node("filler")
+"""
+
+
+def test_a_disk_filler_is_refused_at_the_run_folders_size(tmp_path: Path) -> None:
+    _out, result = _record(tmp_path, FILLER, run_folder_mb=8)
+    assert result.outcome == "refused", result.outcome_reason
+    assert "filled its folder (its limit is 8 MiB)" in result.outcome_reason
+
+
+FLAGGER = """
+import sys
+from multiprocessing.connection import Connection
+
+from usar_replay.api import Node
+from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, unpack
+
+
+def main() -> None:
+    Node("flagger")
+    conn = Connection(int(sys.argv[1]))
+    conn.send_bytes(ready_frame())  # then every tick answered with the flag a bridge sets
+    while True:
+        frame = conn.recv_bytes()
+        if frame[:1] == FrameKind.STOP:
+            return
+        conn.send_bytes(outputs_frame(unpack(frame).t_ns, [], FLAG))
+"""
+
+
+@pytest.mark.parametrize(
+    ("flag", "budget", "said"), [(2, "max_holds", "held 4 ticks"), (4, "max_capped", "in 4 ticks")]
+)
+def test_every_tick_a_hold_or_capped_ends_at_its_budget(
+    tmp_path: Path, flag: int, budget: str, said: str
+) -> None:
+    source = FLAGGER.replace("FLAG))", f"{flag}))")
+    _out, result = _record(tmp_path, source, **{budget: 3})
+    assert result.outcome == "hung", result.outcome_reason
+    assert said in result.outcome_reason
+
+
+def test_a_run_past_its_wall_limit_ends_as_wall_limit(tmp_path: Path) -> None:
+    slow = ESCAPE.replace('Node("escape")', 'Node("slow")\n    node.create_timer(0.1, burn)')
+    slow += "\n\ndef burn() -> None:\n    sum(range(3_000_000))\n"
+    _out, result = _record(tmp_path, slow, wall_s=0.5)
+    assert result.outcome == "wall_limit", result.outcome_reason
+    assert "more than 0.5 s of wall time" in result.outcome_reason
+
+
+RR_CHILD = """
+import os, sys, threading, time
+while os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK != os.SCHED_RR:
+    time.sleep(0.01)  # until the recorder's OneCpu gave this process SCHED_RR
+open("rr", "w").close()
+while not os.path.exists("go"):
+    time.sleep(0.01)  # the recorder has stopped applying: what follows is inherited only
+pid = os.fork()
+if pid == 0:
+    before = os.sched_getscheduler(0)
+    try:
+        os.sched_setscheduler(0, os.SCHED_RR, os.sched_param(1))
+        again = "ALLOWED"
+    except OSError:
+        again = "refused"
+    print("child", before, again, flush=True)
+    os._exit(0)
+os.waitpid(pid, 0)
+seen = []
+t = threading.Thread(target=lambda: seen.append(os.sched_getscheduler(0)))
+t.start()
+t.join()
+print("thread", seen[0], flush=True)
+"""
+
+
+def test_real_time_priority_is_not_inherited_by_children_or_threads(tmp_path: Path) -> None:
+    """A sandboxed process given SCHED_RR as the recorder gives it: its child starts as an
+    ordinary process and may not raise itself, its new thread starts ordinary too."""
+    got = cpu_sets.claim(1, wait_s=60)
+    if got is None:
+        pytest.skip("no CPU sets here")
+    argv = sandbox_argv(
+        [sys.executable, "-c", RR_CHILD],
+        ro_binds=python_binds(),
+        work_dir=str(tmp_path),
+        env={"PATH": "/usr/bin:/bin"},
+    )
+    with KernelSandbox(SandboxLimits(processes=16), cpus=got) as box:
+        proc = subprocess.Popen(box.launch(argv), stdout=subprocess.PIPE, text=True)
+        pin = OneCpu(proc.pid, box.cgroup, cpu=got.graph_cpu)
+        # as before each tick: its threads found and given SCHED_RR
+        wait_for(lambda: pin.apply() < 0 or (tmp_path / "rr").exists(), "SCHED_RR", 60)
+        (tmp_path / "go").touch()
+        out, _ = proc.communicate(timeout=60)
+    assert not pin.refused, pin.refused
+    other = str(os.SCHED_OTHER)
+    assert out.split() == ["child", other, "refused", "thread", other], out

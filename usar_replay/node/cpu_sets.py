@@ -1,0 +1,220 @@
+"""A CPU set per run: each concurrent run owns its CPU(s) through a cpuset cgroup.
+
+Why: a run's log must not depend on who runs beside it. Two runs that share a CPU interleave as
+the machine's timing decides, and a ROS 1 graph under real-time priority (:mod:`usar_replay.ros1.
+scheduling`) would starve whatever else runs on its CPU. So every run claims CPUs of its own
+before it starts: a cpuset cgroup (``/sys/fs/cgroup/cpuset/usar/run-PID-N``, cgroup v1) whose
+``cpuset.cpus`` no other usar run holds. The kernel confines every process and thread of the run
+to it (``sched_setaffinity`` to other CPUs only narrows to the set's own), and the sandboxed code
+cannot write the cgroup's files (the sandbox mounts no ``/sys``; its cgroup namespace shows
+``/``). The recorder of the run pins its own threads to the same CPUs (:meth:`CpuSet.pin_caller`):
+it and its graph run in lockstep, so they share the set without slowing each other much, and
+``--jobs N`` on N CPUs uses N CPUs.
+
+The claim is machine-wide: every usar process takes the lock on the ``usar`` folder
+(``flock``), reads the CPUs its live siblings hold, and takes free ones; a set whose owner
+process is gone is removed first. With no free CPU the claim waits (a batch never asks for more
+sets than there are CPUs: :func:`free_cpus`). Where there is no writable cpuset hierarchy (not
+root, cgroup v2 only) :func:`claim` returns None and the run goes on without a set (docs/batch.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import signal
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus"]
+
+ROOT = "/sys/fs/cgroup/cpuset"
+"""cgroup v1's cpuset hierarchy (the one this project's machines and CI have)."""
+GROUP = "usar"
+"""The folder under :data:`ROOT` that holds every run's set."""
+WANT = 2
+"""CPUs a run takes when no count is asked for and that many are free: one for the graph, one
+for the bridge's watcher (:func:`usar_replay.ros1.pacing.scheduling.watching_elsewhere`)."""
+
+_counter = 0
+
+
+def parse_cpus(text: str) -> list[int]:
+    """``0-2,5`` -> [0, 1, 2, 5] (the kernel's list format)."""
+    out: list[int] = []
+    for part in text.strip().split(","):
+        if not part:
+            continue
+        lo, _, hi = part.partition("-")
+        out += range(int(lo), int(hi or lo) + 1)
+    return sorted(set(out))
+
+
+@dataclass(slots=True)
+class CpuSet:
+    """One run's claimed CPUs and its cpuset cgroup folder."""
+
+    path: str
+    cpus: tuple[int, ...]
+    _saved: dict[int, set[int]] = field(default_factory=dict)
+
+    @property
+    def graph_cpu(self) -> int:
+        """The CPU a ROS 1 graph runs on under SCHED_RR (the set's last)."""
+        return self.cpus[-1]
+
+    @property
+    def procs(self) -> str:
+        """Write a PID here to move it into the set."""
+        return os.path.join(self.path, "cgroup.procs")
+
+    def pin_caller(self) -> None:
+        """Pin every thread of this (the recorder's) process to the set; :meth:`release` undoes
+        it. Threads started later inherit the creating thread's CPUs."""
+        for tid in _threads():
+            with contextlib.suppress(OSError):
+                self._saved[tid] = os.sched_getaffinity(tid)
+                os.sched_setaffinity(tid, self.cpus)
+
+    def release(self) -> None:
+        """Give the CPUs back: the recorder's threads as they were, the cgroup removed (the
+        sandbox's close has ended its processes; any left are killed)."""
+        for tid, cpus in self._saved.items():
+            with contextlib.suppress(OSError):
+                os.sched_setaffinity(tid, cpus)
+        self._saved.clear()
+        _remove(self.path)
+
+
+def _threads() -> list[int]:
+    try:
+        return [int(t) for t in os.listdir("/proc/self/task")]
+    except OSError:
+        return [0]
+
+
+def _root_cpus() -> tuple[list[int], str] | None:
+    """(CPUs, memory nodes) of the cpuset root, or None without a writable v1 hierarchy."""
+    try:
+        cpus = parse_cpus(Path(ROOT, "cpuset.effective_cpus").read_text())
+        mems = Path(ROOT, "cpuset.effective_mems").read_text().strip()
+    except (OSError, ValueError):
+        return None
+    if not os.access(ROOT, os.W_OK):
+        return None
+    return cpus, mems
+
+
+def usable_cpus() -> list[int]:
+    """The CPUs this process may use that the cpuset root has (empty without a hierarchy)."""
+    root = _root_cpus()
+    if root is None:
+        return []
+    return sorted(set(root[0]) & os.sched_getaffinity(0))
+
+
+@contextlib.contextmanager
+def _locked() -> Iterator[str]:
+    """The ``usar`` folder, made if missing, held under an exclusive ``flock``."""
+    root = _root_cpus()
+    if root is None:
+        raise OSError("no writable cpuset hierarchy")
+    group = os.path.join(ROOT, GROUP)
+    with contextlib.suppress(FileExistsError):
+        os.mkdir(group)
+    fd = os.open(group, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        cpus, mems = root
+        # a new v1 cpuset starts with no CPU and no memory node: give the folder all of them
+        if not Path(group, "cpuset.mems").read_text().strip():
+            Path(group, "cpuset.cpus").write_text(",".join(map(str, cpus)))
+            Path(group, "cpuset.mems").write_text(mems)
+        yield group
+    finally:
+        os.close(fd)
+
+
+def _held(group: str) -> set[int]:
+    """CPUs held by live runs' sets (the sets of runs whose owner is gone are removed)."""
+    out: set[int] = set()
+    for name in os.listdir(group):
+        path = os.path.join(group, name)
+        if not name.startswith("run-") or not os.path.isdir(path):
+            continue
+        owner = name.split("-")[1]
+        if owner.isdigit() and not _alive(int(owner)):
+            _remove(path)
+            continue
+        with contextlib.suppress(OSError, ValueError):
+            out |= set(parse_cpus(Path(path, "cpuset.cpus").read_text()))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def free_cpus() -> list[int]:
+    """The usable CPUs no live usar run holds now (a batch runs at most this many at once)."""
+    try:
+        with _locked() as group:
+            held = _held(group)
+    except OSError:
+        return usable_cpus()
+    return [c for c in usable_cpus() if c not in held]
+
+
+def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
+    """A set of ``count`` CPUs (0: :data:`WANT` when free, else 1) no other usar run holds,
+    waiting up to ``wait_s`` for one to be given back; None without a cpuset hierarchy here.
+    Raises TimeoutError when no CPU came free in time."""
+    global _counter
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            with _locked() as group:
+                free = [c for c in usable_cpus() if c not in _held(group)]
+                take = free[: count or WANT] if len(free) >= max(count, 1) else []
+                if take:
+                    _counter += 1
+                    path = os.path.join(group, f"run-{os.getpid()}-{_counter}")
+                    os.mkdir(path)
+                    try:
+                        Path(path, "cpuset.cpus").write_text(",".join(map(str, take)))
+                        mems = Path(group, "cpuset.mems").read_text().strip()
+                        Path(path, "cpuset.mems").write_text(mems)
+                    except OSError:
+                        _remove(path)
+                        raise
+                    return CpuSet(path, tuple(take))
+        except OSError:
+            return None
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"no free CPU for the run within {wait_s:g} s")
+        time.sleep(0.2)  # another usar run gives its set back when it ends
+
+
+def _remove(path: str) -> None:
+    """Remove one set, killing what is left in it first (nothing, normally)."""
+    for _ in range(200):
+        try:
+            os.rmdir(path)
+            return
+        except FileNotFoundError:
+            return
+        except OSError:
+            with contextlib.suppress(OSError):
+                for pid in Path(path, "cgroup.procs").read_text().split():
+                    with contextlib.suppress(OSError):
+                        os.kill(int(pid), signal.SIGKILL)
+            time.sleep(0.01)

@@ -1,0 +1,76 @@
+"""A run's writable folder as a size-limited tmpfs: the run's files have one total limit.
+
+Why: the sandboxed run writes only its own folder (and its private ``/tmp`` and ``/dev/shm``,
+tmpfs mounts of their own size). On the host's disk that folder had only a per-file limit
+(RLIMIT_FSIZE), so a run could fill the disk with many files. A tmpfs with ``size=`` mounted
+on the folder (by the recorder, which is root; the sandbox binds it as it bound the plain folder)
+caps the total; its pages are charged to the memory cgroup of the process that writes them,
+so the run's memory limit covers them too (:mod:`.kernel_sandbox`). A run that fills it ends
+``refused`` (:meth:`RunFolder.full`, checked by :mod:`.mission_process` after each tick).
+
+Where nothing can be mounted (not root) the folder is a plain one and only the per-file limit
+applies, as before; :attr:`RunFolder.limited` says which.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+import shutil
+import tempfile
+
+__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder"]
+
+DEFAULT_RUN_FOLDER_MB = 512
+"""The run folder's default size in MiB (``--run-folder-mb``)."""
+
+_MNT_DETACH = 2
+_MS_NOSUID = 2
+_MS_NODEV = 4
+_FULL_BYTES = 1 << 20
+"""Less than this free: the folder is full (a filler's last write failed for want of space)."""
+
+
+def _libc() -> ctypes.CDLL | None:
+    name = ctypes.util.find_library("c")
+    return ctypes.CDLL(name, use_errno=True) if name else None
+
+
+class RunFolder:
+    """A fresh folder (``mkdtemp``), a tmpfs of ``size_mb`` MiB on it when one can be mounted
+    (0: none); :meth:`close` unmounts and removes it."""
+
+    def __init__(self, prefix: str, size_mb: int) -> None:
+        self.path = tempfile.mkdtemp(prefix=prefix)
+        self.size_mb = size_mb
+        self.limited = size_mb > 0 and self._mount()
+
+    def _mount(self) -> bool:
+        libc = _libc()
+        if libc is None or os.geteuid() != 0:
+            return False
+        opts = f"size={self.size_mb * 1024 * 1024},mode=0700".encode()
+        done = libc.mount(b"tmpfs", self.path.encode(), b"tmpfs", _MS_NOSUID | _MS_NODEV, opts)
+        return bool(done == 0)
+
+    def full(self) -> bool:
+        """Has the run filled its folder? (only a size-limited one can be full)"""
+        if not self.limited:
+            return False
+        try:
+            st = os.statvfs(self.path)
+        except OSError:
+            return False
+        return st.f_bavail * st.f_frsize < min(_FULL_BYTES, self.size_mb * 1024 * 16)
+
+    def close(self, keep: bool = False) -> None:
+        """Unmount (lazily: a process that still has a file open does not stop it) and remove
+        the folder; ``keep`` leaves a plain folder's files (a mounted one's go with it)."""
+        if self.limited:
+            libc = _libc()
+            if libc is not None:
+                libc.umount2(self.path.encode(), _MNT_DETACH)
+            self.limited = False
+        if not keep:
+            shutil.rmtree(self.path, ignore_errors=True)
