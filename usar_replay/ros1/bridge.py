@@ -70,7 +70,7 @@ from usar_replay.ros1.build.debian import DIST_PACKAGES
 from usar_replay.ros1.build.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
 from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
-from usar_replay.ros1.pacing.quiescence import Quiescence, children_map
+from usar_replay.ros1.pacing.quiescence import Quiescence
 from usar_replay.ros1.pacing.scheduling import watching_elsewhere
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.publishing import Publishing
@@ -340,7 +340,7 @@ class Bridge:
         """The idle check's processes and threads found again, and which are the package's:
         one walk of ``/proc`` answers both."""
         assert self.quiet is not None and self.graph is not None
-        kids = children_map(self.quiet.root)
+        kids = self.quiet.children.walk(self.quiet.root)
         self.quiet.refresh(self.graph.watch.package(kids), kids)
 
     def _wait_idle(self, cap: float | None) -> bool:
