@@ -35,6 +35,11 @@ process table shows it gone (:mod:`.proc_watch`). The recorder runs the graph on
 SCHED_RR (:mod:`.scheduling`). With these, two recordings of a package that does not read the
 wall clock are identical, its end and the nodes' screen output included (docs/ros1.md,
 "Pacing").
+
+This module is the start-up and the tick loop; the rest is one job a module: the student's
+processes (:mod:`.graph`), what the simulator publishes and ``/clock`` (:mod:`.publishing`),
+what the graph publishes (:mod:`.receiving`), the graph's own topics (:mod:`.topic_recorder`),
+move_base (:mod:`.move_base`) and when ``/clock`` may move (:mod:`.pacing`).
 """
 
 from __future__ import annotations
@@ -44,7 +49,6 @@ import json
 import multiprocessing.connection
 import os
 import pickle
-import re
 import signal
 import socket
 import subprocess
@@ -56,9 +60,7 @@ import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
-from usar_replay.core import cdr, contract, msgs
-from usar_replay.core.rotations import yaw_from_quat
-from usar_replay.core.tf_tree import BufferCore, TransformException
+from usar_replay.core import contract, msgs
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.protocol import (
     FLAG_CAPPED,
@@ -74,26 +76,21 @@ from usar_replay.ros1 import launch_filter, run_files
 from usar_replay.ros1.build import standins
 from usar_replay.ros1.build.debian import DIST_PACKAGES
 from usar_replay.ros1.build.workspace import catkin_env
-from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
-from usar_replay.ros1.pacing import shim
+from usar_replay.ros1.graph import Graph, tail
 from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
-from usar_replay.ros1.pacing.proc_watch import ProcWatch
-from usar_replay.ros1.pacing.quiescence import Quiescence, children_map
+from usar_replay.ros1.pacing.quiescence import Quiescence
 from usar_replay.ros1.pacing.scheduling import watching_elsewhere
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
+from usar_replay.ros1.publishing import Publishing
+from usar_replay.ros1.receiving import Inbox
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
-from usar_replay.world.nav import grid_from_msg
 
 __all__ = ["main"]
 
 NODE = "/usar_sim"
 """The bridge's node name (what the graph sees as Gazebo, map_server, aruco_detect, move_base)."""
-_LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC)
-_DIED = re.compile(r"has died \[pid \d+, exit code (-?\d+)")
-"""roslaunch's report of a node's death (exit code 0 is a clean end)."""
 CONSOLE_FORMAT = "[${severity}] [${node}]: ${message}"
 """rosconsole's and rospy's screen format in the graph (``ROSCONSOLE_FORMAT``): no time."""
-_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07")
 
 
 def _free_port() -> int:
@@ -111,78 +108,6 @@ def _xmlrpc_value(value: Any) -> Any:
     if isinstance(value, tuple | list):
         return [_xmlrpc_value(v) for v in value]
     return value
-
-
-class Graph:
-    """The student's processes: ``roslaunch PKG FILE`` or ``rosrun PKG NODE``, in the built
-    workspace's environment; roslaunch's own output to a file, each node's stdout and stderr to
-    a file of its own (:mod:`.launch_output`); their last lines are shown when it crashes."""
-
-    def __init__(self, config: dict[str, Any], env: dict[str, str]) -> None:
-        ws = Path(config["workspace"])
-        run = Path(config["run_dir"])
-        self.output_dir = run / run_files.OUTPUT_DIR
-        self.output_dir.mkdir(exist_ok=True)
-        if config.get("launch"):
-            what = f"roslaunch {config['package']} {config['launch']}"
-            nodes = run / run_files.NODES_FILE
-            plan = run / run_files.LAUNCH_PLAN
-            cmd = launch_command(
-                self.output_dir, nodes, config["package"], config["launch"], plan
-            )
-        else:
-            what = f"rosrun {config['package']} {config['node']}"
-            cmd = rosrun_command(self.output_dir, config["package"], config["node"])
-        self.what = what
-        self.log_path = run / "graph.log"
-        self.setup = f'source "{ws}/devel/setup.bash"'
-        script = f"{self.setup} && exec {cmd}"
-        with self.log_path.open("wb") as log:
-            self.proc = subprocess.Popen(
-                ["bash", "-c", script],
-                cwd=run,
-                # the pacing shim in the package's processes only (:mod:`.shim`)
-                env=shim.preloaded(env, config.get("underlays", ())),
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-            )
-        self.watch = ProcWatch(self.proc.pid, launcher_is_package=not config.get("launch"))
-
-    def exit_status(self) -> tuple[int, str] | None:
-        """None while running; (exit code, problem) once it ended: roslaunch exits 0 even when
-        a node died, so its report of a death is the problem then."""
-        code = self.proc.poll()
-        if code is None:
-            return None
-        for line in _tail(self.log_path, 400).splitlines():  # roslaunch's own lines
-            died = _DIED.search(line)
-            if died and int(died.group(1)) != 0:
-                return code, without_prefix(line.strip())
-        return code, ""
-
-    def launcher_stopping(self) -> bool:
-        """roslaunch said it stops the launch (a required node died, or all of them did)."""
-        text = _tail(self.log_path, 40)
-        return "Initiating shutdown!" in text or "roslaunch will exit" in text
-
-    def tail(self, lines: int = 40) -> str:
-        """The nodes' last output lines (``[node] line``), then roslaunch's (terminal colours
-        removed)."""
-        text = run_files.node_tails(self.output_dir, lines) + _tail(self.log_path, lines)
-        return without_prefix(_ANSI.sub("", text))
-
-    def stop(self) -> None:
-        if self.proc.poll() is None and self.watch.seen and self.watch.ended():
-            self.proc.kill()  # the package is gone: roslaunch has nothing left to stop
-            self.proc.wait()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)  # roslaunch stops its nodes on SIGINT
-            try:
-                self.proc.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
 
 
 class Bridge:
@@ -227,13 +152,11 @@ class Bridge:
             sys.path.append(str(DIST_PACKAGES))  # after usar's own numpy and OpenCV
         self.master: subprocess.Popen[bytes] | None = None
         self.graph: Graph | None = None
-        self._lock = threading.Lock()
-        self._inbox: list[tuple[str, str, msgs.Message]] = []
-        self._pubs: dict[str, Any] = {}
-        self._static: dict[str, msgs.TransformStamped] = {}
-        self.buffer = BufferCore(cache_time=30.0)
-        self.info: msgs.CameraInfo | None = None
         self.move_base: dict[str, Any] = {}
+        self.out = Publishing(self.move_base)
+        """The simulator's side of the graph (:mod:`.publishing`)."""
+        self.inbox = Inbox(NODE)
+        """What the graph publishes (:mod:`.receiving`)."""
         self.last_t: int | None = None
         self.robots = [r for r in contract.ROBOTS if contract.odom(r) in setup["sim_topics"]]
         # the graph's own topics, recorded; asked of the master when its call log grew
@@ -284,7 +207,7 @@ class Bridge:
                 break
             except OSError as err:
                 if time.monotonic() > deadline or self.master.poll() is not None:
-                    text = _tail(ws / "master.log")
+                    text = tail(ws / "master.log")
                     raise RuntimeError(f"the ROS master did not start: {text}") from err
                 time.sleep(0.05)
         master.setParam(NODE, "/use_sim_time", True)
@@ -292,7 +215,7 @@ class Bridge:
             if value is not None and key != "use_sim_time":
                 master.setParam(NODE, _ros_param(key), _xmlrpc_value(value))
         self._start_node()
-        self._advertise()
+        self.out.advertise(self.sim_topics, self.robots)
         self.quiet = Quiescence(own_tid=threading.get_native_id())
         expected: list[str] = []
         if self.config.get("launch"):
@@ -321,48 +244,18 @@ class Bridge:
         return path
 
     def _start_node(self) -> None:
+        """The bridge's node: ``/clock``, the subscribers, each robot's move_base."""
         import rospy
-        from rosgraph_msgs.msg import Clock, Log
-        from tf2_msgs.msg import TFMessage
 
         rospy.init_node(NODE.lstrip("/"), disable_signals=True)
-        self._clock = rospy.Publisher(contract.CLOCK, Clock, queue_size=None, tcp_nodelay=True)
-        rospy.Subscriber(
-            contract.TF, TFMessage, self._on_tf, callback_args=contract.TF, tcp_nodelay=True
-        )
-        rospy.Subscriber(
-            contract.TF_STATIC, TFMessage, self._on_tf, callback_args=contract.TF_STATIC
-        )
-        rospy.Subscriber(contract.ROSOUT, Log, self._on_log, tcp_nodelay=True)
-        from geometry_msgs.msg import Twist
-
-        for robot in self.robots:
-            topic = contract.cmd_vel(robot)
-            rospy.Subscriber(topic, Twist, self._on_twist, callback_args=topic, tcp_nodelay=True)
+        self.out.advertise_clock()
+        self.inbox.subscribe(self.robots)
         from usar_replay.ros1.move_base import MoveBase
 
         xy = float(self.parameters.get("mission.xy_tolerance", 0.05))
         yaw = float(self.parameters.get("mission.yaw_tolerance", 0.17))
         for robot in self.robots:
             self.move_base[robot] = MoveBase(robot, xy_tolerance=xy, yaw_tolerance=yaw)
-
-    def _advertise(self) -> None:
-        """Every topic the simulator will publish, before the graph starts: its subscribers
-        connect before the first ``/clock`` (:mod:`.graph_start`), not during the run."""
-        kinds: dict[str, type[msgs.Message]] = {
-            contract.TF: msgs.TFMessage,
-            contract.TF_STATIC: msgs.TFMessage,
-            contract.MAP_TOPIC: msgs.OccupancyGrid,
-            contract.CAMERA_INFO: msgs.CameraInfo,
-            contract.IMAGE: msgs.CompressedImage,
-            contract.FIDUCIALS: msgs.FiducialTransformArray,
-            **{contract.odom(r): msgs.Odometry for r in self.robots},
-        }
-        for topic in self.sim_topics:
-            if topic in kinds:
-                self._publisher(topic, kinds[topic].__msgtype__)
-        if contract.IMAGE in self.sim_topics:
-            self._raw_publisher()
 
     def _wait_for_graph(self, master: Any, expected: list[str], timeout_s: float) -> None:
         """Hold ``/clock`` until the graph is ready (:func:`.graph_start.wait_until_ready`)."""
@@ -391,9 +284,7 @@ class Bridge:
             # and their subscriptions connect here, while /clock holds, not during the run
             # (roscpp negotiates a new subscription on its XML-RPC thread's 100 ms wall-clock
             # poll, so a connection made in a tick lands in a tick the machine decides)
-            from rosgraph_msgs.msg import Clock
-
-            self._clock.publish(Clock(clock=_genpy_time(contract.START_TIME_NS)))
+            self.out.publish_clock(contract.START_TIME_NS)
             wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
             # and each move_base's status (rospy's status timer runs on sim time, first at
             # 0.2 s): an action client's waitForServer, which re-checks on a 500 ms wall-clock
@@ -419,135 +310,18 @@ class Bridge:
                 raise
             raise RuntimeError(f"{graph.what}: {err}:\n" + graph.tail()) from None
 
-    # -- what the graph publishes (rospy's threads) ----------------------------------------------
-
-    def _ours(self, msg: Any) -> bool:
-        header = getattr(msg, "_connection_header", None) or {}
-        return bool(header.get("callerid") == NODE)
-
-    def _on_tf(self, msg: Any, topic: str) -> None:
-        if self._ours(msg):
-            return
-        from usar_replay.ros1.convert import from_ros1
-
-        value = from_ros1(msgs.TFMessage, msg)
-        with self._lock:
-            self._inbox.append((topic, _caller(msg), value))
-
-    def _on_twist(self, msg: Any, topic: str) -> None:
-        from usar_replay.ros1.convert import from_ros1
-
-        value = from_ros1(msgs.Twist, msg)
-        with self._lock:
-            self._inbox.append((topic, _caller(msg), value))
-
-    def _on_log(self, msg: Any) -> None:
-        if self._ours(msg):
-            return
-        from usar_replay.ros1.convert import log_from_ros1
-
-        value = log_from_ros1(msg)
-        with self._lock:
-            self._inbox.append((contract.ROSOUT, _caller(msg), value))
-
-    # -- one tick -------------------------------------------------------------------------------
-
-    def _publisher(self, topic: str, msgtype: str) -> Any:
-        pub = self._pubs.get(topic)
-        if pub is None:
-            import rospy
-
-            from usar_replay.ros1.convert import ros1_class
-
-            pub = rospy.Publisher(
-                topic, ros1_class(msgtype), queue_size=None, latch=topic in _LATCHED
-            )
-            self._pubs[topic] = pub
-        return pub
-
-    def _publish(self, topic: str, value: msgs.Message) -> None:
-        pub = self._publisher(topic, type(value).__msgtype__)
-        if pub.get_num_connections() == 0 and topic not in _LATCHED:
-            return
-        from usar_replay.ros1.convert import to_ros1
-
-        pub.publish(to_ros1(value))
-
-    def _raw_publisher(self) -> Any:
-        topic = contract.IMAGE.removesuffix("/compressed")
-        pub = self._pubs.get(topic)
-        if pub is None:
-            import rospy
-            from sensor_msgs.msg import Image
-
-            pub = self._pubs[topic] = rospy.Publisher(topic, Image, queue_size=None)
-        return pub
-
-    def _raw_image(self, image: msgs.CompressedImage) -> None:
-        """The frame as Gazebo's camera plugin publishes it: ``sensor_msgs/Image`` rgb8."""
-        pub = self._raw_publisher()
-        if pub.get_num_connections() == 0:
-            return
-        import cv2
-        import numpy as np
-        from sensor_msgs.msg import Image
-
-        from usar_replay.ros1.convert import to_ros1
-
-        bgr = cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR)
-        if bgr is None:
-            return
-        out = Image()
-        out.header = to_ros1(image.header)
-        out.height, out.width = int(bgr.shape[0]), int(bgr.shape[1])
-        out.encoding, out.is_bigendian, out.step = "rgb8", 0, int(bgr.shape[1]) * 3
-        out.data = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).tobytes()
-        pub.publish(out)
-
-    def _pose(self, robot: str, t_ns: int) -> tuple[float, float, float] | None:
-        return self._in_map(contract.base_frame(robot), t_ns)
-
-    def _in_map(self, frame: str, t_ns: int = 0) -> tuple[float, float, float] | None:
-        try:
-            tf = self.buffer.lookup_transform(contract.MAP, frame, t_ns)
-        except TransformException:
-            return None
-        tr = tf.transform.translation
-        return (tr.x, tr.y, yaw_from_quat(tf.transform.rotation))
-
     def tick(self, t_ns: int, items: list[tuple[str, str, bytes]]) -> list[tuple[str, Any]]:
         """Publish one tick, wait for the graph, return the outputs (usar values)."""
-        from rosgraph_msgs.msg import Clock
-
         if self.topics.discover():
             # a topic the graph just advertised: connected before this tick's /clock, so what
             # it latched arrives in this tick whatever the machine's speed
             self.topics.wait_connected(self.settle_s + 2.0)
-        for topic, msgtype, data in items:
-            value = cdr.decode(data, msgtype)
-            if topic == contract.TF_STATIC and isinstance(value, msgs.TFMessage):
-                for tf in value.transforms:
-                    self.buffer.set_transform_static(tf, "sim")
-                    self._static[tf.child_frame_id] = tf
-                value = msgs.TFMessage(transforms=tuple(self._static.values()))
-            elif topic == contract.TF and isinstance(value, msgs.TFMessage):
-                for tf in value.transforms:
-                    self.buffer.set_transform(tf, "sim")
-            elif topic == contract.MAP_TOPIC and isinstance(value, msgs.OccupancyGrid):
-                grid = grid_from_msg(value)
-                for mb in self.move_base.values():
-                    mb.grid = grid
-            elif isinstance(value, msgs.CameraInfo):
-                self.info = value
-            elif isinstance(value, msgs.CompressedImage) and self.info is not None:
-                self._raw_image(value)
-            # the course's /fiducial_transforms comes in the tick, right after its frame
-            self._publish(topic, value)
-        poses = {r: self._pose(r, t_ns) for r in self.robots}
+        self.out.publish_inputs(items)
+        poses = {r: self.out.pose(r, t_ns) for r in self.robots}
         settled: list[tuple[str, msgs.Message]] = []
         driven: list[tuple[str, msgs.Message]] = []
         for robot in self.robots:
-            before, after = self.move_base[robot].tick(t_ns, poses, self._in_map)
+            before, after = self.move_base[robot].tick(t_ns, poses, self.out.in_map)
             settled += before
             driven += after
         dt = 0.0 if self.last_t is None else (t_ns - self.last_t) / 1e9
@@ -560,28 +334,24 @@ class Bridge:
         # this wait a result could reach a node after it saw the new time, or before, as the
         # machine's timing decides (its reaction then lands a tick later on one run)
         idle = self._wait_idle(cap)
-        self._clock.publish(Clock(clock=_genpy_time(t_ns)))
+        self.out.publish_clock(t_ns)
         if not (self._wait_idle(cap) and idle):
             self.capped += 1
-        with self._lock:
-            got, self._inbox = self._inbox, []
-        got += self.topics.take()
-        # what arrived within the tick in a fixed order: by topic, then publishing node (one
-        # node's messages on one topic keep their order: one TCP connection)
-        got.sort(key=lambda item: (item[0], item[1]))
+        # what arrived within the tick in a fixed order: by topic, then publishing node
+        got = self.inbox.take(self.topics.take())
         # a goal's end first: real move_base publishes its zero velocity before the result
         # (resetState(), then setSucceeded), so a command the package sends when it learns
         # of the result (a one-shot spin on SUCCEEDED) is the robot's last one (issue #32).
         # The active goal's command last: when the package also commands a robot move_base
         # drives, move_base's command is the one the robot follows (what team 002 saw) and the
         # rubric's cmd_vel_one_publisher line reports the fight
-        return settled + [(topic, value) for topic, _node, value in got] + driven
+        return settled + got + driven
 
     def _refresh(self) -> None:
         """The idle check's processes and threads found again, and which are the package's:
         one walk of ``/proc`` answers both."""
         assert self.quiet is not None and self.graph is not None
-        kids = children_map(self.quiet.root)
+        kids = self.quiet.children.walk(self.quiet.root)
         self.quiet.refresh(self.graph.watch.package(kids), kids)
 
     def _wait_idle(self, cap: float | None) -> bool:
@@ -712,24 +482,6 @@ class Bridge:
         if self.master is not None and self.master.poll() is None:
             self.master.kill()  # it keeps nothing: the run's folder goes with it
             self.master.wait()
-
-
-def _caller(msg: Any) -> str:
-    """The node that published ``msg`` (its connection header's ``callerid``)."""
-    header = getattr(msg, "_connection_header", None) or {}
-    return str(header.get("callerid", ""))
-
-
-def _genpy_time(t_ns: int) -> Any:
-    import genpy
-
-    return genpy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
-
-
-def _tail(path: Path, lines: int = 20) -> str:
-    with contextlib.suppress(OSError):
-        return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
-    return ""
 
 
 def main(argv: list[str]) -> None:

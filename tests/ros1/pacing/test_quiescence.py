@@ -108,3 +108,22 @@ def test_one_walk_of_the_tree_answers_for_any_process_in_it() -> None:
     finally:
         parent.kill()
         parent.wait()
+
+
+def test_the_walk_with_files_kept_open_sees_children_come_and_go() -> None:
+    import os
+
+    from usar_replay.ros1.pacing.quiescence import ChildrenFiles, children_map
+
+    me = os.getpid()
+    with ChildrenFiles() as files:
+        before = files.walk(me)
+        assert before == children_map(me)
+        kid = start_child("import time; time.sleep(60)")
+        try:
+            now = files.walk(me)  # the same open files, read again
+            assert kid.pid in now[me] and now == children_map(me)
+        finally:
+            kid.kill()
+            kid.wait()
+        assert kid.pid not in files.walk(me)[me]

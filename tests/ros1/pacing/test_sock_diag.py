@@ -3,6 +3,7 @@ process, found by inode, and what does not count (CLOSE-WAIT)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 
@@ -52,3 +53,31 @@ def test_unix_socketpair_bytes_wait_until_read() -> None:
 def test_all_lists_sockets_of_this_namespace() -> None:
     with socket.create_server(("127.0.0.1", 0)) as server, SockDiag() as diag:
         assert _ino(server) in {q.inode for q in diag.all()}
+
+
+def test_one_tcp_dump_finds_both_families_as_one_dump_each_does() -> None:
+    # one walk of the kernel's connection table instead of two: the same sockets, queues
+    # included, as the per-family dumps (the fallback where a kernel refuses the one dump)
+    with socket.create_server(("127.0.0.1", 0)) as v4, SockDiag() as diag:
+        servers = [v4]
+        # without an IPv6 loopback here, IPv4 alone
+        with contextlib.suppress(OSError):
+            servers.append(socket.create_server(("::1", 0), family=socket.AF_INET6))
+        client = socket.create_connection(servers[-1].getsockname()[:2])
+        peer, _ = servers[-1].accept()
+        client.sendall(b"z" * 300)
+        wanted = {_ino(s) for s in (*servers, client, peer)}
+        one = {q for q in diag.tcp() if q.inode in wanted}
+        per_family = [
+            q
+            for family in (socket.AF_INET, socket.AF_INET6)
+            for q in diag.inet(family, socket.IPPROTO_TCP)
+            if q.inode in wanted
+        ]
+        assert one == set(per_family)
+        assert {q.inode for q in one} == wanted
+        assert any(q.inode == _ino(peer) and q.rqueue == 300 for q in one)
+        diag._one_tcp_dump = False
+        assert {q for q in diag.tcp() if q.inode in wanted} == one
+        for s in (*servers[1:], client, peer):
+            s.close()

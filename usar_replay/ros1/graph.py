@@ -1,0 +1,107 @@
+"""The student's processes in the bridge: ``roslaunch PKG FILE`` or ``rosrun PKG NODE`` started
+in the built workspace's environment (the pacing shim preloaded, :mod:`.pacing.shim`), and what
+the bridge asks of them: whether they ended and why, roslaunch's own word that it stops, and
+their last output lines for a crash report.
+
+One job, kept apart from the bridge's tick loop (:mod:`.bridge`): a crash report and the end's
+exit status read the same files whatever the loop does.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import signal
+import subprocess
+from pathlib import Path
+from typing import Any
+
+from usar_replay.ros1 import run_files
+from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
+from usar_replay.ros1.pacing import shim
+from usar_replay.ros1.pacing.proc_watch import ProcWatch
+
+__all__ = ["Graph", "tail"]
+
+_DIED = re.compile(r"has died \[pid \d+, exit code (-?\d+)")
+"""roslaunch's report of a node's death (exit code 0 is a clean end)."""
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07")
+
+
+class Graph:
+    """The student's processes: ``roslaunch PKG FILE`` or ``rosrun PKG NODE``, in the built
+    workspace's environment; roslaunch's own output to a file, each node's stdout and stderr to
+    a file of its own (:mod:`.launch_output`); their last lines are shown when it crashes."""
+
+    def __init__(self, config: dict[str, Any], env: dict[str, str]) -> None:
+        ws = Path(config["workspace"])
+        run = Path(config["run_dir"])
+        self.output_dir = run / run_files.OUTPUT_DIR
+        self.output_dir.mkdir(exist_ok=True)
+        if config.get("launch"):
+            what = f"roslaunch {config['package']} {config['launch']}"
+            nodes = run / run_files.NODES_FILE
+            plan = run / run_files.LAUNCH_PLAN
+            cmd = launch_command(
+                self.output_dir, nodes, config["package"], config["launch"], plan
+            )
+        else:
+            what = f"rosrun {config['package']} {config['node']}"
+            cmd = rosrun_command(self.output_dir, config["package"], config["node"])
+        self.what = what
+        self.log_path = run / "graph.log"
+        self.setup = f'source "{ws}/devel/setup.bash"'
+        script = f"{self.setup} && exec {cmd}"
+        with self.log_path.open("wb") as log:
+            self.proc = subprocess.Popen(
+                ["bash", "-c", script],
+                cwd=run,
+                # the pacing shim in the package's processes only (:mod:`.shim`)
+                env=shim.preloaded(env, config.get("underlays", ())),
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
+        self.watch = ProcWatch(self.proc.pid, launcher_is_package=not config.get("launch"))
+
+    def exit_status(self) -> tuple[int, str] | None:
+        """None while running; (exit code, problem) once it ended: roslaunch exits 0 even when
+        a node died, so its report of a death is the problem then."""
+        code = self.proc.poll()
+        if code is None:
+            return None
+        for line in tail(self.log_path, 400).splitlines():  # roslaunch's own lines
+            died = _DIED.search(line)
+            if died and int(died.group(1)) != 0:
+                return code, without_prefix(line.strip())
+        return code, ""
+
+    def launcher_stopping(self) -> bool:
+        """roslaunch said it stops the launch (a required node died, or all of them did)."""
+        text = tail(self.log_path, 40)
+        return "Initiating shutdown!" in text or "roslaunch will exit" in text
+
+    def tail(self, lines: int = 40) -> str:
+        """The nodes' last output lines (``[node] line``), then roslaunch's (terminal colours
+        removed)."""
+        text = run_files.node_tails(self.output_dir, lines) + tail(self.log_path, lines)
+        return without_prefix(_ANSI.sub("", text))
+
+    def stop(self) -> None:
+        if self.proc.poll() is None and self.watch.seen and self.watch.ended():
+            self.proc.kill()  # the package is gone: roslaunch has nothing left to stop
+            self.proc.wait()
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)  # roslaunch stops its nodes on SIGINT
+            try:
+                self.proc.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+
+
+def tail(path: Path, lines: int = 20) -> str:
+    """The last ``lines`` lines of a log file (empty when it cannot be read)."""
+    with contextlib.suppress(OSError):
+        return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+    return ""
