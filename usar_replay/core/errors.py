@@ -23,6 +23,9 @@ __all__ = [
     "UnusableSubmission",
     "TreeRefused",
     "ProtocolMismatch",
+    "NoPackage",
+    "SeveralPackages",
+    "DefinitionRefused",
 ]
 
 
@@ -112,3 +115,18 @@ class ProtocolMismatch(MissionEnded):
 
     def __init__(self, detail: str) -> None:
         super().__init__("refused", detail)
+
+
+class NoPackage(UsageError):
+    """No catkin package in the folder given (a batch then looks for a Python mission). (Raised
+    by :func:`usar_replay.ros1.build.workspace.find_package`.)"""
+
+
+class SeveralPackages(UsageError):
+    """Several catkin packages build nodes in the folder given: the message lists them and
+    says how to choose one. (Raised by :func:`usar_replay.ros1.build.workspace.find_package`.)"""
+
+
+class DefinitionRefused(UsarError, ValueError):
+    """A ROS 1 message definition past a cap of :class:`usar_replay.core.ros1defs.DefinitionLimits`;
+    ``str()`` says which, in one line. A ``ValueError`` too: it is bad input to a parser."""

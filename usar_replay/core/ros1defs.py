@@ -29,6 +29,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from usar_replay.core.errors import DefinitionRefused
+
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
@@ -61,10 +63,6 @@ class DefinitionLimits:
     run_fields: int = 1024
     """... fields and constants together (measured: 4 definitions of 250 fields, parsed and
     each message decoded, 0.5 s of CPU; the course's packages need a few dozen)."""
-
-
-class DefinitionRefused(ValueError):
-    """A definition past a cap of :class:`DefinitionLimits`; ``str()`` says which, in one line."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -51,7 +51,13 @@ import usar_replay.ros1.build.layout as layout
 import usar_replay.ros1.build.message as buildmsg
 import usar_replay.ros1.build.standins as standins
 import usar_replay.ros1.build.tree as tree
-from usar_replay.core.errors import MissionEnded, UnusableSubmission, UsageError
+from usar_replay.core.errors import (
+    MissionEnded,
+    NoPackage,
+    SeveralPackages,
+    UnusableSubmission,
+    UsageError,
+)
 from usar_replay.core.folder_walk import Entry, shown, stream, walk
 from usar_replay.ros1.build.jail import BuildLimits, run_jailed
 
@@ -179,14 +185,6 @@ def _has_nodes(folder: Path) -> bool:
     except OSError:
         return False
     return _ADD_EXECUTABLE.search(text) is not None
-
-
-class NoPackage(UsageError):
-    """No catkin package in the folder given (a batch then looks for a Python mission)."""
-
-
-class SeveralPackages(UsageError):
-    """Several catkin packages build nodes in the folder given: the message lists them."""
 
 
 def find_package(path: str | os.PathLike[str]) -> Package:
