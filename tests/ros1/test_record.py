@@ -2,7 +2,8 @@
 
 A two-node package (``examples/ros1/usar_two_nodes``: the explorer node publishes its stored
 markers latched as a ``geometry_msgs/PoseArray`` on ``/explorer/marker_poses`` and a
-``std_msgs/Int32`` count usar has no type for; the follower node waits for them) is built and
+``std_msgs/Int32`` count usar has no type for, then calls the follower's ``std_srvs/Trigger``
+service; the follower node waits for both) is built and
 recorded on the one-room world, once for the module; then the log is read as a student would:
 ``usar echo``, ``usar log --node``, ``usar log --output`` (each node's stdout and stderr),
 ``usar info`` (the package, its nodes, the build), the summary, the report's picture and the
@@ -96,6 +97,18 @@ def test_log_by_node_finds_each_node(recorded: tuple[Path, str]) -> None:
         assert "[follower]" not in got.stdout
     follower = usar("log", str(out), "--node", "follower").stdout
     assert "waiting for the explorer's markers" in follower
+
+
+def test_the_nodes_talk_through_a_std_srvs_service(recorded: tuple[Path, str]) -> None:
+    """The explorer calls the follower's ``/follower/go`` (std_srvs/Trigger) once it is home,
+    as many groups wrote it: the call is answered in the run, and the follower goes only then
+    (the run scores as a whole, so its markers were visited after the call)."""
+    out, _ = recorded
+    got = usar("log", str(out), "--node", "explorer").stdout
+    assert "[explorer]: explorer: the go call answered: going" in got
+    assert "the go call failed" not in got
+    graded = usar("grade", str(out))
+    assert graded.returncode == 0, graded.stdout + graded.stderr
 
 
 def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, str]) -> None:

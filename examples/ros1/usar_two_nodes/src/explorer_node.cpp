@@ -1,9 +1,11 @@
 /**
  * @file explorer_node.cpp
- * @brief The explorer node: finds the markers, then publishes them (latched) for the follower.
+ * @brief The explorer node: finds the markers, publishes them (latched) for the follower, then
+ *        tells the follower to go through its std_srvs/Trigger service, as many groups wrote it.
  */
 #include <geometry_msgs/PoseArray.h>
 #include <std_msgs/Int32.h>
+#include <std_srvs/Trigger.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
@@ -46,6 +48,12 @@ int main(int argc, char** argv) {
       count.publish(n);
       published = true;
       ROS_INFO("explorer: home, %zu markers on /explorer/marker_poses", msg.poses.size());
+      std_srvs::Trigger go;  // blocks until the follower's next spin answers
+      if (ros::service::call("/follower/go", go)) {
+        ROS_INFO("explorer: the go call answered: %s", go.response.message.c_str());
+      } else {
+        ROS_WARN("explorer: the go call failed");
+      }
     }
     rate.sleep();
   }

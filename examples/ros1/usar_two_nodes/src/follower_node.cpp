@@ -1,8 +1,10 @@
 /**
  * @file follower_node.cpp
- * @brief The follower node: waits for the explorer's markers, visits them, returns home.
+ * @brief The follower node: waits for the explorer's markers and its call of /follower/go
+ *        (std_srvs/Trigger), visits the markers, returns home.
  */
 #include <geometry_msgs/PoseArray.h>
+#include <std_srvs/Trigger.h>
 
 #include <cmath>
 #include <map>
@@ -25,12 +27,21 @@ int main(int argc, char** argv) {
         got = true;
       };
   ros::Subscriber sub = nh.subscribe<geometry_msgs::PoseArray>("/explorer/marker_poses", 1, on_markers);
+  bool go = false;
+  boost::function<bool(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&)> on_go =
+      [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+        go = true;
+        res.success = true;
+        res.message = "going";
+        return true;
+      };
+  ros::ServiceServer server = nh.advertiseService("/follower/go", on_go);
   usar_two_nodes::Follower follower(&nh);
   ros::Rate rate(20.0);
   while (ros::ok()) {
     ros::spinOnce();
-    if (!got) {
-      ROS_INFO_THROTTLE(1.0, "follower: waiting for the explorer's markers");
+    if (!got || !go) {
+      ROS_INFO_THROTTLE(1.0, "follower: waiting for the explorer's markers and its call");
     } else if (!follower.started()) {
       follower.start(markers);
     } else if (follower.step()) {
