@@ -90,7 +90,17 @@ def test_run_settings_file_then_set(tmp_path: Path) -> None:
 
 
 def _limit_args(**kw: object) -> argparse.Namespace:
-    base: dict[str, object] = {"tick_timeout": 5.0, "mission_memory": 0, "max_log_mib": 10}
+    base: dict[str, object] = {
+        "tick_timeout": 5.0,
+        "mission_memory": 0,
+        "max_log_mib": 10,
+        "run_memory": 3072,
+        "processes": 256,
+        "run_folder": 512,
+        "max_holds": 20,
+        "max_capped": 600,
+        "wall_limit": 3600.0,
+    }
     return argparse.Namespace(**{**base, **kw})
 
 
@@ -99,11 +109,17 @@ def test_limits_and_the_files_hidden_from_the_mission() -> None:
     got = options.limits(args)
     assert (got.tick_timeout_s, got.memory_mb, got.max_log_mib) == (5.0, 0, 10)
     assert got.hidden == ("w.toml", "r.mcap")
+    assert (got.run_memory_mb, got.processes, got.run_folder_mb) == (3072, 256, 512)
+    assert (got.max_holds, got.max_capped, got.wall_s) == (20, 600, 3600.0)
     for kw, why in [
         ({"tick_timeout": 0.0}, "--tick-timeout 0.0: expected a positive"),
         ({"tick_timeout": float("nan")}, "--tick-timeout nan"),
         ({"mission_memory": -1}, "--mission-memory -1"),
         ({"max_log_mib": -1}, "--max-log-mib -1"),
+        ({"run_memory": -1}, "--run-memory and --run-folder"),
+        ({"processes": 0}, "--processes 0"),
+        ({"max_holds": -1}, "--max-holds and --max-capped"),
+        ({"wall_limit": -1.0}, "--wall-limit -1"),
     ]:
         with pytest.raises(UsageError, match=why):
             options.limits(_limit_args(**kw))
