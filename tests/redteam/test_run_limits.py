@@ -101,11 +101,18 @@ with open("/tmp/fill", "wb") as f:
     f.write(b"t" * (100 << 20))
 with open("/dev/shm/fill", "wb") as f:
     f.write(b"s" * (100 << 20))
-for _ in range(3):
+ready = []
+for _ in range(3):  # each child's memory held before the run's first tick, not raced with it
+    r, w = os.pipe()
     if os.fork() == 0:
         data = b"c" * (150 << 20)
+        os.write(w, b"1")
         time.sleep(600)
         os._exit(0)
+    os.close(w)  # only the child holds it: a child the OOM killer ends reads as EOF
+    ready.append(r)
+for r in ready:
+    os.read(r, 1)
 
 
 def main() -> None:

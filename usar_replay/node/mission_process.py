@@ -454,6 +454,11 @@ class MissionProcess:
         if not self._conn.poll(timeout_s):
             self._proc.kill()
             self._proc.wait()
+            # a run-wide limit that killed or refused one of its processes is why the rest
+            # waits (a parent blocked on a child the OOM killer ended): that is the verdict
+            limit = self._limit_reached()
+            if limit is not None:
+                raise limit
             raise MissionEnded(
                 "hung",
                 f"no answer within {timeout_s:g} s of wall time while {doing}: a callback does "
