@@ -3,8 +3,8 @@
 Tests mirror the package (``tests/<layer>/test_<module>.py``; ``e2e/``, ``redteam/``, ``meta/``
 beside them) and are imported by pytest's ``importlib`` mode (pyproject.toml), so two folders may
 each hold a ``test_grade.py``. That mode puts nothing on ``sys.path``; this folder goes there
-here, so the shared helpers (``clitools``, ``logtools``, ``example_worlds``, ``msg_strategies``
-and this module's ``one_room``) import the same way from every folder.
+here, so the shared helpers (``clitools``, ``catkintools``, ``logtools``, ``example_worlds``,
+``msg_strategies`` and this module's ``one_room``) import the same way from every folder.
 """
 
 from __future__ import annotations

@@ -20,12 +20,12 @@ import json
 import os
 import stat
 import sys
-import textwrap
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from catkintools import package
 from conftest import one_room
 
 from usar_replay.cli import main as cli
@@ -56,34 +56,6 @@ def cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
         del os.environ["XDG_CACHE_HOME"]
     else:
         os.environ["XDG_CACHE_HOME"] = before
-
-
-def package(folder: Path, name: str, configure: str = "", script: str = "") -> Path:
-    """A catkin package ``name`` in ``folder`` whose CMakeLists.txt runs ``configure`` (CMake
-    code) at configure time, with a launch file, and ``scripts/node.py`` when ``script``."""
-    folder.mkdir(parents=True)
-    (folder / "package.xml").write_text(
-        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.0.1</version>'
-        "<description>red team</description><maintainer email='r@t.invalid'>r</maintainer>"
-        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
-        encoding="utf-8",
-    )
-    (folder / "CMakeLists.txt").write_text(
-        f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\nfind_package(catkin REQUIRED)\n"
-        f"catkin_package()\n{textwrap.dedent(configure)}\n",
-        encoding="utf-8",
-    )
-    (folder / "launch").mkdir()
-    (folder / "launch" / f"{name}.launch").write_text(
-        f'<launch><node pkg="{name}" type="node.py" name="n" output="screen"/></launch>\n',
-        encoding="utf-8",
-    )
-    if script:
-        (folder / "scripts").mkdir()
-        node = folder / "scripts" / "node.py"
-        node.write_text("#!/usr/bin/python3\n" + textwrap.dedent(script), encoding="utf-8")
-        node.chmod(0o755)
-    return folder
 
 
 def record_verdict(tmp_path: Path, pkg: Path, **kwargs: Any) -> tuple[str, str]:

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import textwrap
 from collections.abc import Iterator
 from pathlib import Path
 
+import catkintools
 import pytest
 from clitools import run_batch, usar
 from conftest import one_room
@@ -65,27 +65,7 @@ def _touch(folder: Path, name: bytes) -> None:
 def package(folder: Path, name: str, configure: str = "") -> Path:
     """A catkin package with no C++ (its build only configures), a Python node that exits,
     and ``configure`` (CMake code run at configure time: the team's code)."""
-    (folder / "scripts").mkdir(parents=True)
-    (folder / "launch").mkdir()
-    (folder / "package.xml").write_text(
-        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.0.1</version>'
-        "<description>red team</description><maintainer email='r@t.invalid'>r</maintainer>"
-        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
-        encoding="utf-8",
-    )
-    (folder / "CMakeLists.txt").write_text(
-        f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\nfind_package(catkin REQUIRED)\n"
-        f"catkin_package()\n{textwrap.dedent(configure)}\n",
-        encoding="utf-8",
-    )
-    (folder / "launch" / f"{name}.launch").write_text(
-        f'<launch><node pkg="{name}" type="node.py" name="n" output="screen"/></launch>\n',
-        encoding="utf-8",
-    )
-    node = folder / "scripts" / "node.py"
-    node.write_text("#!/usr/bin/python3\nimport sys\nsys.exit(0)\n", encoding="utf-8")
-    node.chmod(0o755)
-    return folder
+    return catkintools.package(folder, name, configure, script=catkintools.EXITS)
 
 
 # -- 2 and 3: team folders ------------------------------------------------------------------

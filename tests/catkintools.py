@@ -1,0 +1,38 @@
+"""A small catkin package written for a test: the red-team builds and hand-ins share it."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+EXITS = "import sys\nsys.exit(0)\n"
+"""A node script that exits at once (a package that only needs to build and start)."""
+
+
+def package(folder: Path, name: str, configure: str = "", script: str = "") -> Path:
+    """A catkin package ``name`` in ``folder`` with no C++ (its build only configures), whose
+    CMakeLists.txt runs ``configure`` (CMake code: the team's code) at configure time, with a
+    launch file starting ``scripts/node.py``, which holds ``script`` when one is given."""
+    folder.mkdir(parents=True)
+    (folder / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.0.1</version>'
+        "<description>red team</description><maintainer email='r@t.invalid'>r</maintainer>"
+        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
+        encoding="utf-8",
+    )
+    (folder / "CMakeLists.txt").write_text(
+        f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\nfind_package(catkin REQUIRED)\n"
+        f"catkin_package()\n{textwrap.dedent(configure)}\n",
+        encoding="utf-8",
+    )
+    (folder / "launch").mkdir()
+    (folder / "launch" / f"{name}.launch").write_text(
+        f'<launch><node pkg="{name}" type="node.py" name="n" output="screen"/></launch>\n',
+        encoding="utf-8",
+    )
+    if script:
+        (folder / "scripts").mkdir()
+        node = folder / "scripts" / "node.py"
+        node.write_text("#!/usr/bin/python3\n" + textwrap.dedent(script), encoding="utf-8")
+        node.chmod(0o755)
+    return folder
