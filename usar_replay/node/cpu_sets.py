@@ -29,7 +29,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus"]
+__all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus", "remove_cgroup"]
 
 ROOT = "/sys/fs/cgroup/cpuset"
 """cgroup v1's cpuset hierarchy (the one this project's machines and CI have)."""
@@ -86,7 +86,7 @@ class CpuSet:
             with contextlib.suppress(OSError):
                 os.sched_setaffinity(tid, cpus)
         self._saved.clear()
-        _remove(self.path)
+        remove_cgroup(self.path)
 
 
 def _threads() -> list[int]:
@@ -147,7 +147,7 @@ def _held(group: str) -> set[int]:
             continue
         owner = name.split("-")[1]
         if owner.isdigit() and not _alive(int(owner)):
-            _remove(path)
+            remove_cgroup(path)
             continue
         with contextlib.suppress(OSError, ValueError):
             out |= set(parse_cpus(Path(path, "cpuset.cpus").read_text()))
@@ -194,7 +194,7 @@ def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
                         mems = Path(group, "cpuset.mems").read_text().strip()
                         Path(path, "cpuset.mems").write_text(mems)
                     except OSError:
-                        _remove(path)
+                        remove_cgroup(path)
                         raise
                     return CpuSet(path, tuple(take))
         except OSError:
@@ -204,8 +204,9 @@ def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
         time.sleep(0.2)  # another usar run gives its set back when it ends
 
 
-def _remove(path: str) -> None:
-    """Remove one set, killing what is left in it first (nothing, normally)."""
+def remove_cgroup(path: str) -> None:
+    """Remove one of a run's cgroups (its CPU set, its memory or pids group), killing what is
+    left in it first (nothing, normally): a cgroup with members cannot be removed."""
     for _ in range(200):
         try:
             os.rmdir(path)
@@ -217,4 +218,4 @@ def _remove(path: str) -> None:
                 for pid in Path(path, "cgroup.procs").read_text().split():
                     with contextlib.suppress(OSError):
                         os.kill(int(pid), signal.SIGKILL)
-            time.sleep(0.01)
+            time.sleep(0.01)  # the kernel reaps the killed processes

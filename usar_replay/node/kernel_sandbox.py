@@ -30,16 +30,14 @@ import os
 import resource
 import select
 import shutil
-import signal
 import subprocess
 import sys
-import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from usar_replay.node.cpu_sets import CpuSet
+from usar_replay.node.cpu_sets import CpuSet, remove_cgroup
 
 __all__ = [
     "INSTALL_HINT",
@@ -391,7 +389,7 @@ class KernelSandbox:
             self._pidfd = None
         for group in (self.cgroup, self.memory_cgroup):
             if group:
-                _remove_cgroup(group)
+                remove_cgroup(group)
         self.cgroup = self.memory_cgroup = None
         if self.cpus is not None:
             self.cpus.release()
@@ -402,27 +400,6 @@ class KernelSandbox:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def _remove_cgroup(cgroup: str) -> None:
-    """Remove one of the run's cgroups, killing what is left in it first (nothing, normally)."""
-    for _ in range(200):
-        try:
-            os.rmdir(cgroup)
-            break
-        except FileNotFoundError:
-            break
-        except OSError:
-            _kill_members(cgroup)
-            time.sleep(0.01)  # the kernel reaps the killed processes
-
-
-def _kill_members(cgroup: str) -> None:
-    """SIGKILL the processes left in one run's cgroup (all of them the run's own)."""
-    with contextlib.suppress(OSError):
-        for pid in Path(cgroup, "cgroup.procs").read_text().split():
-            with contextlib.suppress(OSError):
-                os.kill(int(pid), signal.SIGKILL)
 
 
 _counter = 0
