@@ -182,3 +182,34 @@ def test_a_kill_is_called_out_of_memory_only_on_the_kernels_record(oom: bool) ->
             proc.send_signal(signal.SIGKILL)
         assert proc.wait(timeout=60) == -signal.SIGKILL
         assert box.oom_killed() is oom
+
+
+def test_the_sandboxs_network_namespace_has_connection_tables_of_its_own(
+    folders: dict[str, Path],
+) -> None:
+    """Where the machine allows (root, Linux 6.1+), bwrap starts from an empty namespace whose
+    children get TCP and UDP hash tables of their own (1024 and 256 buckets), so a socket dump
+    in the sandbox walks its own few connections, not the host's table; the host's setting is
+    left as it was. Elsewhere the command is bwrap's own."""
+    from usar_replay.node.kernel_sandbox import own_tables_argv, own_tables_available
+
+    if not bwrap_available()[0]:
+        pytest.skip("no bwrap here")
+    host = Path("/proc/sys/net/ipv4/tcp_child_ehash_entries")
+    before = host.read_text() if host.exists() else None
+    script = "cat /proc/sys/net/ipv4/tcp_ehash_entries /proc/sys/net/ipv4/udp_hash_entries"
+    argv = sandbox_argv(
+        ["/bin/sh", "-c", script],
+        ro_binds=[],
+        work_dir=str(folders["work"]),
+        env={"PATH": "/usr/bin:/bin"},
+        network="loopback",
+    )
+    if not own_tables_available():
+        assert own_tables_argv(argv) == argv
+        return
+    with KernelSandbox(SandboxLimits(processes=0)) as box:
+        done = subprocess.run(box.launch(argv), capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1024", "256"]  # negative: the host's table, shared
+    assert (host.read_text() if host.exists() else None) == before

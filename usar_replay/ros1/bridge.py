@@ -78,7 +78,7 @@ from usar_replay.ros1.build.debian import DIST_PACKAGES
 from usar_replay.ros1.build.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
 from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
-from usar_replay.ros1.pacing.quiescence import Quiescence
+from usar_replay.ros1.pacing.quiescence import NAP_S, Quiescence
 from usar_replay.ros1.pacing.scheduling import watching_elsewhere
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.publishing import Publishing
@@ -359,8 +359,10 @@ class Bridge:
         assert self.quiet is not None
         self._refresh()
         waited = time.perf_counter()  # pacing only: never reaches a message
-        with watching_elsewhere():  # the graph keeps its CPU to itself (:mod:`.scheduling`)
-            idle = self.quiet.wait(cap)
+        # the graph keeps its CPU to itself (:mod:`.scheduling`); on another one the samples
+        # need no pause between them
+        with watching_elsewhere() as moved:
+            idle = self.quiet.wait(cap, nap_s=0.0 if moved else NAP_S)
         self.waited_s += time.perf_counter() - waited
         return idle
 

@@ -127,3 +127,18 @@ def test_the_walk_with_files_kept_open_sees_children_come_and_go() -> None:
             kid.kill()
             kid.wait()
         assert kid.pid not in files.walk(me)[me]
+
+
+def test_a_runnable_thread_anywhere_ends_the_quiet_readings() -> None:
+    """With a thread runnable anywhere, every thread is read in full (``syscall``): a thread
+    that has not run since the last sample might be one woken and waiting for a CPU."""
+    busy = start_child("while True: pass")
+    try:
+        quiet = Quiescence(own_tid=threading.get_native_id())
+        wait_for(lambda: len(quiet.refresh()) > 1, "the child")
+        wait_for(lambda: not quiet._nothing_runnable(), "a runnable thread in the load average")
+        quiet.refresh([busy.pid])
+        wait_for(lambda: quiet.threads()[busy.pid].running, "the busy child seen running")
+    finally:
+        busy.kill()
+        busy.wait()

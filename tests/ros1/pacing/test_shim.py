@@ -12,6 +12,7 @@ second never passed the start-up gate.
 
 from __future__ import annotations
 
+import platform
 import subprocess
 from collections import Counter
 from pathlib import Path
@@ -77,6 +78,70 @@ def test_a_process_without_roscpp_runs_as_before(library: Path) -> None:
         check=False,
     )
     assert (done.returncode, done.stdout, done.stderr) == (0, "rospy rospy\n", "")
+
+
+SLEEPER = r"""
+// A thread sleeping in sim time (ros::Duration::sleep), the clock set by hand as roscpp's
+// /clock callback does: prints the call the sleeper blocks in and what its sleep returned.
+#include <ros/duration.h>
+#include <ros/time.h>
+#include <sched.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <thread>
+
+int main() {
+  ros::Time::init();
+  ros::Time::setNow(ros::Time(1, 0));  // sim time from here on
+  std::atomic<long> tid{0};
+  std::atomic<int> result{-1};
+  std::thread sleeper([&] {
+    tid = syscall(SYS_gettid);
+    result = ros::Duration(0.5).sleep() ? 1 : 0;
+  });
+  while (tid == 0) sched_yield();
+  std::string call = "running";
+  for (long i = 0; i < 100000000 && (call == "running" || call.empty()); ++i) {
+    std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/syscall");
+    file >> call;
+    sched_yield();
+  }
+  ros::Time::setNow(ros::Time(1, 400000000));  // not yet
+  int early = result;
+  ros::Time::setNow(ros::Time(1, 500000000));
+  sleeper.join();
+  std::printf("%s %d %d\n", call.c_str(), early, static_cast<int>(result));
+}
+"""
+
+
+@pytest.mark.parametrize("shimmed", [True, False])
+def test_a_sim_time_sleep_waits_for_the_clock_blocked_not_napping(
+    library: Path, tmp_path: Path, shimmed: bool
+) -> None:
+    """``ros::Duration::sleep`` in sim time (``ros::Rate::sleep`` calls it): roscpp's naps
+    1 ms at a time (``clock_nanosleep``), which the idle check must wait out every tick; with
+    the shim the thread waits on the process's clock (``futex``) and wakes when roscpp sets
+    the time. Either way the sleep ends when, and only when, the time reaches its end."""
+    (tmp_path / "sleeper.cpp").write_text(SLEEPER, encoding="utf-8")
+    subprocess.run(
+        ["g++", "-std=c++17", "-O1", "-o", "sleeper", "sleeper.cpp", "-lrostime", "-lpthread"],
+        cwd=tmp_path,
+        check=True,
+    )
+    env = {"PATH": "/usr/bin:/bin", **({"LD_PRELOAD": str(library)} if shimmed else {})}
+    sleeper = str(tmp_path / "sleeper")
+    done = subprocess.run([sleeper], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    call, early, result = done.stdout.split()
+    assert (early, result) == ("-1", "1")  # not at 1.4 s of a 0.5 s sleep from 1.0 s; at 1.5 s
+    futex, clock_nanosleep = {"aarch64": ("98", "115")}.get(platform.machine(), ("202", "230"))
+    assert call == (futex if shimmed else clock_nanosleep), call
 
 
 def _record(out: Path, launch: str) -> list[tuple[int, str, bytes]]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import platform
 import struct
 import time
 from collections.abc import Collection
@@ -35,9 +36,8 @@ from dataclasses import dataclass
 
 from usar_replay.ros1.pacing.sock_diag import SockDiag
 
-TCP_ESTABLISHED = 1
-
 __all__ = [
+    "NAP_S",
     "SHORT_SLEEP_S",
     "ChildrenFiles",
     "Quiescence",
@@ -66,6 +66,14 @@ _FUTEX_WAIT_BITSET = 9
 _FUTEX_CLOCK_REALTIME = 256
 _TIMER_ABSTIME = 1
 _TIMESPEC = struct.Struct("=qq")
+_TIMED = frozenset({_NANOSLEEP, _CLOCK_NANOSLEEP, _FUTEX})
+"""The calls whose arguments say how long the wait may last (a poll, or a join)."""
+_WAITS = frozenset({7, 23, 34, 35, 43, 45, 47, 61, 128, 130, 202, 230, 232, 247, 270, 271, 281,
+                    288, 441} if platform.machine() == "x86_64" else ())  # fmt: skip
+"""x86-64 calls a thread blocks in only to wait (poll, select, pause, nanosleep, accept,
+recvfrom, recvmsg, wait4, rt_sigtimedwait, rt_sigsuspend, futex, clock_nanosleep, epoll_wait,
+waitid, pselect6, ppoll, epoll_pwait, accept4, epoll_pwait2): never in uninterruptible I/O.
+Elsewhere none: the state letter is read for every blocked thread."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -162,6 +170,25 @@ def descendants(pid: int, children: dict[int, list[int]] | None = None) -> list[
     return out
 
 
+@dataclass(frozen=True, slots=True)
+class _Poll:
+    """A blocked call's timeout: ``value`` seconds (relative, or a deadline on ``clock``), a
+    poll while at most ``limit`` of it is left."""
+
+    value: float
+    clock: int | None
+    limit: float
+
+    def left(self) -> float:
+        if self.clock is None:
+            return self.value
+        return self.value - time.clock_gettime(self.clock)  # pacing only: never in a message
+
+    def now(self) -> bool:
+        """A poll now."""
+        return self.left() <= self.limit
+
+
 class _Thread:
     """Open files of one thread, read again with pread."""
 
@@ -179,6 +206,13 @@ class _Thread:
             self.syscall: int | None = os.open(base + "syscall", os.O_RDONLY)
         except OSError:
             self.syscall = None
+        self.last: ThreadState | None = None
+        """The last full reading (which holds while the thread is not run again)."""
+        self.poll: _Poll | None = None
+        """The timeout of the package thread's wait then, when the wait is a poll or may
+        become one."""
+        self.untimed = False
+        """The package thread's wait then has no timeout."""
 
     def close(self) -> None:
         for fd in (self.stat, self.schedstat, self.syscall):
@@ -194,6 +228,7 @@ class Quiescence:
         self.root = os.getpid() if root is None else root
         self.own_tid = own_tid
         self.diag = SockDiag()
+        self._loadavg = os.open("/proc/loadavg", os.O_RDONLY)
         self.children = ChildrenFiles()
         """The tree's walk (:meth:`ChildrenFiles.walk` of :attr:`root`), files kept open."""
         self._threads: dict[int, _Thread] = {}
@@ -218,6 +253,10 @@ class Quiescence:
         self._threads.clear()
         self._mem.clear()
         self.diag.close()
+        if self._loadavg >= 0:
+            with contextlib.suppress(OSError):
+                os.close(self._loadavg)
+            self._loadavg = -1
         self.children.close()
 
     # -- processes, threads, sockets -------------------------------------------------------------
@@ -240,9 +279,12 @@ class Quiescence:
                     if tid not in self._threads:
                         with contextlib.suppress(OSError):
                             self._threads[tid] = _Thread(pid, tid)
-                    if tid in self._threads:
+                    t = self._threads.get(tid)
+                    if t is not None:
                         role = "bridge" if pid == self.root else "infra"
-                        self._threads[tid].role = "node" if pid in package else role
+                        role = "node" if pid in package else role
+                        if t.role != role:  # read as a thread of its new role from now on
+                            t.role, t.last, t.poll, t.untimed = role, None, None, False
         for tid in set(self._threads) - seen:
             self._threads.pop(tid).close()
         for pid in set(self._mem) - set(self._pids):
@@ -265,50 +307,82 @@ class Quiescence:
         """Bytes waiting in the tree's sockets (its sockets' inodes are looked up again only
         when a socket with bytes is not known yet: outside a network namespace of its own, the
         machine's other sockets are in the dump too)."""
-        total = 0
-        refreshed = False
-        connected: set[int] = set()
-        for q in self.diag.all():
-            if q.kind == "tcp" and q.state == TCP_ESTABLISHED:
-                connected.add(q.inode)
-            if q.waiting <= 0:
-                continue
-            if q.inode not in self._inodes and not refreshed:
-                self._inodes = self._socket_inodes()
-                refreshed = True
-            if q.inode in self._inodes:
-                total += q.waiting
-        self.connected = frozenset(connected)
-        return total
+        waiting, self.connected = self.diag.busy()
+        if waiting.keys() - self._inodes:
+            self._inodes = self._socket_inodes()
+        return sum(n for ino, n in waiting.items() if ino in self._inodes)
 
     def threads(self) -> dict[int, ThreadState]:
-        """Every thread of the tree now (gone ones left out)."""
+        """Every thread of the tree now (gone ones left out).
+
+        A thread's ``schedstat`` says how often it was given a CPU. When the kernel reports no
+        runnable thread on the machine but the one asking (``/proc/loadavg``), a thread that
+        has not run since the last sample is blocked in the same call as then, and that
+        sample's reading stands: an idle graph costs one small read per thread. Otherwise the
+        thread's ``syscall`` file says ``running`` for a thread on or waiting for a CPU, else
+        the call it is blocked in; its ``stat`` (the state letter, ``D`` for a thread in
+        uninterruptible I/O) is read only for a thread blocked in a call that is not a wait
+        (a ``write`` to a file)."""
         out: dict[int, ThreadState] = {}
         untimed: set[int] = set()
+        quiet = self._nothing_runnable()
         for tid, t in list(self._threads.items()):
             try:
-                stat = os.pread(t.stat, 1024, 0)
                 sched = os.pread(t.schedstat, 128, 0)
+                fields = sched.split()
+                runs = int(fields[2]) if len(fields) > 2 else 0
+                last = t.last
+                if quiet and last is not None and last.runs == runs and not last.running:
+                    if t.poll is not None and t.poll.clock is not None:
+                        polling = t.poll.now()  # a deadline: nearer now
+                        if polling != last.polling:
+                            last = t.last = ThreadState(False, runs, polling, last.watched)
+                    out[tid] = last
+                    if t.untimed:
+                        untimed.add(t.pid)
+                    continue
+                text = os.pread(t.syscall, 256, 0) if t.syscall is not None else b""
+                if not text or not (text[:1].isdigit() or text.startswith(b"running")):
+                    text = b""  # no syscall file (or -1: not in a call): the state letter
+                    stat = os.pread(t.stat, 1024, 0)
+                    running = stat[stat.rfind(b")") + 2 : stat.rfind(b")") + 3] in (b"R", b"D")
             except OSError:
                 t.close()
                 del self._threads[tid]
                 continue
-            if not stat:
-                continue
-            state = stat[stat.rfind(b")") + 2 : stat.rfind(b")") + 3]
-            fields = sched.split()
-            runs = int(fields[2]) if len(fields) > 2 else 0
-            running = state in (b"R", b"D")  # D: in I/O for the reaction (a write), not done
+            nr = -1
+            if text:
+                running = text.startswith(b"running")
+                if not running:
+                    nr = int(text[: text.find(b" ")])
+                    if nr not in _WAITS:  # blocked, but maybe in I/O (D) for the reaction
+                        try:
+                            stat = os.pread(t.stat, 1024, 0)
+                        except OSError:
+                            stat = b""
+                        running = stat[stat.rfind(b")") + 2 : stat.rfind(b")") + 3] == b"D"
             polling = False
-            if not running and t.role == "node":
-                call = self._syscall(t)
-                polling = self._short_sleep(t, call)
-                if tid == t.pid and _untimed_wait(call):
+            t.poll, t.untimed = None, False
+            if not running and t.role == "node" and nr in _TIMED:
+                call = [nr, *(int(a, 16) for a in text.split()[1:7])]
+                t.poll = self._poll(t, call)
+                t.untimed = tid == t.pid and _untimed_wait(call)
+                polling = t.poll is not None and t.poll.now()
+                if t.untimed:
                     untimed.add(t.pid)
-            out[tid] = ThreadState(running, runs, polling, t.role != "infra")
+            out[tid] = t.last = ThreadState(running, runs, polling, t.role != "infra")
         self.samples += 1
         self.untimed = frozenset(untimed)
         return out
+
+    def _nothing_runnable(self) -> bool:
+        """No thread of the machine runnable but the caller (``/proc/loadavg``'s fourth field
+        is ``1/...``)."""
+        try:
+            load = os.pread(self._loadavg, 128, 0)
+        except OSError:
+            return False
+        return load.split()[3].startswith(b"1/") if load.count(b" ") >= 3 else False
 
     def long_waits(self) -> list[int]:
         """The package's threads in a timed wait on a condition with more than
@@ -338,41 +412,34 @@ class Quiescence:
         left = self._left(t.pid, timeout, absolute=clock)
         return 0.0 if left == float("inf") else left
 
-    @staticmethod
-    def _syscall(t: _Thread) -> list[int]:
-        """The thread's blocking system call and its arguments ([] where none is shown)."""
-        if t.syscall is None:
-            return []
-        try:
-            text = os.pread(t.syscall, 256, 0).split()
-        except OSError:
-            return []
-        if len(text) < 7 or not text[0].isdigit():
-            return []
-        return [int(text[0]), *(int(a, 16) for a in text[1:7])]
-
-    def _short_sleep(self, t: _Thread, call: list[int]) -> bool:
-        if not call:
-            return False
+    def _poll(self, t: _Thread, call: list[int]) -> _Poll | None:
+        """The timeout of ``call`` (a blocking call and its arguments) when the wait is a
+        short timed sleep (see the module docstring) or a timed wait that becomes one when it
+        has little left; None for any other."""
         nr, args = call[0], call[1:]
         if nr == _NANOSLEEP:
-            return self._left(t.pid, args[0], absolute=None) <= POLL_SLEEP_S
+            return _Poll(self._timespec(t.pid, args[0]), None, POLL_SLEEP_S)
         if nr == _CLOCK_NANOSLEEP:
             clock = args[0] if args[1] & _TIMER_ABSTIME else None
-            return self._left(t.pid, args[2], absolute=clock) <= POLL_SLEEP_S
+            return _Poll(self._timespec(t.pid, args[2]), clock, POLL_SLEEP_S)
         if nr == _FUTEX and args[3]:
             cmd = args[1] & 127
             if cmd == _FUTEX_WAIT:
-                return self._left(t.pid, args[3], absolute=None) <= SHORT_SLEEP_S
+                return _Poll(self._timespec(t.pid, args[3]), None, SHORT_SLEEP_S)
             if cmd == _FUTEX_WAIT_BITSET:
                 realtime = bool(args[1] & _FUTEX_CLOCK_REALTIME)
                 clock = time.CLOCK_REALTIME if realtime else time.CLOCK_MONOTONIC
-                return self._left(t.pid, args[3], absolute=clock) <= SHORT_SLEEP_S
-        return False
+                return _Poll(self._timespec(t.pid, args[3]), clock, SHORT_SLEEP_S)
+        return None
 
     def _left(self, pid: int, addr: int, absolute: int | None) -> float:
         """Seconds the timespec at ``addr`` leaves (relative, or to its deadline on clock
         ``absolute``); infinity where it cannot be read."""
+        return _Poll(self._timespec(pid, addr), absolute, 0.0).left()
+
+    def _timespec(self, pid: int, addr: int) -> float:
+        """The timespec at ``addr`` in process ``pid``, in seconds; infinity where it cannot
+        be read."""
         fd = self._mem.get(pid)
         if fd is None:
             try:
@@ -386,29 +453,34 @@ class Quiescence:
             sec, nsec = _TIMESPEC.unpack(os.pread(fd, _TIMESPEC.size, addr))
         except (OSError, struct.error, OverflowError):
             return float("inf")
-        value = float(sec) + float(nsec) / 1e9
-        if absolute is None:
-            return value
-        return value - time.clock_gettime(absolute)  # pacing only: never reaches a message
+        return float(sec) + float(nsec) / 1e9
 
     # -- the wait --------------------------------------------------------------------------------
 
-    def wait(self, cap_s: float | None) -> bool:
-        """Wait until the tree is idle (True) or ``cap_s`` wall seconds passed (False)."""
+    def wait(self, cap_s: float | None, nap_s: float = NAP_S) -> bool:
+        """Wait until the tree is idle (True) or ``cap_s`` wall seconds passed (False),
+        sampling every ``nap_s`` (0: at once again, for a caller on a CPU of its own)."""
         deadline = None if cap_s is None else time.perf_counter() + cap_s
         base: dict[int, ThreadState] | None = None
         while True:
             now = self.threads()
-            idle = not any(s.running for s in now.values()) and self.sockets_waiting() == 0
-            if not idle:
+            if any(s.running for s in now.values()):
                 base = None
             elif base is None or not _still(base, now):
                 base = now
             elif _pollers_cycled(base, now):
-                return True
+                # the sockets last: bytes written while every thread sampled blocked woke a
+                # reader (which the thread samples see run); only bytes no thread will read
+                # until a timer fires (Nagle's small writes, held for an acknowledgement) are
+                # left for this, one dump a wait instead of one a sample
+                if self.sockets_waiting() == 0:
+                    return True
+                base = None
             if deadline is not None and time.perf_counter() > deadline:
+                self.sockets_waiting()  # :attr:`connected` as of the wait's end all the same
                 return False
-            time.sleep(NAP_S)
+            if nap_s > 0:
+                time.sleep(nap_s)
 
 
 def _untimed_wait(call: list[int]) -> bool:

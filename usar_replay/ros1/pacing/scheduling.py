@@ -118,9 +118,11 @@ class OneCpu:
 
 
 @contextlib.contextmanager
-def watching_elsewhere() -> Iterator[None]:
+def watching_elsewhere() -> Iterator[bool]:
     """The calling thread, pinned to the graph's one CPU, runs on another one for the block
-    (the module doc); unpinned, or where no other CPU may be used, it stays where it is."""
+    (the module doc); unpinned, or where no other CPU may be used, it stays where it is.
+    Yields whether it moved (then it may sample without pause: the graph does not wait for
+    it)."""
     home = os.sched_getaffinity(0)
     others = set(range(os.cpu_count() or 1)) - home
     moved = False
@@ -129,7 +131,7 @@ def watching_elsewhere() -> Iterator[None]:
             os.sched_setaffinity(0, others)  # 0: this thread
             moved = True
     try:
-        yield
+        yield moved
     finally:
         if moved:
             os.sched_setaffinity(0, home)

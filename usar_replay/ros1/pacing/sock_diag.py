@@ -41,6 +41,7 @@ NLMSG_ERROR = 2
 NLMSG_DONE = 3
 UDIAG_SHOW_RQLEN = 0x10
 UNIX_DIAG_RQLEN = 4
+TCP_ESTABLISHED = 1
 TCP_LISTEN = 10
 _TCP_TIME_WAIT = 6
 _TCP_CLOSE_WAIT = 8
@@ -148,6 +149,43 @@ class SockDiag:
         for family in (socket.AF_INET, socket.AF_INET6):
             yield from self.inet(family, socket.IPPROTO_UDP, 0xFFFFFFFF)
         yield from self.unix()
+
+    def busy(self) -> tuple[dict[int, int], frozenset[int]]:
+        """What :meth:`all` says, as the idle check needs it, at a fraction of the cost (it
+        asks on every wait, twice a tick): the sockets with bytes waiting (inode -> bytes, as
+        :attr:`SockQueue.waiting` counts them), and the inodes of the established TCP
+        connections."""
+        waiting: dict[int, int] = {}
+        established: set[int] = set()
+        if self._one_tcp_dump:
+            req = _INET_REQ_V1.pack(socket.AF_INET, 0, 0, 0, TCP_STATES, 0)
+            try:
+                tcp = list(self._dump(req, TCPDIAG_GETSOCK))
+            except OSError:
+                self._one_tcp_dump = False
+        if not self._one_tcp_dump:
+            tcp = [
+                body
+                for family in (socket.AF_INET, socket.AF_INET6)
+                for body in self._dump(_INET_REQ.pack(family, socket.IPPROTO_TCP, 0, 0, TCP_STATES))
+            ]
+        unpack = _INET_MSG.unpack_from
+        for body in tcp:
+            if len(body) >= _INET_MSG.size:
+                _f, state, _t, _r, _exp, rq, wq, _uid, ino = unpack(body)
+                if state == TCP_ESTABLISHED:
+                    established.add(ino)
+                queued = rq if state == TCP_LISTEN else rq + wq
+                if queued > 0:
+                    waiting[ino] = queued
+        for family in (socket.AF_INET, socket.AF_INET6):
+            for q in self.inet(family, socket.IPPROTO_UDP, 0xFFFFFFFF):
+                if q.rqueue > 0:
+                    waiting[q.inode] = q.rqueue
+        for q in self.unix():
+            if q.rqueue > 0:
+                waiting[q.inode] = q.rqueue
+        return waiting, frozenset(established)
 
     def _dump(self, request: bytes, kind: int = SOCK_DIAG_BY_FAMILY) -> Iterator[bytes]:
         self._seq += 1

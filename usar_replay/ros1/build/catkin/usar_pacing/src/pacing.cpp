@@ -31,11 +31,14 @@
 // register; the other arguments are forwarded untouched.
 
 #include <dlfcn.h>
+#include <linux/futex.h>
 #include <sys/syscall.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdarg>
+#include <climits>
 #include <cstdint>
 #include <cstdio>
 
@@ -59,6 +62,11 @@ using PrintFn = void (*)(void*, void*, int, const char*, int, const char*, const
 using PrintStreamFn = void (*)(void*, void*, int, const void*, const char*, int, const char*);
 
 constexpr const char* kNow = "_ZN3ros4Time3nowEv";
+constexpr const char* kSetNow = "_ZN3ros4Time6setNowERKS0_";
+constexpr const char* kTimeShutdown = "_ZN3ros4Time8shutdownEv";
+constexpr const char* kUseSystemTime = "_ZN3ros4Time13useSystemTimeEv";
+constexpr const char* kDurationSleep = "_ZNK3ros8Duration5sleepEv";
+constexpr const char* kSleepUntil = "_ZN3ros4Time10sleepUntilERKS0_";
 constexpr const char* kOk = "_ZN3ros2okEv";
 constexpr const char* kSpinOnce = "_ZN3ros8spinOnceEv";
 constexpr const char* kGlobalQueue = "_ZN3ros22getGlobalCallbackQueueEv";
@@ -111,14 +119,39 @@ bool ros_ok() {
   return ok != nullptr && ok();
 }
 
-// Wait as roscpp's sim-time Duration::sleep does: 1 ms naps until the time moves.
+// The process's sim-time clock: bumped, and its waiters woken, each time roscpp sets the time
+// (its /clock subscription calls ros::Time::setNow) and when ros::Time shuts down.
+std::atomic<uint32_t> g_clock{0};
+std::atomic<bool> g_stopped{false};  // ros::Time::shutdown() was called
+
+void bump_clock() {
+  g_clock.fetch_add(1, std::memory_order_release);
+  syscall(SYS_futex, reinterpret_cast<uint32_t*>(&g_clock), FUTEX_WAKE_PRIVATE, INT_MAX, nullptr,
+          nullptr, 0);
+}
+
+// Wait until the clock moves past `seen` (read before the caller last looked at the time, so a
+// change in between returns at once). The one-second wall-clock limit is only a safety net: the
+// caller looks at the time again and waits once more.
+void wait_clock(uint32_t seen) {
+  const timespec limit{1, 0};
+  syscall(SYS_futex, reinterpret_cast<uint32_t*>(&g_clock), FUTEX_WAIT_PRIVATE, seen, &limit,
+          nullptr, 0);
+}
+
+bool sim_time() {
+  static BoolFn use_system_time = any<BoolFn>(kUseSystemTime);
+  return use_system_time != nullptr && !use_system_time();
+}
+
+// Wait until sim time moves on from `last` (-1: shutting down).
 int64_t wait_for_new_time(int64_t last) {
-  const timespec nap{0, 1000000};
   for (;;) {
-    nanosleep(&nap, nullptr);
+    uint32_t seen = g_clock.load(std::memory_order_acquire);
     if (!ros_ok()) return -1;
     int64_t now = sim_now();
     if (now != last) return now;
+    wait_clock(seen);
   }
 }
 
@@ -225,4 +258,73 @@ extern "C" void usar_print_stream(void* filter, void* logger, int level, const v
   static PrintStreamFn real = next<PrintStreamFn>(kPrintStream);
   poll_point(Kind::kPrint);
   real(filter, logger, level, ss, file, line, function);
+}
+
+// ros::Time::setNow(const Time&): roscpp's /clock callback. The new time wakes the threads
+// sleeping in sim time at once, where roscpp's own sleeps notice it at their next 1 ms nap.
+using SetNowFn = void (*)(const RosTime*);
+extern "C" void usar_set_now(const RosTime* t) __asm__("_ZN3ros4Time6setNowERKS0_");
+extern "C" void usar_set_now(const RosTime* t) {
+  static SetNowFn real = next<SetNowFn>(kSetNow);
+  real(t);
+  bump_clock();
+}
+
+// ros::Time::shutdown(): the end of every sim-time sleep (roscpp's g_stopped).
+extern "C" void usar_time_shutdown() __asm__("_ZN3ros4Time8shutdownEv");
+extern "C" void usar_time_shutdown() {
+  static VoidFn real = next<VoidFn>(kTimeShutdown);
+  real();
+  g_stopped.store(true, std::memory_order_release);
+  bump_clock();
+}
+
+// ros::Duration::sleep() const (ros::Rate::sleep() calls it) and ros::Time::sleepUntil(): in sim
+// time, roscpp's versions nap 1 ms at a time until ros::Time::now() reaches the end, so a
+// sleeping node looks idle to usar while it has not yet seen the new /clock, and usar must wait
+// for every such napper to wake once more before it may call the graph idle (a millisecond or
+// more a tick). These wait on the process's clock instead: the thread wakes when the time is
+// set, as part of taking in /clock, and is blocked (not polling) in between. Same results as
+// roscpp's: true once the end is reached, false if time went backwards or ros::Time shut down
+// first. With wall time (no /use_sim_time) roscpp's own run.
+using DurationSleepFn = bool (*)(const RosTime*);
+
+namespace {
+
+int64_t ns_of(const RosTime& t) { return static_cast<int64_t>(t.sec) * 1000000000LL + t.nsec; }
+
+enum class Slept { kReached, kNoWait, kBackwards, kStopped };
+
+// roscpp's sim-time loop, waiting on the clock instead of napping
+Slept sleep_until_ns(int64_t start, int64_t end) {
+  bool waited = false;
+  for (;;) {
+    uint32_t seen = g_clock.load(std::memory_order_acquire);
+    if (g_stopped.load(std::memory_order_acquire)) return Slept::kStopped;
+    int64_t now = sim_now();
+    if (now < 0) return Slept::kStopped;
+    if (now < start) return Slept::kBackwards;
+    if (now >= end) return waited ? Slept::kReached : Slept::kNoWait;
+    wait_clock(seen);
+    waited = true;
+  }
+}
+
+}  // namespace
+
+extern "C" bool usar_duration_sleep(const RosTime* self) __asm__("_ZNK3ros8Duration5sleepEv");
+extern "C" bool usar_duration_sleep(const RosTime* self) {
+  static DurationSleepFn real = next<DurationSleepFn>(kDurationSleep);
+  int64_t start = sim_time() ? sim_now() : -1;
+  if (start < 0) return real(self);
+  int64_t end = start == 0 ? INT64_MAX : start + ns_of(*self);  // roscpp: time 0 sleeps for good
+  return sleep_until_ns(start, end) == Slept::kReached;  // roscpp: false if it never waited
+}
+
+extern "C" bool usar_sleep_until(const RosTime* end) __asm__("_ZN3ros4Time10sleepUntilERKS0_");
+extern "C" bool usar_sleep_until(const RosTime* end) {
+  static DurationSleepFn real = next<DurationSleepFn>(kSleepUntil);
+  int64_t start = sim_time() ? sim_now() : -1;
+  if (start < 0) return real(end);
+  return sleep_until_ns(start, ns_of(*end)) != Slept::kBackwards;  // roscpp: true when stopped
 }
