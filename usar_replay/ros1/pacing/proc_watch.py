@@ -55,16 +55,18 @@ class ProcWatch:
         pids = descendants(self.launcher, children)
         return pids if self.launcher_is_package else pids[1:]
 
-    def update(self) -> None:
-        """Note the package's processes running now (call once per tick)."""
-        for pid in self.package():
+    def update(self, children: dict[int, list[int]] | None = None) -> None:
+        """Note the package's processes running now (call once per tick); from ``children``
+        (a walk just made) when given."""
+        for pid in self.package(children):
             if pid not in self.seen:
                 with contextlib.suppress(OSError), open(f"/proc/{pid}/comm") as f:
                     self.seen[pid] = f.read().strip()
 
-    def ended(self) -> bool:
-        """True once every package process seen has exited (at least one was seen)."""
-        self.update()
+    def ended(self, children: dict[int, list[int]] | None = None) -> bool:
+        """True once every package process seen has exited (at least one was seen); the
+        processes running now from ``children`` (a walk just made) when given."""
+        self.update(children)
         if not self.seen:
             return False
         done = True
