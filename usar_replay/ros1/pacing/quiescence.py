@@ -229,6 +229,7 @@ class Quiescence:
         self.own_tid = own_tid
         self.diag = SockDiag()
         self._loadavg = os.open("/proc/loadavg", os.O_RDONLY)
+        self._last_pid = b""
         self.children = ChildrenFiles()
         """The tree's walk (:meth:`ChildrenFiles.walk` of :attr:`root`), files kept open."""
         self._threads: dict[int, _Thread] = {}
@@ -374,6 +375,19 @@ class Quiescence:
         self.samples += 1
         self.untimed = frozenset(untimed)
         return out
+
+    def created(self) -> bool:
+        """Whether a process or thread was created in the caller's PID namespace since the
+        last call (``/proc/loadavg``'s last field, the namespace's last PID, moved; True at the
+        first call). In the kernel sandbox the namespace is the run's: when this is False,
+        the tree's processes and threads are those of the last walk, or fewer."""
+        try:
+            last = os.pread(self._loadavg, 128, 0).split()[-1]
+        except (OSError, IndexError):
+            return True
+        new = last != self._last_pid
+        self._last_pid = last
+        return new
 
     def _nothing_runnable(self) -> bool:
         """No thread of the machine runnable but the caller (``/proc/loadavg``'s fourth field
