@@ -365,10 +365,13 @@ class Bridge:
         assert self.quiet is not None
         self._refresh()
         waited = time.perf_counter()  # pacing only: never reaches a message
-        # the graph keeps its CPU to itself (:mod:`.scheduling`); on another one the samples
-        # need no pause between them
-        with watching_elsewhere() as moved:
-            idle = self.quiet.wait(cap, nap_s=0.0 if moved else NAP_S)
+        # the graph keeps its CPU to itself (:mod:`.scheduling`). The pause between samples
+        # stays even on another CPU: it is when the bridge's own threads (rospy's queue
+        # threads, which write move_base's result) get the interpreter's lock. Sampled
+        # without it, a result still waiting for the lock looked delivered, and the package's
+        # reaction to it moved by one or two ticks from run to run
+        with watching_elsewhere():
+            idle = self.quiet.wait(cap, nap_s=NAP_S)
         self.waited_s += time.perf_counter() - waited
         return idle
 
