@@ -53,7 +53,6 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 import traceback
 import xmlrpc.client
@@ -78,9 +77,8 @@ from usar_replay.ros1.build.debian import DIST_PACKAGES
 from usar_replay.ros1.build.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
 from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
-from usar_replay.ros1.pacing.quiescence import NAP_S, Quiescence
-from usar_replay.ros1.pacing.scheduling import watching_elsewhere
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
+from usar_replay.ros1.pacing.watcher import Watcher
 from usar_replay.ros1.publishing import Publishing
 from usar_replay.ros1.receiving import Inbox
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
@@ -162,9 +160,7 @@ class Bridge:
         # the graph's own topics, recorded; asked of the master when its call log grew
         self.topics = TopicRecorder(NODE, self.uri, run / run_files.MASTER_LOG)
         self.sim_topics: list[str] = list(setup["sim_topics"])
-        self.quiet: Quiescence | None = None
-        self._kids: dict[int, list[int]] | None = None
-        """The last walk of the process tree (:meth:`_refresh`)."""
+        self.quiet: Watcher | None = None
         self.capped = 0
         """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
         self.holds = 0
@@ -218,7 +214,7 @@ class Bridge:
                 master.setParam(NODE, _ros_param(key), _xmlrpc_value(value))
         self._start_node()
         self.out.advertise(self.sim_topics, self.robots)
-        self.quiet = Quiescence(own_tid=threading.get_native_id())
+        self.quiet = Watcher(os.getpid())
         expected: list[str] = []
         if self.config.get("launch"):
             plan = self._write_launch_plan(ws)
@@ -273,8 +269,7 @@ class Bridge:
             graph.watch.update()
 
         def idle(cap_s: float) -> bool:
-            self._refresh()
-            return quiet.wait(cap_s)
+            return self._wait_idle(cap_s)
 
         try:
             wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
@@ -349,29 +344,13 @@ class Bridge:
         # rubric's cmd_vel_one_publisher line reports the fight
         return settled + got + driven
 
-    def _refresh(self) -> dict[int, list[int]]:
-        """The idle check's processes and threads found again, and which are the package's:
-        one walk of ``/proc`` answers both. Walked again only when a process or thread was
-        created in the run since the last walk (:meth:`.Quiescence.created`): most ticks
-        create none, and a walk costs some 0.3 ms. Returns the walk."""
-        assert self.quiet is not None and self.graph is not None
-        if self._kids is None or self.quiet.created():
-            kids = self._kids = self.quiet.children.walk(self.quiet.root)
-            self.quiet.refresh(self.graph.watch.package(kids), kids)
-        return self._kids
-
     def _wait_idle(self, cap: float | None) -> bool:
-        """Until the graph is idle (:mod:`.quiescence`; True), at most ``cap`` wall seconds."""
-        assert self.quiet is not None
-        self._refresh()
+        """Until the graph is idle (:mod:`.quiescence`, asked of :mod:`.watcher`; True), at
+        most ``cap`` wall seconds."""
+        assert self.quiet is not None and self.graph is not None
+        watch = self.graph.watch
         waited = time.perf_counter()  # pacing only: never reaches a message
-        # the graph keeps its CPU to itself (:mod:`.scheduling`). The pause between samples
-        # stays even on another CPU: it is when the bridge's own threads (rospy's queue
-        # threads, which write move_base's result) get the interpreter's lock. Sampled
-        # without it, a result still waiting for the lock looked delivered, and the package's
-        # reaction to it moved by one or two ticks from run to run
-        with watching_elsewhere():
-            idle = self.quiet.wait(cap, nap_s=NAP_S)
+        idle = self.quiet.wait(cap, watch.launcher, watch.launcher_is_package)
         self.waited_s += time.perf_counter() - waited
         return idle
 
@@ -419,7 +398,7 @@ class Bridge:
         if ended is not None:
             return ended
         watch = graph.watch
-        gone = watch.ended(self._refresh())
+        gone = watch.ended(quiet.kids)  # the walk of this tick's last wait
         # signs of a shutdown in this tick, none of which costs a system call: a main thread
         # that entered a wait without a timeout (roscpp's join at ros::shutdown), a package
         # process that exited, a connection that closed (then the master is asked which nodes

@@ -34,6 +34,7 @@ from usar_replay.ros1.build.jail import BUILD_WALL_S
 from usar_replay.ros1.build.workspace import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
+from usar_replay.ros1.pacing import watcher
 from usar_replay.ros1.pacing.scheduling import OneCpu
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
@@ -197,6 +198,7 @@ class Ros1Process(MissionProcess):
                     cpu=cpus.graph_cpu if cpus else None,
                     realtime=cpus is not None,
                     passes_on=b"usar_replay.ros1.bridge",
+                    spares=watcher.MODULE.encode(),
                 )
             self._one_cpu.apply()
         super().send(t_ns, inputs)

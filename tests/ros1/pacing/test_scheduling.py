@@ -43,27 +43,6 @@ def test_without_a_cpu_set_of_its_own_the_graph_is_only_pinned() -> None:
         child.wait()
 
 
-def test_the_watching_thread_leaves_the_graphs_cpu_and_comes_back() -> None:
-    from usar_replay.ros1.pacing.scheduling import watching_elsewhere
-
-    before = os.sched_getaffinity(0)
-    cpus = sorted(before)
-    try:
-        os.sched_setaffinity(0, {cpus[-1]})  # as the recorder pins the bridge
-        with watching_elsewhere():
-            inside = os.sched_getaffinity(0)
-        assert os.sched_getaffinity(0) == {cpus[-1]}
-        if len(cpus) > 1:
-            assert cpus[-1] not in inside and inside
-        else:
-            assert inside == {cpus[-1]}  # no other CPU: it stays
-        os.sched_setaffinity(0, before)  # not pinned: it stays where it is
-        with watching_elsewhere():
-            assert os.sched_getaffinity(0) == before
-    finally:
-        os.sched_setaffinity(0, before)
-
-
 def test_the_named_process_passes_real_time_priority_on_and_no_other_does(
     tmp_path: Path,
 ) -> None:
@@ -83,5 +62,26 @@ def test_the_named_process_passes_real_time_priority_on_and_no_other_does(
         assert os.sched_getscheduler(other.pid) == os.SCHED_RR | os.SCHED_RESET_ON_FORK
     finally:
         for proc in (bridge, other):
+            proc.kill()
+            proc.wait()
+
+
+def test_the_spared_process_keeps_its_cpus_and_policy(tmp_path: Path) -> None:
+    """The idle check's watcher (``spares``) is left as it started: its CPUs and SCHED_OTHER,
+    so it never takes the graph's CPU from the graph; the process beside it is pinned."""
+    (tmp_path / "fake_watcher.py").write_text("import time\ntime.sleep(60)\n")
+    watcher = subprocess.Popen([sys.executable, "-m", "fake_watcher"], cwd=tmp_path)
+    other = start_child("import time\ntime.sleep(60)")
+    cpus = sorted(os.sched_getaffinity(0))
+    try:
+        pin = OneCpu(watcher.pid, cpu=cpus[-1], realtime=False, spares=b"fake_watcher")
+        wait_for(lambda: pin.apply() > 0 or watcher.pid in pin.done, "the watcher's threads")
+        pin.root = other.pid
+        wait_for(lambda: pin.apply() > 0 or other.pid in pin.done, "the other's threads")
+        assert os.sched_getaffinity(watcher.pid) == set(cpus)
+        assert os.sched_getscheduler(watcher.pid) == os.SCHED_OTHER
+        assert os.sched_getaffinity(other.pid) == {cpus[-1]}
+    finally:
+        for proc in (watcher, other):
             proc.kill()
             proc.wait()

@@ -2,7 +2,8 @@
 
 One concern, the pacing side, in one folder: ``graph_start`` (when ``/clock`` may start: every
 node up, every subscription connected, the graph idle), ``quiescence`` (the graph has finished
-reacting to a tick: threads blocked, sockets drained, clock pollers cycled), ``sock_diag``
+reacting to a tick: threads blocked, sockets drained, clock pollers cycled), ``watcher`` (that
+check in a process of its own, which the bridge waits on), ``sock_diag``
 (bytes waiting in the graph's sockets, asked of the kernel), ``shutdown_watch`` (a node's
 ``ros::shutdown()`` held in the tick it began), ``proc_watch`` (the package's processes and
 their exit statuses), ``scheduling`` (the graph's CPU set and real-time policy) and ``shim``
@@ -14,7 +15,7 @@ The bridge (``ros1.bridge``) sits above this and the build side; nothing here im
 from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
 from usar_replay.ros1.pacing.proc_watch import ProcWatch
 from usar_replay.ros1.pacing.quiescence import Quiescence, descendants
-from usar_replay.ros1.pacing.scheduling import OneCpu, watching_elsewhere
+from usar_replay.ros1.pacing.scheduling import OneCpu
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch
 from usar_replay.ros1.pacing.sock_diag import SockDiag
 
@@ -28,5 +29,4 @@ __all__ = [
     "launch_nodes",
     "registered_nodes",
     "wait_until_ready",
-    "watching_elsewhere",
 ]

@@ -224,9 +224,14 @@ class _Thread:
 class Quiescence:
     """Samples one process tree (see the module docstring); one instance per bridge."""
 
-    def __init__(self, root: int | None = None, own_tid: int | None = None) -> None:
+    def __init__(
+        self, root: int | None = None, own_tid: int | None = None, own_pid: int | None = None
+    ) -> None:
         self.root = os.getpid() if root is None else root
         self.own_tid = own_tid
+        """The asking thread, when it is in the tree (left out)."""
+        self.own_pid = own_pid
+        """The asking process, when it is in the tree (left out: :mod:`.watcher`)."""
         self.diag = SockDiag()
         self._loadavg = os.open("/proc/loadavg", os.O_RDONLY)
         self._last_pid = b""
@@ -268,7 +273,7 @@ class Quiescence:
         """Find the tree's processes and threads again (new nodes, exited ones); ``package``:
         the pids of the package's processes (the nodes); ``children``: a walk of the tree
         just made (:func:`children_map` of the root)."""
-        self._pids = descendants(self.root, children)
+        self._pids = [p for p in descendants(self.root, children) if p != self.own_pid]
         seen: set[int] = set()
         for pid in self._pids:
             with contextlib.suppress(OSError):

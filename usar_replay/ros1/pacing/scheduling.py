@@ -21,23 +21,19 @@ own policy): every thread of the run, the bridge's included, found in the run's 
 (``tasks``) or, without one, as the bridge's descendants. New threads are picked up before each
 tick. Where the machine refuses (not root), the run goes on unpinned, as before.
 
-The one thread that need not share the graph's CPU is the bridge's main thread while it only
-watches (:func:`watching_elsewhere`): the idle check samples ``/proc`` and netlink some
-thousands of times a run, and on the graph's CPU every sample is time the graph waits for.
-It moves to another CPU for the wait and back before it publishes again, so whatever it
-publishes is still written on the graph's CPU before any node there runs.
+The one process left alone is the idle check's watcher (:mod:`.watcher`): no real-time
+priority, so on the graph's CPU it runs only while the graph does not.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator
 from pathlib import Path
 
 from usar_replay.ros1.pacing.quiescence import descendants
 
-__all__ = ["OneCpu", "watching_elsewhere"]
+__all__ = ["OneCpu"]
 
 PRIORITY = 1
 _POLICY = os.SCHED_RR | os.SCHED_RESET_ON_FORK
@@ -58,8 +54,13 @@ class OneCpu:
         *,
         realtime: bool = True,
         passes_on: bytes = b"",
+        spares: bytes = b"",
     ) -> None:
         self.root = root
+        self.spares = spares
+        """The module (``python -m``) of the process whose threads are left as they are:
+        the idle check's watcher (:mod:`.watcher`), which must not take the graph's CPU from
+        it."""
         self.passes_on = passes_on
         """A word of the command line of the one process whose threads get SCHED_RR without
         the reset flag (the bridge, usar's own code: rospy starts a thread per new connection,
@@ -85,18 +86,20 @@ class OneCpu:
                 out += [int(t) for t in os.listdir(f"/proc/{pid}/task")]
         return out
 
-    def _policy(self, tid: int) -> int:
-        """RR with the reset flag, or plain RR for the threads of the process named by
-        :attr:`passes_on`."""
-        if not self.passes_on:
+    def _policy(self, tid: int) -> int | None:
+        """RR with the reset flag, plain RR for the threads of the process named by
+        :attr:`passes_on`, None (left alone) for those of the one named by :attr:`spares`."""
+        if not self.passes_on and not self.spares:
             return _POLICY
         with contextlib.suppress(OSError, ValueError):
             status = Path(f"/proc/{tid}/status").read_text()
             tgid = int(status.split("\nTgid:", 1)[1].split()[0])
-            if self._heir is None:
-                argv = Path(f"/proc/{tgid}/cmdline").read_bytes().split(b"\0")
-                if argv[1:3] == [b"-m", self.passes_on]:  # python -m ... (not bwrap's argv)
-                    self._heir = tgid  # the first such process: started before the graph
+            argv = Path(f"/proc/{tgid}/cmdline").read_bytes().split(b"\0")
+            if self.spares and argv[1:3] == [b"-m", self.spares]:
+                return None
+            # python -m ... (not bwrap's argv); the first such process, started before the graph
+            if self._heir is None and self.passes_on and argv[1:3] == [b"-m", self.passes_on]:
+                self._heir = tgid
             if tgid == self._heir:
                 return os.SCHED_RR
         return _POLICY
@@ -106,32 +109,15 @@ class OneCpu:
         new = sorted(t for t in self._tids() if t not in self.done)
         for tid in new:
             self.done.add(tid)
+            policy = self._policy(tid)
+            if policy is None:
+                continue
             try:
                 os.sched_setaffinity(tid, {self.cpu})
                 if not self.refused:
-                    os.sched_setscheduler(tid, self._policy(tid), os.sched_param(PRIORITY))
+                    os.sched_setscheduler(tid, policy, os.sched_param(PRIORITY))
             except ProcessLookupError:
                 continue
             except PermissionError as err:
                 self.refused = str(err)
         return len(new)
-
-
-@contextlib.contextmanager
-def watching_elsewhere() -> Iterator[bool]:
-    """The calling thread, pinned to the graph's one CPU, runs on another one for the block
-    (the module doc); unpinned, or where no other CPU may be used, it stays where it is.
-    Yields whether it moved (then it may sample without pause: the graph does not wait for
-    it)."""
-    home = os.sched_getaffinity(0)
-    others = set(range(os.cpu_count() or 1)) - home
-    moved = False
-    if len(home) == 1 and others:
-        with contextlib.suppress(OSError):
-            os.sched_setaffinity(0, others)  # 0: this thread
-            moved = True
-    try:
-        yield moved
-    finally:
-        if moved:
-            os.sched_setaffinity(0, home)

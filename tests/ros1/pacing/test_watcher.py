@@ -1,0 +1,49 @@
+"""ros1/pacing/watcher: the idle check in a process of its own, asked over a socket.
+
+Real processes: the watcher is started on this test's process tree (as the bridge starts it
+on its own), a busy child keeps the tree from going idle until the cap, and once it is gone
+the tree is idle; the watcher leaves itself out of what it watches."""
+
+from __future__ import annotations
+
+import os
+
+from proctools import child as start_child
+from proctools import wait_for
+
+from usar_replay.ros1.pacing.watcher import Watcher
+
+
+def test_the_watcher_answers_for_the_tree_and_leaves_itself_out() -> None:
+    watcher = Watcher(os.getpid())
+    busy = start_child("while True: pass")
+    try:
+        assert watcher.wait(0.2, launcher=busy.pid, launcher_is_package=True) is False
+        assert watcher.kids is not None and busy.pid in watcher.kids[os.getpid()]
+        assert watcher.proc.pid in watcher.kids[os.getpid()]  # walked, but not sampled
+        assert watcher.samples > 0
+        busy.kill()
+        busy.wait()
+        # this process's threads are blocked on the socket; the watcher itself keeps running
+        wait_for(lambda: watcher.wait(1.0), "the tree idle without the busy child")
+        assert watcher.long_waits() == []
+    finally:
+        if busy.poll() is None:
+            busy.kill()
+            busy.wait()
+        watcher.close()
+    assert watcher.proc.returncode == 0
+
+
+def test_a_watcher_that_ended_is_a_clear_error() -> None:
+    watcher = Watcher(os.getpid())
+    watcher.proc.kill()
+    watcher.proc.wait()
+    try:
+        watcher.wait(0.1)
+    except RuntimeError as err:
+        assert "idle check" in str(err)
+    else:
+        raise AssertionError("no error")
+    finally:
+        watcher.close()

@@ -1,0 +1,158 @@
+"""The idle check in a process of its own: the bridge waits for its answer, blocked.
+
+Why: the bridge is one Python process, and its own threads are part of the graph (rospy's
+queue threads write move_base's result and status, its receiving threads take in what the
+nodes publish). Sampled from the bridge's main thread, every sample held the interpreter's
+lock (the GIL) that those threads need: the samples had to pause (0.2 ms) between them to let
+them run, or a result waiting for the lock looked delivered and the package's reaction moved a
+tick from run to run. Here the samples run in a process of their own, with no lock to share
+and no pause, while the bridge's main thread is blocked on this socket like any idle thread.
+
+The recorder gives the watcher no real-time priority (:class:`.scheduling.OneCpu` passes it
+over): beside the graph's ``SCHED_RR`` threads on one CPU it runs only when the graph does
+not, and on another CPU it costs the graph nothing.
+
+Protocol: one JSON object per line each way on the socket (both ends are usar's own code, in
+the same sandbox; nothing is unpickled). Each wait first finds the tree's processes and threads
+again if the run created one since the last wait (:meth:`.Quiescence.created`), then waits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import socket
+import subprocess
+import sys
+from collections.abc import Collection
+from typing import Any
+
+from usar_replay.ros1.pacing.quiescence import Quiescence, descendants
+
+__all__ = ["MODULE", "Watcher", "main"]
+
+MODULE = "usar_replay.ros1.pacing.watcher"
+"""What the watcher's command line runs (``python -m``): how :class:`.OneCpu` knows it."""
+
+
+class Watcher:
+    """The bridge's side: starts the watcher on the tree under ``root`` (the bridge's pid)
+    and asks it; the answers' details stay as attributes, as on :class:`.Quiescence`."""
+
+    def __init__(self, root: int) -> None:
+        mine, theirs = socket.socketpair()
+        # blocking, whatever default timeout the caller's process set (rospy sets one, and a
+        # socket with a timeout is non-blocking underneath: the watcher read "end of file")
+        mine.setblocking(True)
+        theirs.setblocking(True)
+        with theirs:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", MODULE, str(theirs.fileno()), str(root)],
+                pass_fds=(theirs.fileno(),),
+                stdin=subprocess.DEVNULL,
+            )
+        self._sock = mine
+        self._lines = mine.makefile("rb")
+        self.untimed: frozenset[int] = frozenset()
+        """As :attr:`.Quiescence.untimed`, at the last wait's end."""
+        self.connected: frozenset[int] = frozenset()
+        """As :attr:`.Quiescence.connected`, at the last wait's end."""
+        self.samples = 0
+        self.kids: dict[int, list[int]] | None = None
+        """The tree's last walk (processes -> their children)."""
+
+    def _ask(self, request: dict[str, Any]) -> dict[str, Any]:
+        try:
+            self._sock.sendall(json.dumps(request).encode() + b"\n")
+            line = self._lines.readline()
+        except OSError:
+            line = b""
+        if not line:
+            code = self.proc.poll()
+            raise RuntimeError(f"usar's idle check (its watcher process) ended (exit {code})")
+        answer: dict[str, Any] = json.loads(line)
+        return answer
+
+    def wait(
+        self, cap_s: float | None, launcher: int | None = None, launcher_is_package: bool = False
+    ) -> bool:
+        """The tree found again where it changed (the package: ``launcher``'s descendants,
+        ``launcher`` itself only when ``launcher_is_package``), then
+        :meth:`.Quiescence.wait`."""
+        got = self._ask(
+            {"op": "wait", "cap": cap_s, "launcher": launcher, "own": launcher_is_package}
+        )
+        self.untimed = frozenset(got["untimed"])
+        self.connected = frozenset(got["connected"])
+        self.samples = int(got["samples"])
+        if got["kids"] is not None:
+            self.kids = {int(k): v for k, v in got["kids"].items()}
+        return bool(got["idle"])
+
+    def long_waits(self) -> list[int]:
+        """:meth:`.Quiescence.long_waits`."""
+        return list(self._ask({"op": "long_waits"})["long"])
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self._sock.sendall(b'{"op": "stop"}\n')
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.proc.wait(timeout=2.0)
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        self._lines.close()
+        self._sock.close()
+
+
+def _package(kids: dict[int, list[int]], launcher: int | None, own: bool) -> Collection[int]:
+    """The package's processes in the walk (as :meth:`.ProcWatch.package`)."""
+    if launcher is None:
+        return ()
+    pids = descendants(launcher, kids)
+    return pids if own else pids[1:]
+
+
+def serve(sock: socket.socket, root: int) -> None:
+    """Answer the bridge until it says stop or goes."""
+    quiet = Quiescence(root=root, own_pid=os.getpid())
+    lines = sock.makefile("rb")
+    try:
+        for line in lines:
+            request = json.loads(line)
+            op = request.get("op")
+            if op == "wait":
+                kids = None
+                if quiet.created():
+                    kids = quiet.children.walk(root)
+                    quiet.refresh(_package(kids, request["launcher"], request["own"]), kids)
+                idle = quiet.wait(request["cap"], nap_s=0.0)
+                answer: dict[str, Any] = {
+                    "idle": idle,
+                    "untimed": sorted(quiet.untimed),
+                    "connected": sorted(quiet.connected),
+                    "samples": quiet.samples,
+                    "kids": kids,
+                }
+            elif op == "long_waits":
+                answer = {"long": quiet.long_waits()}
+            else:
+                return
+            sock.sendall(json.dumps(answer).encode() + b"\n")
+    finally:
+        quiet.close()
+
+
+def main(argv: list[str]) -> None:
+    """``python -m usar_replay.ros1.pacing.watcher FD ROOT``."""
+    # no real-time priority of its own, whatever it was started with (module docstring)
+    with contextlib.suppress(OSError, AttributeError):
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    with socket.socket(fileno=int(argv[0])) as sock, contextlib.suppress(OSError):
+        sock.setblocking(True)
+        serve(sock, int(argv[1]))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
