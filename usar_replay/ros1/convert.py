@@ -10,6 +10,7 @@ the ROS 1 message modules by name, from Debian's dist-packages).
 
 from __future__ import annotations
 
+import functools
 import importlib
 from typing import Any
 
@@ -24,8 +25,10 @@ _ROS1_LEVELS = {1: msgs.Log.DEBUG, 2: msgs.Log.INFO, 4: msgs.Log.WARN, 8: msgs.L
 _ROS1_LEVELS[16] = msgs.Log.FATAL
 
 
+@functools.cache
 def ros1_class(msgtype: str) -> Any:
-    """``geometry_msgs/msg/Twist`` -> rospy's ``geometry_msgs.msg.Twist``."""
+    """``geometry_msgs/msg/Twist`` -> rospy's ``geometry_msgs.msg.Twist`` (looked up once per
+    type: the bridge converts some twenty messages a tick)."""
     pkg, _, name = msgtype.split("/")
     return getattr(importlib.import_module(f"{pkg}.msg"), name)
 

@@ -98,6 +98,7 @@ class Graph:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self.watch.close()
 
 
 def tail(path: Path, lines: int = 20) -> str:

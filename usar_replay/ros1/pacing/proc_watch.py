@@ -13,6 +13,7 @@ process seen here has exited. A zombie's exit status is in its ``/proc/<pid>/sta
 from __future__ import annotations
 
 import contextlib
+import os
 from dataclasses import dataclass, field
 
 from usar_replay.ros1.pacing.quiescence import descendants
@@ -20,12 +21,18 @@ from usar_replay.ros1.pacing.quiescence import descendants
 __all__ = ["ProcWatch"]
 
 
-def _stat(pid: int) -> tuple[str, int | None] | None:
-    """(state, exit status where shown) of a process, None once it is gone."""
+def _stat(pid: int, fd: int | None = None) -> tuple[str, int | None] | None:
+    """(state, exit status where shown) of a process, None once it is gone; read from ``fd``
+    (its ``stat`` file, kept open) when given."""
     try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            raw = f.read()
+        if fd is None:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                raw = f.read()
+        else:
+            raw = os.pread(fd, 4096, 0)
     except OSError:
+        return None
+    if not raw:
         return None
     fields = raw[raw.rfind(b")") + 2 :].split()
     state = fields[0].decode()
@@ -47,6 +54,9 @@ class ProcWatch:
     """pid -> exit status (waitpid's encoding) of the ones seen as zombies."""
     exited: set[int] = field(default_factory=set)
     """The ones seen exited (zombies or gone) by :meth:`ended`."""
+    _fds: dict[int, int] = field(default_factory=dict, repr=False)
+    """pid -> its ``stat`` file, opened when first seen and read again each tick (it keeps
+    naming that process: once it is collected the read fails, even if its pid is reused)."""
 
     def package(self, children: dict[int, list[int]] | None = None) -> list[int]:
         """The package's processes now (the launcher's descendants; with roslaunch, not
@@ -62,6 +72,7 @@ class ProcWatch:
             if pid not in self.seen:
                 with contextlib.suppress(OSError), open(f"/proc/{pid}/comm") as f:
                     self.seen[pid] = f.read().strip()
+                    self._fds[pid] = os.open(f"/proc/{pid}/stat", os.O_RDONLY)
 
     def ended(self, children: dict[int, list[int]] | None = None) -> bool:
         """True once every package process seen has exited (at least one was seen); the
@@ -71,18 +82,33 @@ class ProcWatch:
             return False
         done = True
         for pid in self.seen:
-            st = _stat(pid)
+            if pid in self.exited:
+                continue  # once exited, for good
+            st = _stat(pid, self._fds.get(pid))
             if st is None:
                 self.exited.add(pid)
+                self._close(pid)
                 continue
             state, code = st
             if state in ("Z", "X"):
                 if code is not None:
                     self.codes.setdefault(pid, code)
                 self.exited.add(pid)
+                self._close(pid)
                 continue
             done = False
         return done
+
+    def _close(self, pid: int) -> None:
+        fd = self._fds.pop(pid, None)
+        if fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    def close(self) -> None:
+        """Close the files kept open."""
+        for pid in list(self._fds):
+            self._close(pid)
 
     def failures(self) -> list[str]:
         """``name exit N`` (or ``killed by signal N``) for the processes that ended badly."""
