@@ -37,7 +37,8 @@ GROUP = "usar"
 """The folder under :data:`ROOT` that holds every run's set."""
 WANT = 2
 """CPUs a run takes when no count is asked for and that many are free: one for the graph, one
-for the bridge's watcher (:func:`usar_replay.ros1.pacing.scheduling.watching_elsewhere`)."""
+for the idle check's watcher process (:mod:`usar_replay.ros1.pacing.watcher`) and the
+recorder's simulation, which take turns with the graph."""
 
 _counter = 0
 

@@ -4,15 +4,19 @@ Why: the bridge paces the clock by the graph (docs/ros1.md, "Pacing"): the next 
 soon as the graph is done with this one, not after a fixed wall-time wait, so a run is as fast
 as the graph and the same on a loaded machine as on an idle one. The graph is idle when
 
-1. every thread of its processes (the bridge's own included, but not the thread asking) is
-   blocked: ``/proc/<pid>/task/<tid>/stat`` state is neither ``R`` nor ``D`` (a thread
-   in uninterruptible I/O, writing its output to a file, is still reacting);
+1. every thread of its processes (the bridge's own included, but not the process or thread
+   asking) is blocked, at two samples with none of the package's or the bridge's threads run
+   in between: ``/proc/<pid>/task/<tid>/syscall`` does not say ``running``, and a thread in a
+   call that is not a wait is not ``D`` in its ``stat`` (in uninterruptible I/O, writing its
+   output to a file, it is still reacting); see :meth:`Quiescence.threads` for the cheap
+   reading of a machine with nothing runnable;
 2. no bytes wait in any of its sockets (:mod:`.sock_diag`: a message on its way between two
-   nodes is a reaction not finished);
+   nodes is a reaction not finished), asked once the threads look idle;
 3. every thread that was in a *short timed sleep* when the graph first looked idle has woken
    and slept again since (its run count in ``/proc/<pid>/task/<tid>/schedstat`` moved), and no
    other thread ran in between. roscpp's sim-time sleeps (``ros::Rate::sleep``,
-   ``Duration::sleep``, timers) poll the clock in 1 ms wall-clock naps: such a node looks idle
+   ``Duration::sleep``, timers) poll the clock in 1 ms wall-clock naps (under usar the pacing
+   shim, :mod:`.shim`, turns the first two into waits on the clock): such a node looks idle
    while it has not yet noticed the new ``/clock``. A short timed sleep is a ``nanosleep``/
    ``clock_nanosleep`` of at most :data:`POLL_SLEEP_S` or a timed futex wait (a ``wait_for`` on
    a condition) with at most :data:`SHORT_SLEEP_S` to go, read from
@@ -20,8 +24,8 @@ as the graph and the same on a loaded machine as on an idle one. The graph is id
    (the graph is the bridge's descendants: allowed).
 
 Processes are found as the bridge's descendants (``/proc/<pid>/task/<tid>/children``); files
-stay open and are read again with ``pread`` (a sample of some 40 threads costs well under a
-millisecond).
+stay open and are read again with ``pread`` (a sample of some 45 threads costs 0.05-0.3 ms).
+The bridge asks through :mod:`.watcher`, a process of its own.
 """
 
 from __future__ import annotations
@@ -56,7 +60,9 @@ LONG_WAIT_S = 0.15
 """A timed wait with more than this left at start-up is a wall-clock re-check (see
 :meth:`Quiescence.long_waits`); roscpp's own spinners wait 100 ms at a time."""
 NAP_S = 0.0002
-"""Wall time between two samples (the asking thread sleeps: on one CPU the graph runs then)."""
+"""Wall time between two samples by default (the asking thread sleeps: on the graph's CPU the
+graph runs then, and in the graph's own process its other threads get the interpreter's lock);
+:mod:`.watcher`, a process of its own, does not pause."""
 
 _NANOSLEEP = 35
 _CLOCK_NANOSLEEP = 230

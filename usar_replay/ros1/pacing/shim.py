@@ -12,8 +12,12 @@ usar's underlay builds ``usar_pacing`` (``catkin/usar_pacing/src/pacing.cpp``) b
 It wraps roscpp's poll points (``ros::spinOnce()``, ``CallbackQueue::callAvailable()`` with
 no timeout, ``ros::console::print()``, ROS_INFO's entry, outside callbacks and not on
 roscpp's own threads): a thread that reaches them again and again at the same sim time,
-having run no callback, naps as roscpp's own sim-time sleeps do (1 ms wall-clock naps) until
-``ros::Time::now()`` changes. So a busy loop runs its body a fixed number of times per tick
+having run no callback, waits until ``ros::Time::now()`` changes: on the process's clock, a
+futex the shim wakes when roscpp sets the time (``ros::Time::setNow``, its ``/clock``
+callback). roscpp's own sim-time sleeps (``ros::Duration::sleep``, which ``ros::Rate::sleep``
+calls, and ``ros::Time::sleepUntil``) wait on it too, where roscpp naps 1 ms at a time: a
+sleeping node is then blocked, not a poller the idle check must wait out every tick. So a
+busy loop runs its body a fixed number of times per tick
 (a few spins or log lines of grace per tick, so a node that logs several lines in one go is
 not delayed) and the idle check sees it as it sees a node paced by ``ros::Rate``. Nothing
 there reads the wall clock to decide, so two recordings stay the same. With wall time (no

@@ -5,10 +5,11 @@
 // ros::spinOnce(); }`, or `while (ac.getState() != SUCCEEDED) ROS_INFO("Moving");`) never
 // looks idle: on Gazebo it burns a CPU and works, under usar every tick waited for the wall cap
 // (0.33x real time, not repeatable) or the start-up gate gave up. Such a loop has nothing new
-// to do until sim time moves on, so this shim makes it wait for that, the way roscpp's own
-// sim-time sleeps do (1 ms wall-clock naps until ros::Time::now() changes): the loop then runs
-// its body a fixed number of times per tick and looks to usar's idle check like a node paced
-// by ros::Rate.
+// to do until sim time moves on, so this shim makes it wait for that, as a sim-time sleep does
+// (on the process's clock, below, until ros::Time::now() changes): the loop then runs its body
+// a fixed number of times per tick and looks to usar's idle check like a node paced by
+// ros::Rate. roscpp's own sim-time sleeps (Duration::sleep, Rate::sleep, Time::sleepUntil) wait
+// on that clock too instead of napping 1 ms at a time.
 //
 // The policy, per thread, at each poll point (ros::spinOnce(), CallbackQueue::callAvailable()
 // with a zero timeout, and ros::console::print(), ROS_INFO's entry, outside any callback):
@@ -18,7 +19,7 @@
 //   - else count it (log lines only on the main thread or a thread that spins itself: never
 //     on roscpp's own threads); past a small budget per tick (kSpinBudget spins, kPrintBudget log lines,
 //     so a node that logs a few lines in one go, or spins twice in one loop, is not delayed)
-//     the thread naps until sim time changes (or ros::ok() turns false).
+//     the thread waits until sim time changes (or ros::ok() turns false).
 // Nothing here reads the wall clock to decide: how many times a loop body runs in a tick
 // depends on the ticks and the messages only, so two recordings are the same.
 //
