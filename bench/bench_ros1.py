@@ -12,9 +12,12 @@ whole build + run + grade time.
 Each ``--launch`` file is one run (the example package's default: ``usar_course.launch``, a
 ``ros::Rate`` loop, and its busy twins ``busy_scan.launch`` and ``busy_wait.launch``, the same
 logic polling without sleeping: each busy run's wall time is printed as a ratio to the Rate
-run's, which issue 31 wants within 1.5x). Last, the built-in Python mission is recorded on the
-same world and its real-time factor printed beside each ROS 1 run's (the ratio issue 31 wants
-at 0.8 or more). Nothing is asserted; the numbers go into docs/ros1.md.
+run's, which issue 31 wants within 1.5x). The built-in Python mission is recorded on the same
+world first and again last, and each ROS 1 run's real-time factor is printed beside the mean
+of those two (the ratio issue 31 wants at 0.8 or more): a shared machine's speed drifts by
+10-20% over the minutes a course-world bench takes, and a Python run on one side of the ROS 1
+runs only would put the drift into the ratio. Nothing is asserted; the numbers go into
+docs/ros1.md.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ from usar_replay.pipeline import record as python_record
 from usar_replay.ros1.build import workspace as build_mod
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
-from usar_replay.world.scenario import course_world
+from usar_replay.world.scenario import Scenario, course_world
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import one_room
@@ -63,6 +66,7 @@ def main() -> None:
             f"build: {time.perf_counter() - t0:.1f} s wall, {_children_cpu() - cpu0:.1f} s CPU"
             f" (catkin_make -j2, {pkg.name} + fiducial_msgs)"
         )
+        pythons = [_python_rtf(scenario, Path(tmp) / "python-first.mcap", "first")]
         ros1: list[tuple[str, float]] = []  # (what, sim / wall)
         for rtf in args.rtf:
             rate_wall = 0.0
@@ -88,22 +92,28 @@ def main() -> None:
                     f" so far {time.perf_counter() - everything:.1f} s"
                 )
                 ros1.append((f"{launch or pkg.name} dt/{rtf:g}", result.sim_duration_s / wall))
-        out = Path(tmp) / f"{args.world}-python.mcap"
-        start = time.perf_counter()
-        result = python_record.record(scenario, out, RunSettings())
-        wall = time.perf_counter() - start
-        python_rtf = result.sim_duration_s / wall
-        report = grade_file(out)
-        print(
-            f"built-in Python mission: {result.outcome}, {report.points:g}/{report.max_points:g}"
-            f" points, {result.sim_duration_s:.1f} s sim in {wall:.1f} s wall: "
-            f"{python_rtf:.2f}x real time"
-        )
+        pythons.append(_python_rtf(scenario, Path(tmp) / "python-last.mcap", "last"))
+        python_rtf = sum(pythons) / len(pythons)
+        print(f"built-in Python mission, mean of the two: {python_rtf:.2f}x real time")
         for what, rtf_reached in ros1:
             print(
                 f"  ROS 1 {what}: {rtf_reached:.2f}x vs Python {python_rtf:.2f}x: "
                 f"{rtf_reached / python_rtf:.2f} of the Python mission's real-time factor"
             )
+
+
+def _python_rtf(scenario: Scenario, out: Path, when: str) -> float:
+    """The built-in Python mission recorded on ``scenario``: its real-time factor, printed."""
+    start = time.perf_counter()
+    result = python_record.record(scenario, out, RunSettings())
+    wall = time.perf_counter() - start
+    report = grade_file(out)
+    print(
+        f"built-in Python mission ({when}): {result.outcome}, {report.points:g}/"
+        f"{report.max_points:g} points, {result.sim_duration_s:.1f} s sim in {wall:.1f} s wall:"
+        f" {result.sim_duration_s / wall:.2f}x real time"
+    )
+    return result.sim_duration_s / wall
 
 
 def _children_cpu() -> float:
