@@ -28,7 +28,7 @@ import sys
 from collections.abc import Collection
 from typing import Any
 
-from usar_replay.ros1.pacing.quiescence import Quiescence, descendants
+from usar_replay.ros1.pacing.quiescence import NAP_S, Quiescence, descendants
 
 __all__ = ["MODULE", "Watcher", "main"]
 
@@ -117,6 +117,9 @@ def _package(kids: dict[int, list[int]], launcher: int | None, own: bool) -> Col
 def serve(sock: socket.socket, root: int) -> None:
     """Answer the bridge until it says stop or goes."""
     quiet = Quiescence(root=root, own_pid=os.getpid())
+    # no pause between samples where another CPU may take them; on the graph's only CPU the
+    # pause lets the graph run (where it has no real-time priority to come first)
+    nap_s = 0.0 if len(os.sched_getaffinity(0)) > 1 else NAP_S
     lines = sock.makefile("rb")
     try:
         for line in lines:
@@ -127,7 +130,7 @@ def serve(sock: socket.socket, root: int) -> None:
                 if quiet.created():
                     kids = quiet.children.walk(root)
                     quiet.refresh(_package(kids, request["launcher"], request["own"]), kids)
-                idle = quiet.wait(request["cap"], nap_s=0.0)
+                idle = quiet.wait(request["cap"], nap_s=nap_s)
                 answer: dict[str, Any] = {
                     "idle": idle,
                     "untimed": sorted(quiet.untimed),
