@@ -72,7 +72,7 @@ def main() -> None:
             rate_wall = 0.0
             for launch in launches:
                 out = Path(tmp) / f"{args.world}-rtf{rtf:g}-{launch or 'node'}.mcap"
-                start = time.perf_counter()
+                start, stolen = time.perf_counter(), _steal()
                 result = record_ros1(
                     scenario,
                     out,
@@ -81,6 +81,7 @@ def main() -> None:
                     options=Ros1Options(launch=launch, rtf=rtf),
                 )
                 wall = time.perf_counter() - start
+                steal = steal_since(stolen)
                 report = grade_file(out)
                 rate_wall = rate_wall or wall
                 twin = f", {wall / rate_wall:.2f}x the Rate run's wall" if launch in TWINS else ""
@@ -88,8 +89,8 @@ def main() -> None:
                     f"{launch or pkg.name}, wall cap dt/{rtf:g}: {result.outcome}, "
                     f"{report.points:g}/{report.max_points:g} points, {result.sim_duration_s:.1f}"
                     f" s sim in {wall:.1f} s wall (incl. start-up): "
-                    f"{result.sim_duration_s / wall:.2f}x real time{twin}; build + run + grade"
-                    f" so far {time.perf_counter() - everything:.1f} s"
+                    f"{result.sim_duration_s / wall:.2f}x real time{twin}{steal}; build + run +"
+                    f" grade so far {time.perf_counter() - everything:.1f} s"
                 )
                 ros1.append((f"{launch or pkg.name} dt/{rtf:g}", result.sim_duration_s / wall))
         pythons.append(_python_rtf(scenario, Path(tmp) / "python-last.mcap", "last"))
@@ -104,16 +105,31 @@ def main() -> None:
 
 def _python_rtf(scenario: Scenario, out: Path, when: str) -> float:
     """The built-in Python mission recorded on ``scenario``: its real-time factor, printed."""
-    start = time.perf_counter()
+    start, stolen = time.perf_counter(), _steal()
     result = python_record.record(scenario, out, RunSettings())
     wall = time.perf_counter() - start
+    steal = steal_since(stolen)
     report = grade_file(out)
     print(
         f"built-in Python mission ({when}): {result.outcome}, {report.points:g}/"
         f"{report.max_points:g} points, {result.sim_duration_s:.1f} s sim in {wall:.1f} s wall:"
-        f" {result.sim_duration_s / wall:.2f}x real time"
+        f" {result.sim_duration_s / wall:.2f}x real time{steal}"
     )
     return result.sim_duration_s / wall
+
+
+def _steal() -> tuple[int, int]:
+    """(steal, all) jiffies of the machine so far (``/proc/stat``): on a virtual machine, the
+    time the host gave the CPUs to someone else."""
+    fields = [int(x) for x in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+    return (fields[7] if len(fields) > 7 else 0), sum(fields[:8])
+
+
+def steal_since(before: tuple[int, int]) -> str:
+    """`` (steal N%)``: the CPU time the host took since ``before`` (:func:`_steal`)."""
+    now = _steal()
+    total = now[1] - before[1]
+    return f" (steal {100 * (now[0] - before[0]) / total:.0f}%)" if total > 0 else ""
 
 
 def _children_cpu() -> float:
