@@ -76,7 +76,12 @@ from usar_replay.ros1.build import standins
 from usar_replay.ros1.build.debian import DIST_PACKAGES
 from usar_replay.ros1.build.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
-from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
+from usar_replay.ros1.pacing.graph_start import (
+    launch_nodes,
+    missing_connections,
+    registered_nodes,
+    wait_until_ready,
+)
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.pacing.watcher import Watcher
 from usar_replay.ros1.publishing import Publishing
@@ -313,6 +318,8 @@ class Bridge:
             # a topic the graph just advertised: connected before this tick's /clock, so what
             # it latched arrives in this tick whatever the machine's speed
             self.topics.wait_connected(self.settle_s + 2.0)
+        if self.topics.registered:
+            self._wait_connections()
         self.out.publish_inputs(items)
         poses = {r: self.out.pose(r, t_ns) for r in self.robots}
         settled: list[tuple[str, msgs.Message]] = []
@@ -343,6 +350,21 @@ class Bridge:
         # drives, move_base's command is the one the robot follows (what team 002 saw) and the
         # rubric's cmd_vel_one_publisher line reports the fight
         return settled + got + driven
+
+    def _wait_connections(self, cap_s: float = 5.0) -> None:
+        """Hold this tick's ``/clock`` until every subscription of the graph is connected to
+        every publisher of its topic (:func:`.graph_start.missing_connections`), at most
+        ``cap_s`` wall seconds. Why: a node registered a topic in the last tick (an action
+        client built mid-run), and roscpp makes the connection on its XML-RPC thread's 100 ms
+        wall-clock poll, so without this the machine decided the tick it landed in (and with
+        it, the tick an action client first saw its server's status: 0.2 s apart from run to
+        run)."""
+        deadline = time.monotonic() + cap_s  # pacing only: never reaches a message
+        while time.monotonic() < deadline:
+            if not missing_connections(self._master, NODE):
+                break
+            time.sleep(0.002)
+        self._wait_idle(self._cap if self._cap is not None else 2.0)  # what connecting set off
 
     def _wait_idle(self, cap: float | None) -> bool:
         """Until the graph is idle (:mod:`.quiescence`, asked of :mod:`.watcher`; True), at

@@ -59,6 +59,10 @@ class TopicRecorder:
         self._arrived: list[tuple[str, str, int, msgs.Message]] = []
         self._count = 0
         self._publishers: dict[str, int] = {}
+        self._registrations: frozenset[tuple[str, str, str]] | None = None
+        self.registered = False
+        """The last :meth:`discover` found a topic registration (a publisher or subscriber of
+        any node) that was not there at the one before: a connection may be on its way."""
 
     @property
     def topics(self) -> list[str]:
@@ -81,6 +85,7 @@ class TopicRecorder:
         import rospy
 
         new: list[str] = []
+        self.registered = False
         before = self._log_state()
         if before is not None and before == self._log_seen:
             return new  # no call reached the master since: no topic was advertised
@@ -88,6 +93,15 @@ class TopicRecorder:
         self._log_seen = self._log_state()  # our own call's line included
         state = reply[2]
         publishers, subscribers = state[0], state[1]
+        registrations = frozenset(
+            (kind, topic, name)
+            for kind, entries in (("pub", publishers), ("sub", subscribers))
+            for topic, names in entries
+            for name in names
+        )
+        if self._registrations is not None and registrations - self._registrations:
+            self.registered = True
+        self._registrations = registrations
         ours = {t for t, names in (*publishers, *subscribers) if self.node in names}
         for topic, names in sorted(publishers):
             if topic in self._subs or topic in ours or topic in _SKIPPED:
