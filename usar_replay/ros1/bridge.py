@@ -360,8 +360,14 @@ class Bridge:
         it, the tick an action client first saw its server's status: 0.2 s apart from run to
         run)."""
         deadline = time.monotonic() + cap_s  # pacing only: never reaches a message
-        while time.monotonic() < deadline:
-            if not missing_connections(self._master, NODE):
+        while True:
+            try:
+                if not missing_connections(self._master, NODE):
+                    break
+            except (OSError, xmlrpc.client.Error):
+                break  # the master is going: the tick's end says what happened
+            if time.monotonic() > deadline:
+                self.capped += 1  # counted against --max-capped, as a tick past its cap
                 break
             time.sleep(0.002)
         self._wait_idle(self._cap if self._cap is not None else 2.0)  # what connecting set off

@@ -56,9 +56,23 @@ def registered_nodes(master: Any, caller: str) -> set[str]:
     return nodes - {caller, "/rosout"}
 
 
+class _TimedTransport(xmlrpc.client.Transport):
+    """An XML-RPC transport that gives up after :data:`NODE_ANSWER_S` (a node's slave API is
+    the package's code: one that never answers must not hold the bridge)."""
+
+    def make_connection(self, host: Any) -> Any:
+        conn = super().make_connection(host)
+        conn.timeout = NODE_ANSWER_S
+        return conn
+
+
+NODE_ANSWER_S = 2.0
+"""Wall seconds a node's ``getBusInfo`` may take (then it counts as not connected)."""
+
+
 def _inbound(uri: str, caller: str) -> dict[str, set[str]]:
     """topic -> the publishers a node's subscriptions are connected to (its ``getBusInfo``)."""
-    proxy: Any = xmlrpc.client.ServerProxy(uri)
+    proxy: Any = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport())
     code, _msg, info = proxy.getBusInfo(caller)
     out: dict[str, set[str]] = {}
     if code != 1:
