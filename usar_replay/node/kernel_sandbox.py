@@ -50,6 +50,7 @@ __all__ = [
     "python_binds",
     "sandbox_argv",
     "signal_of_exit",
+    "succeeds",
 ]
 
 INSTALL_HINT = "apt-get install bubblewrap"
@@ -288,6 +289,23 @@ _OWN_TABLES = (
 buckets, ample for a ROS graph's hundred connections; 256 UDP ones, the kernel's least."""
 
 
+def succeeds(argv: Sequence[str], timeout_s: float = 10.0) -> bool:
+    """Whether ``argv`` runs to exit 0 within ``timeout_s``, its output discarded: the probe
+    of what a machine allows (namespaces, settings) before a run relies on it."""
+    try:
+        done = subprocess.run(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            timeout=timeout_s,
+            check=False,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return done.returncode == 0
+
+
 @functools.cache
 def own_tables_available() -> bool:
     """Whether :func:`own_tables_argv` can work here (root, ``unshare``, Linux 6.1 or later);
@@ -295,18 +313,7 @@ def own_tables_available() -> bool:
     unshare = shutil.which("unshare")
     if os.geteuid() != 0 or unshare is None:
         return False
-    try:
-        done = subprocess.run(
-            [unshare, "--net", "/bin/sh", "-c", _OWN_TABLES],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            timeout=10,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return done.returncode == 0
+    return succeeds([unshare, "--net", "/bin/sh", "-c", _OWN_TABLES])
 
 
 def own_tables_argv(argv: Sequence[str]) -> list[str]:

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import functools
 import shutil
-import subprocess
 from collections.abc import Sequence
+
+from usar_replay.node.kernel_sandbox import succeeds
 
 __all__ = ["isolated_command", "netns_available"]
 
@@ -29,18 +30,7 @@ def netns_available() -> bool:
     """True when ``unshare -rn`` with loopback up works here (tried once per process)."""
     if shutil.which("unshare") is None or shutil.which("ip") is None:
         return False
-    try:
-        done = subprocess.run(
-            ["unshare", "-rn", "sh", "-c", _LOOPBACK_UP, "sh", "true"],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            timeout=10,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return done.returncode == 0
+    return succeeds(["unshare", "-rn", "sh", "-c", _LOOPBACK_UP, "sh", "true"])
 
 
 def isolated_command(argv: Sequence[str], *, isolate: bool = True) -> list[str]:

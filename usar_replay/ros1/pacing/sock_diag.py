@@ -26,7 +26,7 @@ import errno
 import os
 import socket
 import struct
-from collections.abc import Collection, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from dataclasses import dataclass
 
 __all__ = ["SockQueue", "SockDiag", "waiting"]
@@ -104,7 +104,7 @@ class SockDiag:
         yield from self._inet_records(self._dump(req), kind)
 
     @staticmethod
-    def _inet_records(payloads: Iterator[bytes], kind: str) -> Iterator[SockQueue]:
+    def _inet_records(payloads: Iterable[bytes], kind: str) -> Iterator[SockQueue]:
         for payload in payloads:
             if len(payload) < _INET_MSG.size:
                 continue
@@ -114,15 +114,20 @@ class SockDiag:
     def tcp(self, states: int = TCP_STATES) -> list[SockQueue]:
         """The TCP sockets of IPv4 and IPv6, from one walk of the kernel's table where it
         allows (the order is the kernel's: IPv4 and IPv6 mixed)."""
+        return list(self._inet_records(self._tcp_records(states), "tcp"))
+
+    def _tcp_records(self, states: int) -> list[bytes]:
+        """The raw ``inet_diag_msg`` records of :meth:`tcp`."""
         if self._one_tcp_dump:
             req = _INET_REQ_V1.pack(socket.AF_INET, 0, 0, 0, states, 0)
             try:
-                return list(self._inet_records(self._dump(req, TCPDIAG_GETSOCK), "tcp"))
+                return list(self._dump(req, TCPDIAG_GETSOCK))
             except OSError:
                 self._one_tcp_dump = False  # refused: one dump per family from now on
         return [
-            *self.inet(socket.AF_INET, socket.IPPROTO_TCP, states),
-            *self.inet(socket.AF_INET6, socket.IPPROTO_TCP, states),
+            body
+            for family in (socket.AF_INET, socket.AF_INET6)
+            for body in self._dump(_INET_REQ.pack(family, socket.IPPROTO_TCP, 0, 0, states))
         ]
 
     def unix(self) -> Iterator[SockQueue]:
@@ -157,20 +162,8 @@ class SockDiag:
         connections."""
         waiting: dict[int, int] = {}
         established: set[int] = set()
-        if self._one_tcp_dump:
-            req = _INET_REQ_V1.pack(socket.AF_INET, 0, 0, 0, TCP_STATES, 0)
-            try:
-                tcp = list(self._dump(req, TCPDIAG_GETSOCK))
-            except OSError:
-                self._one_tcp_dump = False
-        if not self._one_tcp_dump:
-            tcp = [
-                body
-                for family in (socket.AF_INET, socket.AF_INET6)
-                for body in self._dump(_INET_REQ.pack(family, socket.IPPROTO_TCP, 0, 0, TCP_STATES))
-            ]
         unpack = _INET_MSG.unpack_from
-        for body in tcp:
+        for body in self._tcp_records(TCP_STATES):
             if len(body) >= _INET_MSG.size:
                 _f, state, _t, _r, _exp, rq, wq, _uid, ino = unpack(body)
                 if state == TCP_ESTABLISHED:

@@ -28,7 +28,8 @@ import sys
 from collections.abc import Collection
 from typing import Any
 
-from usar_replay.ros1.pacing.quiescence import NAP_S, Quiescence, descendants
+from usar_replay.ros1.pacing.proc_watch import ProcWatch
+from usar_replay.ros1.pacing.quiescence import NAP_S, Quiescence
 
 __all__ = ["MODULE", "Watcher", "main"]
 
@@ -107,11 +108,9 @@ class Watcher:
 
 
 def _package(kids: dict[int, list[int]], launcher: int | None, own: bool) -> Collection[int]:
-    """The package's processes in the walk (as :meth:`.ProcWatch.package`)."""
-    if launcher is None:
-        return ()
-    pids = descendants(launcher, kids)
-    return pids if own else pids[1:]
+    """The package's processes in the walk (:meth:`.ProcWatch.package`; none before the
+    package is launched)."""
+    return () if launcher is None else ProcWatch(launcher, own).package(kids)
 
 
 def serve(sock: socket.socket, root: int) -> None:
