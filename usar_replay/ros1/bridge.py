@@ -337,7 +337,7 @@ class Bridge:
         # (move_base's result, status, feedback) write from rospy's queue threads, so without
         # this wait a result could reach a node after it saw the new time, or before, as the
         # machine's timing decides (its reaction then lands a tick later on one run)
-        idle = self._wait_idle(cap)
+        idle = self._wait_idle(cap, soon=True)
         self.out.publish_clock(t_ns)
         if not (self._wait_idle(cap) and idle):
             self.capped += 1
@@ -372,13 +372,13 @@ class Bridge:
             time.sleep(0.002)
         self._wait_idle(self._cap if self._cap is not None else 2.0)  # what connecting set off
 
-    def _wait_idle(self, cap: float | None) -> bool:
+    def _wait_idle(self, cap: float | None, *, soon: bool = False) -> bool:
         """Until the graph is idle (:mod:`.quiescence`, asked of :mod:`.watcher`; True), at
-        most ``cap`` wall seconds."""
+        most ``cap`` wall seconds; ``soon``: another wait follows at once."""
         assert self.quiet is not None and self.graph is not None
         watch = self.graph.watch
         waited = time.perf_counter()  # pacing only: never reaches a message
-        idle = self.quiet.wait(cap, watch.launcher, watch.launcher_is_package)
+        idle = self.quiet.wait(cap, watch.launcher, watch.launcher_is_package, soon=soon)
         self.waited_s += time.perf_counter() - waited
         return idle
 

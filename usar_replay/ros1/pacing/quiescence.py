@@ -214,6 +214,8 @@ class _Thread:
             self.syscall = None
         self.last: ThreadState | None = None
         """The last full reading (which holds while the thread is not run again)."""
+        self.sched = b""
+        """``schedstat`` at that reading (the thread ran since when it reads otherwise)."""
         self.poll: _Poll | None = None
         """The timeout of the package thread's wait then, when the wait is a poll or may
         become one."""
@@ -255,6 +257,9 @@ class Quiescence:
         self.connected: frozenset[int] = frozenset()
         """The established TCP connections of the namespace at the last sample (a node's
         ``ros::shutdown`` closes its connections: the bridge asks the master then)."""
+        self.ignore: frozenset[int] = frozenset()
+        """Sockets (inodes) that hold nothing while the tree is sampled: the asker's own
+        socket pair (:mod:`.watcher`), whose request was read before the samples began."""
 
     def close(self) -> None:
         for t in self._threads.values():
@@ -319,7 +324,7 @@ class Quiescence:
         """Bytes waiting in the tree's sockets (its sockets' inodes are looked up again only
         when a socket with bytes is not known yet: outside a network namespace of its own, the
         machine's other sockets are in the dump too)."""
-        waiting, self.connected = self.diag.busy()
+        waiting, self.connected = self.diag.busy(self.ignore)
         if waiting.keys() - self._inodes:
             self._inodes = self._socket_inodes()
         return sum(n for ino, n in waiting.items() if ino in self._inodes)
@@ -327,10 +332,12 @@ class Quiescence:
     def threads(self) -> dict[int, ThreadState]:
         """Every thread of the tree now (gone ones left out).
 
-        A thread's ``schedstat`` says how often it was given a CPU. When the kernel reports no
-        runnable thread on the machine but the one asking (``/proc/loadavg``), a thread that
-        has not run since the last sample is blocked in the same call as then, and that
-        sample's reading stands: an idle graph costs one small read per thread. Otherwise the
+        A thread's ``schedstat`` moves whenever it is given a CPU. When the kernel reports no
+        runnable thread on the machine but the one asking (``/proc/loadavg``), a thread whose
+        ``schedstat`` has not moved since its last full reading is blocked in the same call as
+        then, and that reading stands: an idle graph costs one small read per thread. So it
+        does once this sample found a thread running (the sample says "not idle" whatever the
+        others do; they are read in full again once they have run). Otherwise the
         thread's ``syscall`` file says ``running`` for a thread on or waiting for a CPU, else
         the call it is blocked in; its ``stat`` (the state letter, ``D`` for a thread in
         uninterruptible I/O) is read only for a thread blocked in a call that is not a wait
@@ -338,21 +345,23 @@ class Quiescence:
         out: dict[int, ThreadState] = {}
         untimed: set[int] = set()
         quiet = self._nothing_runnable()
+        busy = False  # a thread found running: this sample is no base, the rest may be stale
         for tid, t in list(self._threads.items()):
             try:
                 sched = os.pread(t.schedstat, 128, 0)
-                fields = sched.split()
-                runs = int(fields[2]) if len(fields) > 2 else 0
                 last = t.last
-                if quiet and last is not None and last.runs == runs and not last.running:
+                if (quiet or busy) and sched == t.sched and last is not None and not last.running:
                     if t.poll is not None and t.poll.clock is not None:
                         polling = t.poll.now()  # a deadline: nearer now
                         if polling != last.polling:
-                            last = t.last = ThreadState(False, runs, polling, last.watched)
+                            last = t.last = ThreadState(False, last.runs, polling, last.watched)
                     out[tid] = last
                     if t.untimed:
                         untimed.add(t.pid)
                     continue
+                t.sched = sched
+                fields = sched.split()
+                runs = int(fields[2]) if len(fields) > 2 else 0
                 text = os.pread(t.syscall, 256, 0) if t.syscall is not None else b""
                 if not text or not (text[:1].isdigit() or text.startswith(b"running")):
                     text = b""  # no syscall file (or -1: not in a call): the state letter
@@ -383,6 +392,7 @@ class Quiescence:
                 if t.untimed:
                     untimed.add(t.pid)
             out[tid] = t.last = ThreadState(running, runs, polling, t.role != "infra")
+            busy = busy or running
         self.samples += 1
         self.untimed = frozenset(untimed)
         return out

@@ -10,20 +10,25 @@ run's own.
 TCP is asked in one dump for both IPv4 and IPv6 (the older ``TCPDIAG_GETSOCK`` request, which
 the kernel answers with every family): a TCP dump walks the kernel's whole connection table,
 which namespaces share (262144 buckets on a large machine, some 0.4 ms a walk, whatever the
-run's few sockets), and the idle check asks on every sample (:mod:`.quiescence`). Where a
-kernel refuses that request, one dump per family.
+run's few sockets; the sandbox gives the run's namespace a table of its own), and the idle
+check asks on every wait (:mod:`.quiescence`). Where a kernel refuses that request, one dump
+per family.
 
 What is asked: TCP and UDP over IPv4 and IPv6 (``inet_diag_req_v2``: ``idiag_rqueue`` is what
 the owner has not read, ``idiag_wqueue`` what the peer has not acknowledged) and unix sockets
 (``unix_diag_req`` with ``UDIAG_SHOW_RQLEN``). TCP sockets in CLOSE-WAIT (a keep-alive
 connection the peer closed; XML-RPC leaves them) and TIME-WAIT (no owner) are not asked for.
-A listening socket's receive queue is its backlog of connections not yet accepted: waiting too.
+A listening socket's receive queue is its backlog of connections not yet accepted: waiting too
+(:meth:`SockDiag.busy`, the idle check's question, finds those another way: see there).
 """
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import itertools
 import os
+import re
 import socket
 import struct
 from collections.abc import Collection, Iterable, Iterator
@@ -55,6 +60,9 @@ _INET_MSG = struct.Struct("=BBBB48xIIIII")  # ..., expires, rqueue, wqueue, uid,
 _UNIX_REQ = struct.Struct("=BBHIIIII")  # family, protocol, pad, states, ino, show, cookie[2]
 _UNIX_MSG = struct.Struct("=BBBBIII")  # family, type, state, pad, ino, cookie[2]
 _RTA = struct.Struct("=HH")
+_COUNTS = re.compile(rb"(?:used|inuse) (\d+)")
+_INET_FIELDS = struct.Struct("=xB54xII4xI")
+"""What :meth:`SockDiag.busy` reads of an ``inet_diag_msg``: state, rqueue, wqueue, inode."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,9 +95,22 @@ class SockDiag:
         self._seq = 0
         self._one_tcp_dump = True
         """The kernel answers ``TCPDIAG_GETSOCK`` (until it refused once)."""
+        try:
+            self._sockstat = os.open("/proc/net/sockstat", os.O_RDONLY)
+        except OSError:
+            self._sockstat = -1
+        self._census_seen: tuple[bytes, ...] | None = None
+        self._udp = True
+        """The namespace had UDP sockets when its census last moved (:meth:`busy`)."""
+        self._unix = True
+        """The namespace had unix sockets :meth:`busy` was not told to ignore then."""
 
     def close(self) -> None:
         self._sock.close()
+        if self._sockstat >= 0:
+            with contextlib.suppress(OSError):
+                os.close(self._sockstat)
+            self._sockstat = -1
 
     def __enter__(self) -> SockDiag:
         return self
@@ -114,21 +135,11 @@ class SockDiag:
     def tcp(self, states: int = TCP_STATES) -> list[SockQueue]:
         """The TCP sockets of IPv4 and IPv6, from one walk of the kernel's table where it
         allows (the order is the kernel's: IPv4 and IPv6 mixed)."""
-        return list(self._inet_records(self._tcp_records(states), "tcp"))
-
-    def _tcp_records(self, states: int) -> list[bytes]:
-        """The raw ``inet_diag_msg`` records of :meth:`tcp`."""
-        if self._one_tcp_dump:
-            req = _INET_REQ_V1.pack(socket.AF_INET, 0, 0, 0, states, 0)
-            try:
-                return list(self._dump(req, TCPDIAG_GETSOCK))
-            except OSError:
-                self._one_tcp_dump = False  # refused: one dump per family from now on
-        return [
-            body
-            for family in (socket.AF_INET, socket.AF_INET6)
-            for body in self._dump(_INET_REQ.pack(family, socket.IPPROTO_TCP, 0, 0, states))
-        ]
+        out = []
+        for data, off in self._tcp_raw(states):
+            _f, state, _t, _r, _exp, rq, wq, _uid, ino = _INET_MSG.unpack_from(data, off)
+            out.append(SockQueue(ino, "tcp", state, rq, wq))
+        return out
 
     def unix(self) -> Iterator[SockQueue]:
         """The unix sockets (stream, datagram, seqpacket), with their queue lengths."""
@@ -155,32 +166,85 @@ class SockDiag:
             yield from self.inet(family, socket.IPPROTO_UDP, 0xFFFFFFFF)
         yield from self.unix()
 
-    def busy(self) -> tuple[dict[int, int], frozenset[int]]:
+    def busy(self, ignore: Collection[int] = ()) -> tuple[dict[int, int], frozenset[int]]:
         """What :meth:`all` says, as the idle check needs it, at a fraction of the cost (it
         asks on every wait, twice a tick): the sockets with bytes waiting (inode -> bytes, as
         :attr:`SockQueue.waiting` counts them), and the inodes of the established TCP
-        connections."""
+        connections. ``ignore``: unix sockets that hold nothing while it asks (the idle check's
+        own socket pair).
+
+        What it leaves out, and why that loses nothing:
+
+        - Listening TCP sockets. A connection not yet accepted is in the table of established
+          ones with the bytes its peer sent (a ROS connection's header comes first), and the
+          listeners' table is one all namespaces share: walking it was half a dump.
+        - UDP and unix sockets while the namespace has none (but ``ignore``): which it has is
+          asked again whenever ``/proc/net/sockstat``'s counts of the namespace's sockets move
+          (a dump walks every bucket of the namespace's table, even an empty one: some 40
+          microseconds for unix sockets).
+
+        The TCP records are read where they lie in the kernel's answer (no copy, no object per
+        socket)."""
         waiting: dict[int, int] = {}
         established: set[int] = set()
-        unpack = _INET_MSG.unpack_from
-        for body in self._tcp_records(TCP_STATES):
-            if len(body) >= _INET_MSG.size:
-                _f, state, _t, _r, _exp, rq, wq, _uid, ino = unpack(body)
-                if state == TCP_ESTABLISHED:
-                    established.add(ino)
-                queued = rq if state == TCP_LISTEN else rq + wq
-                if queued > 0:
-                    waiting[ino] = queued
-        for family in (socket.AF_INET, socket.AF_INET6):
-            for q in self.inet(family, socket.IPPROTO_UDP, 0xFFFFFFFF):
-                if q.rqueue > 0:
-                    waiting[q.inode] = q.rqueue
-        for q in self.unix():
+        fields = _INET_FIELDS.unpack_from
+        for data, off in self._tcp_raw(TCP_STATES & ~(1 << TCP_LISTEN)):
+            state, rq, wq, ino = fields(data, off)
+            if state == TCP_ESTABLISHED:
+                established.add(ino)
+            if rq + wq > 0:
+                waiting[ino] = rq + wq
+        census = self._census()
+        if census is None or census != self._census_seen:
+            self._census_seen = census
+            self._udp = any(True for _ in self._udp_queues())
+            self._unix = any(q.inode not in ignore for q in self.unix())
+        for q in itertools.chain(
+            self._udp_queues() if self._udp else (), self.unix() if self._unix else ()
+        ):
             if q.rqueue > 0:
                 waiting[q.inode] = q.rqueue
         return waiting, frozenset(established)
 
+    def _udp_queues(self) -> Iterator[SockQueue]:
+        for family in (socket.AF_INET, socket.AF_INET6):
+            yield from self.inet(family, socket.IPPROTO_UDP, 0xFFFFFFFF)
+
+    def _census(self) -> tuple[bytes, ...] | None:
+        """The namespace's socket counts (``sockets: used`` and each protocol's ``inuse`` in
+        ``/proc/net/sockstat``, which counts the caller's network namespace only); None where
+        it cannot be read (then UDP and unix sockets are asked every time)."""
+        if self._sockstat < 0:
+            return None
+        try:
+            return tuple(_COUNTS.findall(os.pread(self._sockstat, 1024, 0))) or None
+        except OSError:
+            return None
+
+    def _tcp_raw(self, states: int) -> Iterator[tuple[bytes, int]]:
+        """The TCP records of IPv4 and IPv6 as (the kernel's answer, where a record starts),
+        from one dump where the kernel allows."""
+        if self._one_tcp_dump:
+            req = _INET_REQ_V1.pack(socket.AF_INET, 0, 0, 0, states, 0)
+            try:
+                yield from self._dump_raw(req, TCPDIAG_GETSOCK, _INET_MSG.size)
+                return
+            except OSError:
+                self._one_tcp_dump = False  # refused (before any record): one dump per family
+        for family in (socket.AF_INET, socket.AF_INET6):
+            request = _INET_REQ.pack(family, socket.IPPROTO_TCP, 0, 0, states)
+            yield from self._dump_raw(request, SOCK_DIAG_BY_FAMILY, _INET_MSG.size)
+
     def _dump(self, request: bytes, kind: int = SOCK_DIAG_BY_FAMILY) -> Iterator[bytes]:
+        """The records of one dump, each body a copy."""
+        for data, off in self._dump_raw(request, kind, 0):
+            length = _NLMSG.unpack_from(data, off - _NLMSG.size)[0]
+            yield data[off : off - _NLMSG.size + length]
+
+    def _dump_raw(self, request: bytes, kind: int, least: int) -> Iterator[tuple[bytes, int]]:
+        """The records of one dump as (a buffer the kernel answered, where the record's body
+        starts), those shorter than ``least`` bytes left out. Raises :class:`OSError` before
+        any record where the kernel refused the request."""
         self._seq += 1
         header = _NLMSG.pack(
             _NLMSG.size + len(request),
@@ -190,25 +254,29 @@ class SockDiag:
             0,
         )
         self._sock.send(header + request)
+        head = _NLMSG.size
         while True:
             data = self._sock.recv(65536)
-            off = 0
-            while off + _NLMSG.size <= len(data):
+            off, size = 0, len(data)
+            while off + head <= size:
                 length, kind, _flags, seq, _pid = _NLMSG.unpack_from(data, off)
-                if length < _NLMSG.size:
+                if length < head or off + length > size:
                     return
-                body = data[off + _NLMSG.size : off + length]
+                at = off + head
                 off += (length + 3) & ~3
                 if seq != self._seq:
                     continue
                 if kind == NLMSG_DONE:
                     return
                 if kind == NLMSG_ERROR:
-                    code = -struct.unpack_from("=i", body)[0] if len(body) >= 4 else errno.EIO
+                    code = (
+                        -struct.unpack_from("=i", data, at)[0] if length >= head + 4 else errno.EIO
+                    )
                     if code in (0, errno.ENOENT):  # no such family/protocol here: none
                         return
                     raise OSError(code, f"sock_diag: {os.strerror(code)}")
-                yield body
+                if length - head >= least:
+                    yield data, at
 
 
 def waiting(diag: SockDiag, inodes: Collection[int] | None = None) -> list[SockQueue]:

@@ -22,9 +22,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import select
 import socket
 import subprocess
 import sys
+import time
 from collections.abc import Collection
 from typing import Any
 
@@ -35,6 +37,8 @@ __all__ = ["MODULE", "Watcher", "main"]
 
 MODULE = "usar_replay.ros1.pacing.watcher"
 """What the watcher's command line runs (``python -m``): how :class:`.OneCpu` knows it."""
+SPIN_S = 0.002
+"""How long the watcher looks for a request it was told comes soon without sleeping."""
 
 
 class Watcher:
@@ -47,9 +51,10 @@ class Watcher:
         # socket with a timeout is non-blocking underneath: the watcher read "end of file")
         mine.setblocking(True)
         theirs.setblocking(True)
+        mine_inode = os.fstat(mine.fileno()).st_ino
         with theirs:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", MODULE, str(theirs.fileno()), str(root)],
+                [sys.executable, "-m", MODULE, str(theirs.fileno()), str(root), str(mine_inode)],
                 pass_fds=(theirs.fileno(),),
                 stdin=subprocess.DEVNULL,
             )
@@ -76,18 +81,27 @@ class Watcher:
         return answer
 
     def wait(
-        self, cap_s: float | None, launcher: int | None = None, launcher_is_package: bool = False
+        self,
+        cap_s: float | None,
+        launcher: int | None = None,
+        launcher_is_package: bool = False,
+        *,
+        soon: bool = False,
     ) -> bool:
         """The tree found again where it changed (the package: ``launcher``'s descendants,
         ``launcher`` itself only when ``launcher_is_package``), then
-        :meth:`.Quiescence.wait`."""
-        got = self._ask(
-            {"op": "wait", "cap": cap_s, "launcher": launcher, "own": launcher_is_package}
-        )
-        self.untimed = frozenset(got["untimed"])
-        self.connected = frozenset(got["connected"])
+        :meth:`.Quiescence.wait`. ``soon``: the next wait follows within a fraction of a
+        millisecond (the ``/clock`` after the inputs), and the watcher looks for it without
+        sleeping (see :func:`serve`)."""
+        request = {"op": "wait", "cap": cap_s, "launcher": launcher, "own": launcher_is_package}
+        got = self._ask({**request, "soon": soon})
+        # what did not change since the last answer is left out of it
+        if "untimed" in got:
+            self.untimed = frozenset(got["untimed"])
+        if "connected" in got:
+            self.connected = frozenset(got["connected"])
         self.samples = int(got["samples"])
-        if got["kids"] is not None:
+        if "kids" in got:
             self.kids = {int(k): v for k, v in got["kids"].items()}
         return bool(got["idle"])
 
@@ -113,47 +127,66 @@ def _package(kids: dict[int, list[int]], launcher: int | None, own: bool) -> Col
     return () if launcher is None else ProcWatch(launcher, own).package(kids)
 
 
-def serve(sock: socket.socket, root: int) -> None:
-    """Answer the bridge until it says stop or goes."""
+def serve(sock: socket.socket, root: int, ignore: Collection[int] = ()) -> None:
+    """Answer the bridge until it says stop or goes; ``ignore``: the sockets of the pair it
+    asks on (they hold nothing while the tree is sampled).
+
+    No pause between samples where another CPU may take them; on the graph's only CPU the
+    pause lets the graph run (where it has no real-time priority to come first). Where it has
+    another CPU, after a wait asked with ``soon`` the watcher looks for the next request
+    without sleeping, for at most :data:`SPIN_S`: a process that sleeps between two requests
+    0.1 ms apart is woken from an idle CPU each time (30-50 microseconds on a virtual
+    machine, twice a tick)."""
     quiet = Quiescence(root=root, own_pid=os.getpid())
-    # no pause between samples where another CPU may take them; on the graph's only CPU the
-    # pause lets the graph run (where it has no real-time priority to come first)
-    nap_s = 0.0 if len(os.sched_getaffinity(0)) > 1 else NAP_S
+    quiet.ignore = frozenset(ignore)
+    own_cpu = len(os.sched_getaffinity(0)) > 1
+    nap_s = 0.0 if own_cpu else NAP_S
     lines = sock.makefile("rb")
+    told: dict[str, Any] = {}  # what the bridge was last told, by key
+    poller = select.poll()
+    poller.register(sock.fileno(), select.POLLIN)
     try:
-        for line in lines:
+        while True:
+            line = lines.readline()
+            if not line:
+                return
             request = json.loads(line)
             op = request.get("op")
             if op == "wait":
-                kids = None
+                answer: dict[str, Any] = {}
                 if quiet.created():
-                    kids = quiet.children.walk(root)
-                    quiet.refresh(_package(kids, request["launcher"], request["own"]), kids)
-                idle = quiet.wait(request["cap"], nap_s=nap_s)
-                answer: dict[str, Any] = {
-                    "idle": idle,
-                    "untimed": sorted(quiet.untimed),
-                    "connected": sorted(quiet.connected),
-                    "samples": quiet.samples,
-                    "kids": kids,
-                }
+                    answer["kids"] = quiet.children.walk(root)
+                    quiet.refresh(
+                        _package(answer["kids"], request["launcher"], request["own"]),
+                        answer["kids"],
+                    )
+                answer["idle"] = quiet.wait(request["cap"], nap_s=nap_s)
+                answer["samples"] = quiet.samples
+                for key, value in (("untimed", quiet.untimed), ("connected", quiet.connected)):
+                    if told.get(key) != value:
+                        answer[key] = sorted(value)
+                        told[key] = value
             elif op == "long_waits":
                 answer = {"long": quiet.long_waits()}
             else:
                 return
             sock.sendall(json.dumps(answer).encode() + b"\n")
+            if own_cpu and request.get("soon"):
+                deadline = time.perf_counter() + SPIN_S  # pacing only: never in a message
+                while not poller.poll(0) and time.perf_counter() < deadline:
+                    pass
     finally:
         quiet.close()
 
 
 def main(argv: list[str]) -> None:
-    """``python -m usar_replay.ros1.pacing.watcher FD ROOT``."""
+    """``python -m usar_replay.ros1.pacing.watcher FD ROOT [PEER_INODE]``."""
     # no real-time priority of its own, whatever it was started with (module docstring)
     with contextlib.suppress(OSError, AttributeError):
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     with socket.socket(fileno=int(argv[0])) as sock, contextlib.suppress(OSError):
         sock.setblocking(True)
-        serve(sock, int(argv[1]))
+        serve(sock, int(argv[1]), {os.fstat(sock.fileno()).st_ino, *map(int, argv[2:3])})
 
 
 if __name__ == "__main__":
