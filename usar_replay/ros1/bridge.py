@@ -44,6 +44,7 @@ move_base (:mod:`.move_base`) and when ``/clock`` may move (:mod:`.pacing`).
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import json
 import multiprocessing.connection
@@ -191,6 +192,16 @@ class Bridge:
         """The master, the parameters, the bridge's node, then the student's graph; returns
         once the graph has registered a node with the master (or raises with its output)."""
         ws = Path(self.config["run_dir"])
+        # the launch file's node names (roslaunch --nodes, half a second of parsing) are only
+        # needed by the start-up gate: asked while the master and the bridge's node start
+        names = concurrent.futures.ThreadPoolExecutor(max_workers=1)
+        expected: concurrent.futures.Future[list[str]] | None = None
+        if self.config.get("launch"):
+            plan = self._write_launch_plan(ws)
+            setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
+            pkg, launch = self.config["package"], self.config["launch"]
+            expected = names.submit(launch_nodes, setup, pkg, launch, self.env, plan)
+        names.shutdown(wait=False)
         # every call logged (getParam included): ``usar info`` lists the parameters the
         # package's nodes read (:func:`.run_files.parameters_read`)
         logged = ["--master-logger-level", "debug", f"__log:={ws / run_files.MASTER_LOG}"]
@@ -220,14 +231,9 @@ class Bridge:
         self._start_node()
         self.out.advertise(self.sim_topics, self.robots)
         self.quiet = Watcher(os.getpid())
-        expected: list[str] = []
-        if self.config.get("launch"):
-            plan = self._write_launch_plan(ws)
-            setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
-            pkg, launch = self.config["package"], self.config["launch"]
-            expected = launch_nodes(setup, pkg, launch, self.env, plan)
         self.graph = Graph(self.config, self.env)
-        self._wait_for_graph(master, expected, float(self.config.get("connect_timeout_s", 60.0)))
+        wanted = [] if expected is None else expected.result()
+        self._wait_for_graph(master, wanted, float(self.config.get("connect_timeout_s", 60.0)))
 
     def _write_launch_plan(self, run: Path) -> Path:
         """The plan roslaunch follows (:mod:`.launch_filter`): usar's stand-ins' nodes dropped,

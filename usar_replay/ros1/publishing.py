@@ -103,6 +103,8 @@ class Publishing:
         """The tick's inputs (topic, type, CDR), in their order: told to the tf buffer and
         move_base, then published."""
         for topic, msgtype, data in items:
+            if not self._needed(topic, msgtype):
+                continue
             value = cdr.decode(data, msgtype)
             if topic == contract.TF_STATIC and isinstance(value, msgs.TFMessage):
                 for tf in value.transforms:
@@ -122,6 +124,21 @@ class Publishing:
                 self._raw_image(value)
             # the course's /fiducial_transforms comes in the tick, right after its frame
             self._publish(topic, value)
+
+    def _needed(self, topic: str, msgtype: str) -> bool:
+        """Whether an input is worth decoding: the bridge's tf, move_base's map and the camera's
+        calibration always are; anything else only while someone subscribes to it (or its raw
+        twin) or it is latched. Decoding the rest every tick was a tenth of the bridge's own
+        work; its publisher is still made, so the master knows it from the first tick."""
+        if topic in (contract.TF, contract.TF_STATIC, contract.MAP_TOPIC):
+            return True
+        if msgtype == msgs.CameraInfo.__msgtype__:
+            return True
+        if topic in LATCHED or self._publisher(topic, msgtype).get_num_connections() > 0:
+            return True
+        return msgtype == msgs.CompressedImage.__msgtype__ and (
+            self._raw_publisher().get_num_connections() > 0
+        )
 
     def publish_clock(self, t_ns: int) -> None:
         """``/clock`` at ``t_ns`` (the tick loop's call: when the pacing allows)."""
