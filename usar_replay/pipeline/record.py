@@ -427,25 +427,42 @@ def _tick_loop(
         latency = rs.actuation_latency_ticks
         commands: list[tuple[str, msgs.Twist]] = []
         written = True
-        while tick is not None:
-            if not written:
-                _write_tick(writer, tick, run, detector)
-            written = False
-            proc.send(tick.t, tick.wire)
-            nxt: _Observed | None = None
-            if latency:
-                _step(sim, commands, steps_per_tick)
-                nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-            commands = _take_outputs(proc, writer, tick.t, run, detector, asg.robot_names)
-            if progress is not None:
-                progress(_progress(run, tick.t, scenario))
-            if proc.shutdown_requested:
-                run.outcome, run.reason = "done", "the mission said it was done"
-                return
-            if not latency:
-                _step(sim, commands, steps_per_tick)
-                nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
-            tick = nxt
+        # the log's writes wait for the mission to think: a tick's outputs are written after
+        # the next tick is sent, and a tick's inputs after it is sent (in the log's order:
+        # inputs, then outputs, tick by tick; the bytes are the same). Why: they overlap the
+        # mission's turn (a ROS 1 graph's few milliseconds a tick) instead of adding to it
+        unwritten: _Outputs | None = None
+        try:
+            while tick is not None:
+                if not written and detector is not None:
+                    tick.wire = detector.add_detections(tick.wire)
+                try:
+                    proc.send(tick.t, tick.wire)
+                finally:
+                    if unwritten is not None:
+                        _write_outputs(writer, unwritten)
+                        unwritten = None
+                    if not written:
+                        _write_inputs(writer, tick, run)
+                written = False
+                nxt: _Observed | None = None
+                if latency:
+                    _step(sim, commands, steps_per_tick)
+                    nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                unwritten = _take_outputs(proc, tick.t, run, detector, asg.robot_names)
+                commands = unwritten.commands
+                if progress is not None:
+                    progress(_progress(run, tick.t, scenario))
+                if proc.shutdown_requested:
+                    run.outcome, run.reason = "done", "the mission said it was done"
+                    return
+                if not latency:
+                    _step(sim, commands, steps_per_tick)
+                    nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                tick = nxt
+        finally:
+            if unwritten is not None:
+                _write_outputs(writer, unwritten)
 
 
 @contextlib.contextmanager
@@ -480,27 +497,33 @@ def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:
     run.last_t = tick.t
 
 
+@dataclass(slots=True)
+class _Outputs:
+    """One tick's outputs as received, to be written later (:func:`_write_outputs`)."""
+
+    t: int
+    items: list[tuple[str, str, bytes, msgs.Message | Ros1Message]]
+    commands: list[tuple[str, msgs.Twist]]
+
+
 def _take_outputs(
     proc: MissionProcess,
-    writer: bag.BagWriter,
     t: int,
     run: _Run,
     detector: CourseDetector | None = None,
     robots: tuple[str, ...] = contract.ROBOTS,
-) -> list[tuple[str, msgs.Twist]]:
-    """What the mission published at this tick (checked by the process boundary), written as
-    the ``mission`` publisher; returns the cmd_vels for the simulator, notes the stored markers
-    and the last log line, and hands the course's detector its enable switch."""
+) -> _Outputs:
+    """What the mission published at this tick (checked by the process boundary), for the log
+    as the ``mission`` publisher; the cmd_vels for the simulator. Notes the stored markers and
+    the last log line, and hands the course's detector its enable switch."""
     commands: list[tuple[str, msgs.Twist]] = []
     drives = {contract.cmd_vel(r): r for r in robots}  # the assignment's robots, by topic
     outputs = proc.receive()
     if detector is not None:
         detector.note_outputs((topic, value) for topic, _, _, value in outputs)
-    for topic, msgtype, raw, value in outputs:
-        if isinstance(value, Ros1Message):  # a ROS 1 package's own type, in its own bytes
-            writer.write_ros1(topic, value, t, publisher="mission")
+    for topic, _msgtype, _raw, value in outputs:
+        if isinstance(value, Ros1Message):
             continue
-        writer.write_raw(topic, msgtype, raw, t, publisher="mission")
         robot = drives.get(topic)
         if robot is not None and isinstance(value, msgs.Twist):
             commands.append((robot, value))
@@ -509,7 +532,17 @@ def _take_outputs(
         elif topic == contract.ROSOUT and isinstance(value, msgs.Log):
             run.node_lines.note(value)
             run.last_log = run.node_lines.status()
-    return commands
+    return _Outputs(t, list(outputs), commands)
+
+
+def _write_outputs(writer: bag.BagWriter, outputs: _Outputs) -> None:
+    """A tick's outputs into the log, as the ``mission`` publisher (a ROS 1 package's own
+    types in their own bytes)."""
+    for topic, msgtype, raw, value in outputs.items:
+        if isinstance(value, Ros1Message):
+            writer.write_ros1(topic, value, outputs.t, publisher="mission")
+        else:
+            writer.write_raw(topic, msgtype, raw, outputs.t, publisher="mission")
 
 
 def _progress(run: _Run, t: int, scenario: Scenario) -> Progress:
