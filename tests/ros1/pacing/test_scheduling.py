@@ -85,3 +85,19 @@ def test_the_spared_process_keeps_its_cpus_and_policy(tmp_path: Path) -> None:
         for proc in (watcher, other):
             proc.kill()
             proc.wait()
+
+
+def test_beside_a_real_time_graph_the_spared_process_shares_its_cpu(tmp_path: Path) -> None:
+    """Where the graph gets SCHED_RR, the watcher is pinned to the graph's CPU, as an ordinary
+    process (it runs there only while the graph does not)."""
+    (tmp_path / "fake_watcher.py").write_text("import time\ntime.sleep(60)\n")
+    watcher = subprocess.Popen([sys.executable, "-m", "fake_watcher"], cwd=tmp_path)
+    cpus = sorted(os.sched_getaffinity(0))
+    try:
+        pin = OneCpu(watcher.pid, cpu=cpus[0], realtime=True, spares=b"fake_watcher")
+        wait_for(lambda: pin.apply() > 0 or watcher.pid in pin.done, "the watcher's threads")
+        assert os.sched_getaffinity(watcher.pid) == {cpus[0]}
+        assert os.sched_getscheduler(watcher.pid) == os.SCHED_OTHER
+    finally:
+        watcher.kill()
+        watcher.wait()

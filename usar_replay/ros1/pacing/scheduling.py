@@ -21,8 +21,13 @@ own policy): every thread of the run, the bridge's included, found in the run's 
 (``tasks``) or, without one, as the bridge's descendants. New threads are picked up before each
 tick. Where the machine refuses (not root), the run goes on unpinned, as before.
 
-The one process left alone is the idle check's watcher (:mod:`.watcher`): no real-time
-priority, so on the graph's CPU it runs only while the graph does not.
+The idle check's watcher (:mod:`.watcher`) gets no real-time priority: on the graph's CPU it
+runs only while the graph does not. Where the graph has SCHED_RR, the watcher is pinned there
+too: it then samples only once the graph has stopped (no sample races a reaction or takes the
+scheduler's lock from it), and the two hand-overs of every wait, bridge to watcher and back,
+happen on a CPU that is running instead of one woken from idle (some 40 microseconds each on a
+virtual machine). Without real-time priority it is left on the CPUs it started with, where it
+cannot take the graph's CPU from it.
 """
 
 from __future__ import annotations
@@ -58,9 +63,9 @@ class OneCpu:
     ) -> None:
         self.root = root
         self.spares = spares
-        """The module (``python -m``) of the process whose threads are left as they are:
+        """The module (``python -m``) of the process whose threads get no real-time priority:
         the idle check's watcher (:mod:`.watcher`), which must not take the graph's CPU from
-        it."""
+        it (pinned to it beside a real-time graph, else left as it is)."""
         self.passes_on = passes_on
         """A word of the command line of the one process whose threads get SCHED_RR without
         the reset flag (the bridge, usar's own code: rospy starts a thread per new connection,
@@ -88,7 +93,8 @@ class OneCpu:
 
     def _policy(self, tid: int) -> int | None:
         """RR with the reset flag, plain RR for the threads of the process named by
-        :attr:`passes_on`, None (left alone) for those of the one named by :attr:`spares`."""
+        :attr:`passes_on`, None (no real-time priority) for those of the one named by
+        :attr:`spares`."""
         if not self.passes_on and not self.spares:
             return _POLICY
         with contextlib.suppress(OSError, ValueError):
@@ -111,6 +117,9 @@ class OneCpu:
             self.done.add(tid)
             policy = self._policy(tid)
             if policy is None:
+                if self.realtime and not self.refused:  # below the graph, on its CPU
+                    with contextlib.suppress(OSError):
+                        os.sched_setaffinity(tid, {self.cpu})
                 continue
             try:
                 os.sched_setaffinity(tid, {self.cpu})

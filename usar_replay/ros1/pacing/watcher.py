@@ -8,9 +8,10 @@ them run, or a result waiting for the lock looked delivered and the package's re
 tick from run to run. Here the samples run in a process of their own, with no lock to share
 and no pause, while the bridge's main thread is blocked on this socket like any idle thread.
 
-The recorder gives the watcher no real-time priority (:class:`.scheduling.OneCpu` passes it
-over): beside the graph's ``SCHED_RR`` threads on one CPU it runs only when the graph does
-not, and on another CPU it costs the graph nothing.
+The recorder gives the watcher no real-time priority (:class:`.scheduling.OneCpu`): beside the
+graph's ``SCHED_RR`` threads, on their CPU, it runs only when the graph does not (so its first
+sample is usually the graph at rest), and without real-time priority it stays off the graph's
+CPU where it can.
 
 Protocol: one JSON object per line each way on the socket (both ends are usar's own code, in
 the same sandbox; nothing is unpickled). Each wait first finds the tree's processes and threads
