@@ -34,29 +34,54 @@ def ros1_class(msgtype: str) -> Any:
 
 
 def _time1(t: msgs.Time) -> Any:
+    return ros1_time(t.sec, t.nanosec)
+
+
+def ros1_time(secs: int, nsecs: int) -> Any:
+    """rospy's time, made without genpy's checks where the value is already canonical (one
+    per header: the bridge makes some twenty a tick, and ``genpy.Time()`` was a tenth of its
+    own work); the same value as ``genpy.Time(secs, nsecs)``."""
     import genpy
 
-    return genpy.Time(t.sec, t.nanosec)
+    if secs >= 0 and 0 <= nsecs < 1_000_000_000:
+        out = genpy.Time.__new__(genpy.Time)
+        out.secs, out.nsecs = secs, nsecs
+        return out
+    return genpy.Time(secs, nsecs)
 
 
 def to_ros1(value: msgs.Message) -> Any:
     """A usar value as the rospy message of the same type (header ``seq`` 0, as tf2 sends)."""
-    cls = type(value)
-    out = ros1_class(cls.__msgtype__)()
-    for name, kind, sub in msgs.field_kinds(cls):
-        v = getattr(value, name)
+    cls: Any = type(value)
+    return _to_ros1_fn(cls)(value)
+
+
+@functools.cache
+def _to_ros1_fn(cls: Any) -> Any:
+    """The converter of one type, generated once: one call of the rospy class with every field
+    by name (so it makes no default field values to throw away), nested types by their own
+    converters."""
+    env: dict[str, Any] = {"C": ros1_class(cls.__msgtype__), "T": _time1, "to_ros1": to_ros1}
+    args = []
+    for i, (name, kind, sub) in enumerate(msgs.field_kinds(cls)):
+        target = _RENAMED.get((cls.__name__, name), name)
+        v = f"o.{name}"
         if kind == "msg":
-            conv = _time1(v) if sub is msgs.Time else to_ros1(v)
+            env[f"f{i}"] = _time1 if sub is msgs.Time else _to_ros1_fn(sub)
+            conv = f"f{i}({v})"
         elif kind == "msgs":
-            conv = [to_ros1(x) for x in v]
+            env[f"f{i}"] = _to_ros1_fn(sub)
+            conv = f"[f{i}(x) for x in {v}]"
         elif kind == "bytes" and cls is msgs.OccupancyGrid:
-            conv = [b - 256 if b > 127 else b for b in v]  # int8[]
+            conv = f"[b - 256 if b > 127 else b for b in {v}]"  # int8[]
         elif kind in ("floats", "ints"):
-            conv = list(v)
+            conv = f"list({v})"
         else:
             conv = v
-        setattr(out, _RENAMED.get((cls.__name__, name), name), conv)
-    return out
+        args.append(f"{target}={conv}")
+    code = f"def conv(o):\n    return C({', '.join(args)})\n"
+    exec(code, env)
+    return env["conv"]
 
 
 def from_ros1(cls: type[msgs.Message], value: Any) -> msgs.Message:

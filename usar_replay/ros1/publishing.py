@@ -28,9 +28,9 @@ LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC)
 
 def genpy_time(t_ns: int) -> Any:
     """``t_ns`` as rospy's time (``/clock``'s value)."""
-    import genpy
+    from usar_replay.ros1.convert import ros1_time
 
-    return genpy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
+    return ros1_time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
 
 
 class Publishing:
