@@ -54,8 +54,8 @@ SHORT_SLEEP_S = 0.002
 """A timed wait on a condition with at most this much left counts as a clock poll (roscpp's
 sim-time timers wait 1 ms at a time); a longer one is woken by its condition when it matters.
 Twice the timers' period, not more: every tf2 listener's thread waits on its queue 10 ms at a
-time (``TransformListener::dedicatedListenerThread``), and each wait that found it within this
-of its timeout waited for it to wake for nothing (5 ms made that half of all waits)."""
+time (``TransformListener::dedicatedListenerThread``), and a wait that found it within this
+of its timeout waited for it to wake for nothing (with 5 ms, half of its time)."""
 POLL_SLEEP_S = 0.05
 """A plain sleep of at most this much counts as a poll: nothing but time wakes it (roscpp's
 sim-time sleeps nap 1 ms, ``ros::Time::waitForValid`` 10 ms until the first ``/clock``)."""
