@@ -7,6 +7,8 @@ the tree is idle; the watcher leaves itself out of what it watches."""
 from __future__ import annotations
 
 import os
+import signal
+import threading
 
 from proctools import child as start_child
 from proctools import wait_for
@@ -46,4 +48,29 @@ def test_a_watcher_that_ended_is_a_clear_error() -> None:
     else:
         raise AssertionError("no error")
     finally:
+        watcher.close()
+
+
+def test_a_starving_watcher_is_moved_back_to_its_cpus() -> None:
+    # beside a graph thread spinning at real-time priority on the CPU they share, the watcher
+    # would run only in the kernel's throttling window: stopped here, it answers late, and the
+    # bridge's side moves it back to the CPUs it started with, then gets its answer
+    watcher = Watcher(os.getpid())
+    cpus = os.sched_getaffinity(0)
+    answers: list[bool] = []
+    try:
+        watcher.wait(0.5)  # started and answering
+        os.sched_setaffinity(watcher.proc.pid, {min(cpus)})  # as OneCpu pins it
+        os.kill(watcher.proc.pid, signal.SIGSTOP)
+        asking = threading.Thread(target=lambda: answers.append(watcher.wait(0.1)))
+        asking.start()
+        if len(cpus) > 1:
+            wait_for(lambda: watcher.freed, "the late answer noticed")
+            assert os.sched_getaffinity(watcher.proc.pid) == cpus
+        os.kill(watcher.proc.pid, signal.SIGCONT)
+        asking.join(timeout=30)
+        assert not asking.is_alive() and len(answers) == 1
+        assert watcher.freed == (len(cpus) > 1)
+    finally:
+        os.kill(watcher.proc.pid, signal.SIGCONT)
         watcher.close()

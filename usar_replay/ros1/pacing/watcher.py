@@ -40,6 +40,8 @@ MODULE = "usar_replay.ros1.pacing.watcher"
 """What the watcher's command line runs (``python -m``): how :class:`.OneCpu` knows it."""
 SPIN_S = 0.002
 """How long the watcher looks for a request it was told comes soon without sleeping."""
+LATE_S = 0.2
+"""How much later than its cap an answer may come before the watcher counts as starving."""
 
 
 class Watcher:
@@ -61,6 +63,10 @@ class Watcher:
             )
         self._sock = mine
         self._lines = mine.makefile("rb")
+        self._cpus = os.sched_getaffinity(0)
+        """The CPUs the watcher started with (the run's set): where it goes if it starves."""
+        self.freed = False
+        """The watcher was moved off the graph's CPU (:meth:`_ask`)."""
         self.untimed: frozenset[int] = frozenset()
         """As :attr:`.Quiescence.untimed`, at the last wait's end."""
         self.connected: frozenset[int] = frozenset()
@@ -70,8 +76,19 @@ class Watcher:
         """The tree's last walk (processes -> their children)."""
 
     def _ask(self, request: dict[str, Any]) -> dict[str, Any]:
+        """One request and its answer. Where the answer is later than the request's cap (and
+        :data:`LATE_S`), the watcher is starving: beside a graph thread that spins at real-time
+        priority on the CPU they share (a loop no pacing point sees), it runs only when the
+        kernel's real-time throttling lets it, 50 ms a second. It is then moved back to the
+        CPUs it started with, for good, and the tick ends at its wall cap as it did before the
+        watcher shared the graph's CPU."""
         try:
             self._sock.sendall(json.dumps(request).encode() + b"\n")
+            cap = request.get("cap")
+            if not self.freed and cap is not None and len(self._cpus) > 1:
+                ready, _, _ = select.select([self._sock], [], [], float(cap) + LATE_S)
+                if not ready:
+                    self.free()
             line = self._lines.readline()
         except OSError:
             line = b""
@@ -80,6 +97,12 @@ class Watcher:
             raise RuntimeError(f"usar's idle check (its watcher process) ended (exit {code})")
         answer: dict[str, Any] = json.loads(line)
         return answer
+
+    def free(self) -> None:
+        """Move the watcher back to the CPUs it started with (see :meth:`_ask`)."""
+        self.freed = True
+        with contextlib.suppress(OSError):
+            os.sched_setaffinity(self.proc.pid, self._cpus)
 
     def wait(
         self,
