@@ -144,6 +144,93 @@ def test_a_sim_time_sleep_waits_for_the_clock_blocked_not_napping(
     assert call == (futex if shimmed else clock_nanosleep), call
 
 
+FROM_ZERO = r"""
+// A sim-time sleep begun before the first /clock (time 0), as a node's ros::Rate loop or
+// ros::Duration(1).sleep() that starts at once: roscpp counts it from the first time set.
+#include <ros/duration.h>
+#include <ros/time.h>
+#include <sched.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <thread>
+
+static std::string read(long tid, const char* name) {
+  std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/" + name);
+  std::string word;
+  file >> word;
+  return word;
+}
+
+static std::string runs(long tid) {  // schedstat's third field: times given a CPU
+  std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/schedstat");
+  std::string a, b, c;
+  file >> a >> b >> c;
+  return c;
+}
+
+// until the sleeper is blocked in a call again after `before` runs (it has seen the time)
+static void settled(long tid, const std::string& before) {
+  for (long i = 0; i < 100000000; ++i) {
+    std::string call = read(tid, "syscall");
+    if (runs(tid) != before && call != "running" && !call.empty()) return;
+    sched_yield();
+  }
+}
+
+int main() {
+  ros::Time::init();
+  ros::Time::setNow(ros::Time(0, 0));  // sim time, not started yet
+  std::atomic<long> tid{0};
+  std::atomic<int> result{-1};
+  std::thread sleeper([&] {
+    tid = syscall(SYS_gettid);
+    result = ros::Duration(0.5).sleep() ? 1 : 0;
+  });
+  while (tid == 0) sched_yield();
+  settled(tid, "");
+  std::string before = runs(tid);
+  ros::Time::setNow(ros::Time(1, 0));  // the first time: the sleep counts from here
+  settled(tid, before);
+  ros::Time::setNow(ros::Time(1, 400000000));  // not yet
+  int early = result;
+  ros::Time::setNow(ros::Time(1, 500000000));
+  for (int i = 0; i < 300 && result == -1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::printf("%d %d\n", early, static_cast<int>(result));
+  std::fflush(stdout);
+  std::_Exit(0);  // a sleeper still asleep is not joined
+}
+"""
+
+
+def test_a_sleep_begun_before_the_first_clock_counts_from_the_first_time(
+    library: Path, tmp_path: Path
+) -> None:
+    """roscpp's ``Duration::sleep`` begun at time 0 waits for the first time and sleeps its
+    length from there; the shim's did not, and a node whose ``ros::Rate`` loop (or a
+    ``Duration(1).sleep()``) ran before the first ``/clock`` slept until the run's end."""
+    (tmp_path / "zero.cpp").write_text(FROM_ZERO, encoding="utf-8")
+    subprocess.run(
+        ["g++", "-std=c++17", "-O1", "-o", "zero", "zero.cpp", "-lrostime", "-lpthread"],
+        cwd=tmp_path,
+        check=True,
+    )
+    env = {"PATH": "/usr/bin:/bin", "LD_PRELOAD": str(library)}
+    done = subprocess.run(
+        [str(tmp_path / "zero")], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["-1", "1"]  # not at 1.4 s of 0.5 s from 1.0 s; at 1.5 s
+
+
 def _record(out: Path, launch: str) -> list[tuple[int, str, bytes]]:
     """One recording of the example package with ``launch`` on the one-room world, graded to
     60/60; what the package and the bridge published (not the simulator's), tick by tick."""

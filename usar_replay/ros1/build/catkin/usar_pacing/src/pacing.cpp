@@ -296,14 +296,20 @@ int64_t ns_of(const RosTime& t) { return static_cast<int64_t>(t.sec) * 100000000
 
 enum class Slept { kReached, kNoWait, kBackwards, kStopped };
 
-// roscpp's sim-time loop, waiting on the clock instead of napping
-Slept sleep_until_ns(int64_t start, int64_t end) {
+// roscpp's sim-time loop, waiting on the clock instead of napping. `from_zero` >= 0: a sleep
+// of that many ns begun at time 0 (before the first /clock), which, as roscpp's, counts from
+// the first time set after it began.
+Slept sleep_until_ns(int64_t start, int64_t end, int64_t from_zero = -1) {
   bool waited = false;
   for (;;) {
     uint32_t seen = g_clock.load(std::memory_order_acquire);
     if (g_stopped.load(std::memory_order_acquire)) return Slept::kStopped;
     int64_t now = sim_now();
     if (now < 0) return Slept::kStopped;
+    if (waited && start == 0 && from_zero >= 0) {
+      start = now;  // roscpp: "wait for the first actual time to arrive before starting"
+      end = now == 0 ? INT64_MAX : now + from_zero;
+    }
     if (now < start) return Slept::kBackwards;
     if (now >= end) return waited ? Slept::kReached : Slept::kNoWait;
     wait_clock(seen);
@@ -318,8 +324,8 @@ extern "C" bool usar_duration_sleep(const RosTime* self) {
   static DurationSleepFn real = next<DurationSleepFn>(kDurationSleep);
   int64_t start = sim_time() ? sim_now() : -1;
   if (start < 0) return real(self);
-  int64_t end = start == 0 ? INT64_MAX : start + ns_of(*self);  // roscpp: time 0 sleeps for good
-  return sleep_until_ns(start, end) == Slept::kReached;  // roscpp: false if it never waited
+  if (start == 0) return sleep_until_ns(0, INT64_MAX, ns_of(*self)) == Slept::kReached;
+  return sleep_until_ns(start, start + ns_of(*self)) == Slept::kReached;  // false: never waited
 }
 
 extern "C" bool usar_sleep_until(const RosTime* end) __asm__("_ZN3ros4Time10sleepUntilERKS0_");
