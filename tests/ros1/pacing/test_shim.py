@@ -83,70 +83,8 @@ def test_a_process_without_roscpp_runs_as_before(library: Path) -> None:
 SLEEPER = r"""
 // A thread sleeping in sim time (ros::Duration::sleep), the clock set by hand as roscpp's
 // /clock callback does: prints the call the sleeper blocks in and what its sleep returned.
-#include <ros/duration.h>
-#include <ros/time.h>
-#include <sched.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
-#include <atomic>
-#include <cstdio>
-#include <fstream>
-#include <string>
-#include <thread>
-
-int main() {
-  ros::Time::init();
-  ros::Time::setNow(ros::Time(1, 0));  // sim time from here on
-  std::atomic<long> tid{0};
-  std::atomic<int> result{-1};
-  std::thread sleeper([&] {
-    tid = syscall(SYS_gettid);
-    result = ros::Duration(0.5).sleep() ? 1 : 0;
-  });
-  while (tid == 0) sched_yield();
-  std::string call = "running";
-  for (long i = 0; i < 100000000 && (call == "running" || call.empty()); ++i) {
-    std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/syscall");
-    file >> call;
-    sched_yield();
-  }
-  ros::Time::setNow(ros::Time(1, 400000000));  // not yet
-  int early = result;
-  ros::Time::setNow(ros::Time(1, 500000000));
-  sleeper.join();
-  std::printf("%s %d %d\n", call.c_str(), early, static_cast<int>(result));
-}
-"""
-
-
-@pytest.mark.parametrize("shimmed", [True, False])
-def test_a_sim_time_sleep_waits_for_the_clock_blocked_not_napping(
-    library: Path, tmp_path: Path, shimmed: bool
-) -> None:
-    """``ros::Duration::sleep`` in sim time (``ros::Rate::sleep`` calls it): roscpp's naps
-    1 ms at a time (``clock_nanosleep``), which the idle check must wait out every tick; with
-    the shim the thread waits on the process's clock (``futex``) and wakes when roscpp sets
-    the time. Either way the sleep ends when, and only when, the time reaches its end."""
-    (tmp_path / "sleeper.cpp").write_text(SLEEPER, encoding="utf-8")
-    subprocess.run(
-        ["g++", "-std=c++17", "-O1", "-o", "sleeper", "sleeper.cpp", "-lrostime", "-lpthread"],
-        cwd=tmp_path,
-        check=True,
-    )
-    env = {"PATH": "/usr/bin:/bin", **({"LD_PRELOAD": str(library)} if shimmed else {})}
-    sleeper = str(tmp_path / "sleeper")
-    done = subprocess.run([sleeper], env=env, capture_output=True, text=True, timeout=60)
-    assert done.returncode == 0, done.stderr
-    call, early, result = done.stdout.split()
-    assert (early, result) == ("-1", "1")  # not at 1.4 s of a 0.5 s sleep from 1.0 s; at 1.5 s
-    futex, clock_nanosleep = {"aarch64": ("98", "115")}.get(platform.machine(), ("202", "230"))
-    assert call == (futex if shimmed else clock_nanosleep), call
-
-
-FROM_ZERO = r"""
-// A sim-time sleep begun before the first /clock (time 0), as a node's ros::Rate loop or
-// ros::Duration(1).sleep() that starts at once: roscpp counts it from the first time set.
+// With an argument the sleep begins before the first /clock (time 0), as a node's ros::Rate
+// loop or ros::Duration(1).sleep() that starts at once: roscpp counts it from the first time.
 #include <ros/duration.h>
 #include <ros/time.h>
 #include <sched.h>
@@ -161,32 +99,29 @@ FROM_ZERO = r"""
 #include <string>
 #include <thread>
 
-static std::string read(long tid, const char* name) {
-  std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/" + name);
-  std::string word;
-  file >> word;
-  return word;
+static std::string word(long tid, const char* file, int nth) {
+  std::ifstream in("/proc/self/task/" + std::to_string(tid) + "/" + file);
+  std::string w;
+  for (int i = 0; i <= nth; ++i) in >> w;
+  return w;
 }
 
-static std::string runs(long tid) {  // schedstat's third field: times given a CPU
-  std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/schedstat");
-  std::string a, b, c;
-  file >> a >> b >> c;
-  return c;
-}
-
-// until the sleeper is blocked in a call again after `before` runs (it has seen the time)
-static void settled(long tid, const std::string& before) {
+// until the sleeper is blocked in a call, having run since `runs` (schedstat's third field,
+// the times it was given a CPU); the call it is blocked in
+static std::string settled(long tid, const std::string& runs) {
+  std::string call;
   for (long i = 0; i < 100000000; ++i) {
-    std::string call = read(tid, "syscall");
-    if (runs(tid) != before && call != "running" && !call.empty()) return;
+    call = word(tid, "syscall", 0);
+    if (call != "running" && !call.empty() && word(tid, "schedstat", 2) != runs) break;
     sched_yield();
   }
+  return call;
 }
 
-int main() {
+int main(int argc, char**) {
+  const bool from_zero = argc > 1;
   ros::Time::init();
-  ros::Time::setNow(ros::Time(0, 0));  // sim time, not started yet
+  ros::Time::setNow(ros::Time(from_zero ? 0 : 1, 0));  // sim time from here on
   std::atomic<long> tid{0};
   std::atomic<int> result{-1};
   std::thread sleeper([&] {
@@ -194,21 +129,52 @@ int main() {
     result = ros::Duration(0.5).sleep() ? 1 : 0;
   });
   while (tid == 0) sched_yield();
-  settled(tid, "");
-  std::string before = runs(tid);
-  ros::Time::setNow(ros::Time(1, 0));  // the first time: the sleep counts from here
-  settled(tid, before);
+  std::string call = settled(tid, "");
+  if (from_zero) {
+    std::string runs = word(tid, "schedstat", 2);
+    ros::Time::setNow(ros::Time(1, 0));  // the first time: the sleep counts from here
+    settled(tid, runs);
+  }
   ros::Time::setNow(ros::Time(1, 400000000));  // not yet
   int early = result;
   ros::Time::setNow(ros::Time(1, 500000000));
   for (int i = 0; i < 300 && result == -1; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  std::printf("%d %d\n", early, static_cast<int>(result));
+  std::printf("%s %d %d\n", call.c_str(), early, static_cast<int>(result));
   std::fflush(stdout);
   std::_Exit(0);  // a sleeper still asleep is not joined
 }
 """
+
+
+def _sleeper(library: Path, tmp_path: Path, shimmed: bool, *args: str) -> list[str]:
+    """:data:`SLEEPER` built and run (with the shim preloaded or not): its three words."""
+    (tmp_path / "sleeper.cpp").write_text(SLEEPER, encoding="utf-8")
+    subprocess.run(
+        ["g++", "-std=c++17", "-O1", "-o", "sleeper", "sleeper.cpp", "-lrostime", "-lpthread"],
+        cwd=tmp_path,
+        check=True,
+    )
+    env = {"PATH": "/usr/bin:/bin", **({"LD_PRELOAD": str(library)} if shimmed else {})}
+    sleeper = str(tmp_path / "sleeper")
+    done = subprocess.run([sleeper, *args], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
+@pytest.mark.parametrize("shimmed", [True, False])
+def test_a_sim_time_sleep_waits_for_the_clock_blocked_not_napping(
+    library: Path, tmp_path: Path, shimmed: bool
+) -> None:
+    """``ros::Duration::sleep`` in sim time (``ros::Rate::sleep`` calls it): roscpp's naps
+    1 ms at a time (``clock_nanosleep``), which the idle check must wait out every tick; with
+    the shim the thread waits on the process's clock (``futex``) and wakes when roscpp sets
+    the time. Either way the sleep ends when, and only when, the time reaches its end."""
+    call, early, result = _sleeper(library, tmp_path, shimmed)
+    assert (early, result) == ("-1", "1")  # not at 1.4 s of a 0.5 s sleep from 1.0 s; at 1.5 s
+    futex, clock_nanosleep = {"aarch64": ("98", "115")}.get(platform.machine(), ("202", "230"))
+    assert call == (futex if shimmed else clock_nanosleep), call
 
 
 def test_a_sleep_begun_before_the_first_clock_counts_from_the_first_time(
@@ -217,18 +183,8 @@ def test_a_sleep_begun_before_the_first_clock_counts_from_the_first_time(
     """roscpp's ``Duration::sleep`` begun at time 0 waits for the first time and sleeps its
     length from there; the shim's did not, and a node whose ``ros::Rate`` loop (or a
     ``Duration(1).sleep()``) ran before the first ``/clock`` slept until the run's end."""
-    (tmp_path / "zero.cpp").write_text(FROM_ZERO, encoding="utf-8")
-    subprocess.run(
-        ["g++", "-std=c++17", "-O1", "-o", "zero", "zero.cpp", "-lrostime", "-lpthread"],
-        cwd=tmp_path,
-        check=True,
-    )
-    env = {"PATH": "/usr/bin:/bin", "LD_PRELOAD": str(library)}
-    done = subprocess.run(
-        [str(tmp_path / "zero")], env=env, capture_output=True, text=True, timeout=60
-    )
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["-1", "1"]  # not at 1.4 s of 0.5 s from 1.0 s; at 1.5 s
+    _call, early, result = _sleeper(library, tmp_path, True, "from-zero")
+    assert (early, result) == ("-1", "1")  # not at 1.4 s of 0.5 s from 1.0 s; at 1.5 s
 
 
 def _record(out: Path, launch: str) -> list[tuple[int, str, bytes]]:
