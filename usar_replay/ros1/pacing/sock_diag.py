@@ -195,13 +195,16 @@ class SockDiag:
             if rq + wq > 0:
                 waiting[ino] = rq + wq
         census = self._census()
+        udp: Iterable[SockQueue]
+        unix: Iterable[SockQueue]
         if census is None or census != self._census_seen:
             self._census_seen = census
-            self._udp = any(True for _ in self._udp_queues())
-            self._unix = any(q.inode not in ignore for q in self.unix())
-        for q in itertools.chain(
-            self._udp_queues() if self._udp else (), self.unix() if self._unix else ()
-        ):
+            udp, unix = list(self._udp_queues()), list(self.unix())  # read below too
+            self._udp, self._unix = bool(udp), any(q.inode not in ignore for q in unix)
+        else:
+            udp = self._udp_queues() if self._udp else ()
+            unix = self.unix() if self._unix else ()
+        for q in itertools.chain(udp, unix if self._unix else ()):
             if q.rqueue > 0:
                 waiting[q.inode] = q.rqueue
         return waiting, frozenset(established)
