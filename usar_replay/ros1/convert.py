@@ -61,7 +61,7 @@ def _to_ros1_fn(cls: Any) -> Any:
     """The converter of one type, generated once: one call of the rospy class with every field
     by name (so it makes no default field values to throw away), nested types by their own
     converters."""
-    env: dict[str, Any] = {"C": ros1_class(cls.__msgtype__), "T": _time1, "to_ros1": to_ros1}
+    env: dict[str, Any] = {"C": ros1_class(cls.__msgtype__)}
     args = []
     for i, (name, kind, sub) in enumerate(msgs.field_kinds(cls)):
         target = _RENAMED.get((cls.__name__, name), name)
