@@ -23,24 +23,28 @@ def test_cpu_lists_parse_as_the_kernel_writes_them() -> None:
 
 @needs_cpusets
 def test_two_claims_never_share_a_cpu_and_a_release_gives_it_back() -> None:
-    free = cpu_sets.free_cpus()
-    if not free:
-        pytest.skip("every CPU is held by another usar run")
-    first = cpu_sets.claim(1, wait_s=0)
+    # the first waits for a CPU (another usar run, or the suite's other worker, may hold one);
+    # then claims without waiting take what is left until none is: none shares a CPU, and the
+    # last one fails, whatever other runs hold meanwhile (they only ever give CPUs back)
+    first = cpu_sets.claim(1, wait_s=600)
     assert first is not None and len(first.cpus) == 1
+    more: list[cpu_sets.CpuSet] = []
     try:
         assert first.cpus[0] not in cpu_sets.free_cpus()
-        if len(free) > 1:
-            second = cpu_sets.claim(1, wait_s=0)
-            assert second is not None and set(second.cpus).isdisjoint(first.cpus)
-            second.release()
-        else:
-            with pytest.raises(TimeoutError):
-                cpu_sets.claim(1, wait_s=0)
+        with pytest.raises(TimeoutError):
+            while True:
+                got = cpu_sets.claim(1, wait_s=0)
+                assert got is not None
+                more.append(got)
+                assert len(more) <= len(cpu_sets.usable_cpus())
+        held = [c for s in [first, *more] for c in s.cpus]
+        assert len(held) == len(set(held))
     finally:
+        for s in more:
+            s.release()
         first.release()
     assert not os.path.exists(first.path)
-    assert first.cpus[0] in cpu_sets.free_cpus()
+    assert first.cpus[0] in cpu_sets.usable_cpus()
 
 
 @needs_cpusets
@@ -78,13 +82,17 @@ def test_a_process_in_the_set_cannot_widen_its_cpus() -> None:
 def test_a_set_whose_owner_is_gone_is_removed_by_the_next_claim() -> None:
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    free = cpu_sets.free_cpus()
-    if not free:
-        pytest.skip("every CPU is held by another usar run")
-    with cpu_sets._locked() as group:  # a stale set, as a killed recorder leaves
-        stale = os.path.join(group, f"run-{dead.pid}-1")
+    # under the claims' lock, so no other run claims meanwhile (a release may still happen)
+    with cpu_sets._locked() as group:
+        before = cpu_sets._held(group)
+        free = [c for c in cpu_sets.usable_cpus() if c not in before]
+        cpu = free[0] if free else cpu_sets.usable_cpus()[0]
+        stale = os.path.join(group, f"run-{dead.pid}-1")  # as a killed recorder leaves it
         os.mkdir(stale)
         with open(os.path.join(stale, "cpuset.cpus"), "w") as f:
-            f.write(str(free[0]))
-    assert free[0] in cpu_sets.free_cpus()
+            f.write(str(cpu))
+        after = cpu_sets._held(group)  # what claim() and free_cpus() ask
     assert not os.path.exists(stale)
+    assert after <= before
+    if free:
+        assert cpu not in after

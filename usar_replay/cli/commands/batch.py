@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
+from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError
 
 if TYPE_CHECKING:
@@ -156,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
     print(summary.table)
     print()
     print("\n".join(summary.lines()))
-    print(f"wrote {plan.out_root}/summary.csv, summary.txt and a folder per team")
+    print_wrapped(f"wrote {plan.out_root}/summary.csv, summary.txt and a folder per team")
     if summary.interrupted:
         return EXIT_INTERRUPTED
     return EXIT_FAIL if summary.errors else EXIT_OK
