@@ -494,7 +494,8 @@ class Bridge:
     def stop(self) -> None:
         if self.quiet is not None:
             print(
-                f"usar pacing: {self.quiet.samples} samples, {self.capped} ticks capped, "
+                f"usar pacing: {self.quiet.samples} samples ({self.quiet.snapshots} waits on "
+                f"one), {self.capped} ticks capped, "
                 f"{self.waited_s:.1f} s waiting for the graph, {self.shutdown.summary()}",
                 flush=True,
             )

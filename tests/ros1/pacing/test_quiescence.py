@@ -142,3 +142,41 @@ def test_a_runnable_thread_anywhere_ends_the_quiet_readings() -> None:
     finally:
         busy.kill()
         busy.wait()
+
+
+def test_one_sample_is_enough_only_for_a_real_time_tree_on_the_askers_only_cpu() -> None:
+    """The watcher's case (:meth:`Quiescence.confined`): the tree real-time on the CPU the
+    asking thread alone may use; a wait then ends on one sample. A tree thread allowed
+    elsewhere could run while the asker reads: two samples again."""
+    import os
+
+    import pytest
+
+    child = start_child("import time; time.sleep(600)")
+    mine = os.sched_getaffinity(0)
+    cpu = max(mine)
+    try:
+        quiet = Quiescence(root=child.pid)
+        wait_for(lambda: quiet.refresh() == [child.pid], "the child")
+        tids = [int(t) for t in os.listdir(f"/proc/{child.pid}/task")]
+        assert not quiet.confined()  # an ordinary process on any CPU
+        try:
+            for tid in tids:
+                os.sched_setaffinity(tid, {cpu})
+                os.sched_setscheduler(tid, os.SCHED_RR, os.sched_param(1))
+        except PermissionError:
+            pytest.skip("real-time priority needs root (CAP_SYS_NICE)")
+        os.sched_setaffinity(0, {cpu})
+        quiet.created()  # the tree as found now (as the watcher asks before each wait)
+        quiet.refresh()
+        assert quiet.confined()
+        assert quiet.wait(5.0) and quiet.snapshots == 1
+        os.sched_setaffinity(tids[0], mine)  # the child may run beside the asker now
+        quiet.refresh()
+        assert not quiet.confined()
+        samples = quiet.samples
+        assert quiet.wait(5.0) and quiet.snapshots == 1 and quiet.samples >= samples + 2
+    finally:
+        os.sched_setaffinity(0, mine)
+        child.kill()
+        child.wait()

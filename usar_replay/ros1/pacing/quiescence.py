@@ -9,7 +9,10 @@ as the graph and the same on a loaded machine as on an idle one. The graph is id
    in between: ``/proc/<pid>/task/<tid>/syscall`` does not say ``running``, and a thread in a
    call that is not a wait is not ``D`` in its ``stat`` (in uninterruptible I/O, writing its
    output to a file, it is still reacting); see :meth:`Quiescence.threads` for the cheap
-   reading of a machine with nothing runnable;
+   reading of a machine with nothing runnable. One sample is enough where it is a snapshot
+   (:meth:`Quiescence.confined`): the whole tree real-time on the asking thread's only CPU,
+   and the asker never off that CPU while it read (a tree thread that ran would have taken
+   the CPU from it: its count of context switches, ``getrusage``, would have moved);
 2. no bytes wait in any of its sockets (:mod:`.sock_diag`: a message on its way between two
    nodes is a reaction not finished), asked once the threads look idle;
 3. every thread that was in a *short timed sleep* when the graph first looked idle has woken
@@ -33,6 +36,7 @@ from __future__ import annotations
 import contextlib
 import os
 import platform
+import resource
 import struct
 import time
 from collections.abc import Collection
@@ -62,6 +66,10 @@ sim-time sleeps nap 1 ms, ``ros::Time::waitForValid`` 10 ms until the first ``/c
 LONG_WAIT_S = 0.15
 """A timed wait with more than this left at start-up is a wall-clock re-check (see
 :meth:`Quiescence.long_waits`); roscpp's own spinners wait 100 ms at a time."""
+CONFINED_RECHECK = 32
+"""Waits between two checks of :meth:`Quiescence.confined` on an unchanged tree (a thread
+may widen its CPUs or lose its real-time policy at any time; new threads are checked at
+once)."""
 NAP_S = 0.0002
 """Wall time between two samples by default (the asking thread sleeps: on the graph's CPU the
 graph runs then, and in the graph's own process its other threads get the interpreter's lock);
@@ -254,6 +262,11 @@ class Quiescence:
         self._inodes: set[int] = set()
         self.samples = 0
         """Samples taken (for the bridge's log)."""
+        self.snapshots = 0
+        """Waits that ended on one sample taken as a snapshot (:meth:`confined`)."""
+        self._confined: bool | None = None
+        """:meth:`confined`'s last answer (None: ask again)."""
+        self._confined_age = 0
         self.untimed: frozenset[int] = frozenset()
         """The package's processes whose main thread was in a wait without a timeout at the
         last sample (:mod:`.shutdown_watch`: roscpp's ``ros::shutdown`` joins its threads so)."""
@@ -288,6 +301,7 @@ class Quiescence:
         the pids of the package's processes (the nodes); ``children``: a walk of the tree
         just made (:func:`children_map` of the root)."""
         self._pids = [p for p in descendants(self.root, children) if p != self.own_pid]
+        self._confined = None
         seen: set[int] = set()
         for pid in self._pids:
             with contextlib.suppress(OSError):
@@ -493,6 +507,43 @@ class Quiescence:
             return float("inf")
         return float(sec) + float(nsec) / 1e9
 
+    def confined(self) -> bool:
+        """Whether one sample is a snapshot of the tree: the asking thread may run on one CPU
+        only, and every thread of the tree on that CPU only, under a real-time policy (as
+        :mod:`.scheduling` sets the graph beside the watcher). There, a tree thread that
+        becomes runnable takes the CPU from the asker at once, so a sample during which the
+        asker never left its CPU (:meth:`_switches`) saw every thread as it was at one instant,
+        and a second sample to show that none ran in between adds nothing. Asked again after
+        each change of the tree, and every :data:`CONFINED_RECHECK` waits."""
+        self._confined_age += 1
+        if self._confined is not None and self._confined_age < CONFINED_RECHECK:
+            return self._confined
+        self._confined_age = 0
+        self._confined = False
+        try:
+            mine = os.sched_getaffinity(0)
+            if len(mine) != 1 or os.sched_getscheduler(0) != os.SCHED_OTHER:
+                return False
+            for tid in self._threads:
+                rr = os.sched_getscheduler(tid) & ~os.SCHED_RESET_ON_FORK
+                if rr not in (os.SCHED_RR, os.SCHED_FIFO) or os.sched_getaffinity(tid) != mine:
+                    return False
+        except OSError:
+            return False
+        self._confined = bool(self._threads)
+        return self._confined
+
+    def _switches(self) -> tuple[int, int, bytes]:
+        """The asking thread's voluntary and involuntary context switches, and the PID
+        namespace's last PID (as :meth:`created` reads it: a thread made since the tree was
+        last found is not in the sample)."""
+        use = resource.getrusage(resource.RUSAGE_THREAD)
+        try:
+            last = os.pread(self._loadavg, 128, 0).split()[-1]
+        except (OSError, IndexError):
+            last = b"?"
+        return use.ru_nvcsw, use.ru_nivcsw, last
+
     # -- the wait --------------------------------------------------------------------------------
 
     def wait(self, cap_s: float | None, nap_s: float = NAP_S) -> bool:
@@ -500,9 +551,22 @@ class Quiescence:
         sampling every ``nap_s`` (0: at once again, for a caller on a CPU of its own)."""
         deadline = None if cap_s is None else time.perf_counter() + cap_s
         base: dict[int, ThreadState] | None = None
+        alone = self.confined()
         while True:
+            before = self._switches() if alone else None
             now = self.threads()
             if any(s.running for s in now.values()):
+                base = None
+            elif (
+                before is not None
+                and self._switches() == before
+                and before[2] == self._last_pid  # no thread made since the tree was found
+                and not any(s.polling for s in now.values())
+            ):
+                # a snapshot: nothing of the tree ran while it was read (see :meth:`confined`)
+                if self.sockets_waiting() == 0:
+                    self.snapshots += 1
+                    return True
                 base = None
             elif base is None or not _still(base, now):
                 base = now

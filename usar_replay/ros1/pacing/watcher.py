@@ -72,6 +72,8 @@ class Watcher:
         self.connected: frozenset[int] = frozenset()
         """As :attr:`.Quiescence.connected`, at the last wait's end."""
         self.samples = 0
+        self.snapshots = 0
+        """Waits that ended on one sample (:meth:`.Quiescence.confined`)."""
         self.kids: dict[int, list[int]] | None = None
         """The tree's last walk (processes -> their children)."""
 
@@ -125,6 +127,7 @@ class Watcher:
         if "connected" in got:
             self.connected = frozenset(got["connected"])
         self.samples = int(got["samples"])
+        self.snapshots = int(got.get("snapshots", 0))
         if "kids" in got:
             self.kids = {int(k): v for k, v in got["kids"].items()}
         return bool(got["idle"])
@@ -186,6 +189,7 @@ def serve(sock: socket.socket, root: int, ignore: Collection[int] = ()) -> None:
                     )
                 answer["idle"] = quiet.wait(request["cap"], nap_s=nap_s)
                 answer["samples"] = quiet.samples
+                answer["snapshots"] = quiet.snapshots
                 for key, value in (("untimed", quiet.untimed), ("connected", quiet.connected)):
                     if told.get(key) != value:
                         answer[key] = sorted(value)
