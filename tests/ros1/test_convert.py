@@ -53,13 +53,37 @@ def test_messages_convert_both_ways() -> None:
 
 def test_rosout_levels_and_names_come_back_as_rcl_log() -> None:
     _ros1()
+    import io
+
     from rosgraph_msgs.msg import Log as Log1
 
-    from usar_replay.ros1.convert import log_from_ros1, ros1_class
+    from usar_replay.ros1.convert import log_from_ros1_bytes, ros1_class
+
+    def wire(value: object) -> bytes:
+        buff = io.BytesIO()
+        value.serialize(buff)  # type: ignore[attr-defined]
+        return buff.getvalue()
 
     assert ros1_class("geometry_msgs/msg/Twist").__name__ == "Twist"
     value = Log1(level=Log1.WARN, name="/explorer", msg="explorer: stuck", file="e.cpp", line=7)
-    got = log_from_ros1(value)
-    assert got.level == msgs.Log.WARN
-    assert log_from_ros1(Log1(level=3)).level == msgs.Log.INFO  # not a ROS 1 level
+    value.header.stamp.secs, value.header.stamp.nsecs = 12, 500
+    value.topics = ["/rosout", "/explorer/cmd_vel"]
+    got = log_from_ros1_bytes(wire(value))
+    assert got is not None and got.level == msgs.Log.WARN
+    assert (got.stamp.sec, got.stamp.nanosec) == (12, 500)
     assert (got.name, got.msg, got.file, got.line) == ("explorer", "explorer: stuck", "e.cpp", 7)
+    weird = log_from_ros1_bytes(wire(Log1(level=3, function="f")))
+    assert weird is not None and weird.level == msgs.Log.INFO  # not a ROS 1 level
+    assert weird.function == "f"
+    # whatever the bytes, the same fields as rospy's own deserialize, or None where it fails
+    bad = wire(Log1(level=Log1.ERROR, msg="caf\u00e9", topics=["a"])).replace(b"\xc3", b"\xff")
+    for data in (bad, bad[:-1], bad[:30], bad[:12], b""):
+        import genpy
+
+        try:
+            ref = Log1().deserialize(data)
+        except genpy.DeserializationError:  # rospy drops the message
+            assert log_from_ros1_bytes(data) is None
+            continue
+        mine = log_from_ros1_bytes(data)
+        assert mine is not None and (mine.msg, mine.line) == (ref.msg, ref.line)

@@ -29,6 +29,20 @@ def _from(msg: Any, node: str) -> Any:
     return msg
 
 
+def _raw(msg: Any, node: str) -> Any:
+    """``msg`` as rospy's ``AnyMsg`` hands it over: its bytes and the connection header."""
+    import io
+
+    import rospy
+
+    buff = io.BytesIO()
+    msg.serialize(buff)
+    raw = rospy.AnyMsg()
+    raw.deserialize(buff.getvalue())
+    raw._connection_header = {"callerid": node, "type": msg._type, "md5sum": msg._md5sum}
+    return raw
+
+
 def _twist(x: float, node: str) -> Any:
     from geometry_msgs.msg import Twist
 
@@ -71,9 +85,16 @@ def test_the_bridges_own_tf_and_log_are_not_the_graphs_outputs() -> None:
 
     inbox = Inbox(BRIDGE)
     inbox.on_tf(_tf("base_footprint", BRIDGE), contract.TF_STATIC)
-    inbox.on_log(_from(Log(name=BRIDGE, msg="ours"), BRIDGE))
-    inbox.on_log(_from(Log(name="/explorer", msg="theirs", level=Log.INFO), "/explorer"))
+    inbox.on_log(_raw(Log(name=BRIDGE, msg="ours"), BRIDGE))
+    inbox.on_log(_raw(Log(name="/explorer", msg="theirs", level=Log.INFO), "/explorer"))
     got = inbox.take()
     assert [topic for topic, _ in got] == [contract.ROSOUT]
+    (log,) = (v for _, v in got)
+    assert isinstance(log, msgs.Log) and (log.name, log.msg) == ("explorer", "theirs")
+    # /rosout is taken in as raw bytes: another type published on it is not read as a log
+    from std_msgs.msg import String
+
+    inbox.on_log(_raw(String(data="not a log line"), "/explorer"))
+    assert inbox.take() == []
     assert caller(_twist(0.0, "/explorer")) == "/explorer"
     assert caller(object()) == ""

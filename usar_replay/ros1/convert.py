@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import functools
 import importlib
+import struct
 from typing import Any
 
 from usar_replay.core import msgs
 
-__all__ = ["from_ros1", "log_from_ros1", "ros1_class", "to_ros1"]
+__all__ = ["from_ros1", "log_from_ros1_bytes", "ros1_class", "to_ros1"]
 
 _RENAMED = {("CameraInfo", "d"): "D", ("CameraInfo", "k"): "K", ("CameraInfo", "r"): "R"}
 _RENAMED[("CameraInfo", "p")] = "P"
@@ -113,14 +114,46 @@ def from_ros1(cls: type[msgs.Message], value: Any) -> msgs.Message:
     return cls(**kwargs)
 
 
-def log_from_ros1(value: Any) -> msgs.Log:
-    """rosgraph_msgs/Log (ROS 1 levels 1/2/4/8/16) as rcl_interfaces/Log (10/20/30/40/50)."""
+_HEADER = struct.Struct("<3I")
+_U32 = struct.Struct("<I")
+_LEVEL = struct.Struct("<b")
+
+
+def log_from_ros1_bytes(data: bytes) -> msgs.Log | None:
+    """A serialized ``rosgraph_msgs/Log`` (ROS 1 levels 1/2/4/8/16) as ``rcl_interfaces/Log``
+    (10/20/30/40/50), without rospy's message object in between (None where rospy's would not
+    deserialize: a truncated message). Why: a package that logs in a busy loop sends a few
+    lines a tick, and rospy's ``deserialize`` and the conversion after it, on the bridge's
+    receiving thread, were part of every such tick's wait. Strings as genpy decodes them
+    (UTF-8, a bad byte replaced)."""
+    try:
+        _seq, secs, nsecs = _HEADER.unpack_from(data, 0)
+        at = _HEADER.size
+        texts: list[str] = []
+        for field in range(5):  # header.frame_id, then (after the level) name msg file function
+            (n,) = _U32.unpack_from(data, at)
+            at += 4
+            if at + n > len(data):
+                return None
+            texts.append(data[at : at + n].decode("utf-8", "replace"))
+            at += n
+            if field == 0:
+                (level,) = _LEVEL.unpack_from(data, at)
+                at += 1
+        (line,) = _U32.unpack_from(data, at)
+        (count,) = _U32.unpack_from(data, at + 4)  # topics[]: read, as rospy's would, not kept
+        at += 8
+        for _ in range(count):  # as genpy: a length must be there, its string may run short
+            (n,) = _U32.unpack_from(data, at)
+            at += 4 + n
+    except struct.error:
+        return None
     return msgs.Log(
-        stamp=msgs.Time(sec=int(value.header.stamp.secs), nanosec=int(value.header.stamp.nsecs)),
-        level=_ROS1_LEVELS.get(int(value.level), msgs.Log.INFO),
-        name=str(value.name).lstrip("/"),
-        msg=str(value.msg),
-        file=str(value.file),
-        function=str(value.function),
-        line=int(value.line),
+        stamp=msgs.Time(sec=secs, nanosec=nsecs),
+        level=_ROS1_LEVELS.get(level, msgs.Log.INFO),
+        name=texts[1].lstrip("/"),
+        msg=texts[2],
+        file=texts[3],
+        function=texts[4],
+        line=line,
     )

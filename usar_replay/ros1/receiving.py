@@ -39,7 +39,6 @@ class Inbox:
         """rospy's subscribers, in the bridge's start-up order (rospy must be initialised)."""
         import rospy
         from geometry_msgs.msg import Twist
-        from rosgraph_msgs.msg import Log
         from tf2_msgs.msg import TFMessage
 
         rospy.Subscriber(
@@ -48,7 +47,9 @@ class Inbox:
         rospy.Subscriber(
             contract.TF_STATIC, TFMessage, self.on_tf, callback_args=contract.TF_STATIC
         )
-        rospy.Subscriber(contract.ROSOUT, Log, self.on_log, tcp_nodelay=True)
+        # raw bytes, read here (:func:`.convert.log_from_ros1_bytes`); of Log's type only, as
+        # rospy's own checks would have it (a publisher of another type on /rosout is ignored)
+        rospy.Subscriber(contract.ROSOUT, rospy.AnyMsg, self.on_log, tcp_nodelay=True)
         for robot in robots:
             topic = contract.cmd_vel(robot)
             rospy.Subscriber(topic, Twist, self.on_twist, callback_args=topic, tcp_nodelay=True)
@@ -76,12 +77,18 @@ class Inbox:
         self._put(topic, msg, from_ros1(msgs.Twist, msg))
 
     def on_log(self, msg: Any) -> None:
-        """A ``rosgraph_msgs/Log`` on ``/rosout``."""
-        if self._ours(msg):
-            return
-        from usar_replay.ros1.convert import log_from_ros1
+        """A ``rosgraph_msgs/Log`` on ``/rosout``, as rospy's ``AnyMsg`` (raw bytes)."""
+        from rosgraph_msgs.msg import Log
 
-        self._put(contract.ROSOUT, msg, log_from_ros1(msg))
+        from usar_replay.ros1.convert import log_from_ros1_bytes
+
+        header = getattr(msg, "_connection_header", None) or {}
+        kind = (header.get("type"), header.get("md5sum"))
+        if self._ours(msg) or kind != (Log._type, Log._md5sum):
+            return
+        value = log_from_ros1_bytes(bytes(msg._buff))
+        if value is not None:
+            self._put(contract.ROSOUT, msg, value)
 
     def take(
         self, more: Sequence[tuple[str, str, msgs.Message]] = ()
