@@ -299,6 +299,9 @@ def test_wall_limit_is_a_verdict(tmp_path: Path) -> None:
     assert "wall time" in str(g["outcome_reason"])
     assert float(g["points"]) < 60  # type: ignore[arg-type]
     assert g["log_complete"] is False  # the cut log is graded as far as it goes
+    # whatever the limit cut short, nothing of the run stays mounted in the batch's folder
+    with open("/proc/self/mountinfo", encoding="utf-8", errors="replace") as f:
+        assert str(tmp_path) not in f.read()
 
 
 @pytest.mark.slow

@@ -29,6 +29,7 @@ from typing import Any, Protocol
 from usar_replay.batch.plan import RunJob, RunResult, read_json
 from usar_replay.core.errors import UsageError
 from usar_replay.node import cpu_sets
+from usar_replay.node.run_folder import unmount_under
 
 __all__ = ["Engine", "LocalEngine", "RayEngine", "execute", "make_engine", "share_cpus"]
 
@@ -110,6 +111,7 @@ def execute(job_json: str) -> dict[str, Any]:
     tail = _tail(output)
     if output.exists():
         os.replace(output, job.path(".output.txt"))
+    unmount_under(str(work))  # a run killed at its limit left its folder's tmpfs mounted
     shutil.rmtree(work, ignore_errors=True)
     with contextlib.suppress(OSError):
         work.parent.rmdir()  # .work/ when it is empty

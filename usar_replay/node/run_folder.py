@@ -20,7 +20,7 @@ import os
 import shutil
 import tempfile
 
-__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder"]
+__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder", "unmount_under"]
 
 DEFAULT_RUN_FOLDER_MB = 512
 """The run folder's default size in MiB (``--run-folder-mb``)."""
@@ -74,3 +74,37 @@ class RunFolder:
             self.limited = False
         if not keep:
             shutil.rmtree(self.path, ignore_errors=True)
+
+
+def _mount_points() -> list[str]:
+    """This mount namespace's mount points (``/proc/self/mountinfo``'s fifth field, its octal
+    escapes of space, tab, newline and backslash undone)."""
+    try:
+        with open("/proc/self/mountinfo", "rb") as f:
+            lines = f.read().split(b"\n")
+    except OSError:
+        return []
+    out = []
+    for line in lines:
+        fields = line.split(b" ")
+        if len(fields) > 4:
+            raw = fields[4]
+            for esc, char in ((b"\\040", b" "), (b"\\011", b"\t"), (b"\\012", b"\n")):
+                raw = raw.replace(esc, char)
+            out.append(os.fsdecode(raw.replace(b"\\134", b"\\")))
+    return out
+
+
+def unmount_under(folder: str) -> list[str]:
+    """Unmount (lazily) every mount at or below ``folder``, the deepest first; returns them.
+    Why: a run killed at its wall limit never reaches :meth:`RunFolder.close`, and its tmpfs
+    stayed mounted in the batch's work folder (``rmtree`` could not remove it) until the
+    machine restarted. The batch calls this once the run's processes are gone."""
+    libc = _libc()
+    if libc is None or os.geteuid() != 0:
+        return []
+    top = os.path.realpath(folder)
+    under = [m for m in _mount_points() if m == top or m.startswith(top + os.sep)]
+    for point in sorted(under, key=len, reverse=True):
+        libc.umount2(point.encode(), _MNT_DETACH)
+    return under

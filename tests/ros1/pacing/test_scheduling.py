@@ -94,6 +94,12 @@ def test_beside_a_real_time_graph_the_spared_process_shares_its_cpu(tmp_path: Pa
     watcher = subprocess.Popen([sys.executable, "-m", "fake_watcher"], cwd=tmp_path)
     cpus = sorted(os.sched_getaffinity(0))
     try:
+        # until its exec the child shows this process's command line (the real watcher, started
+        # long before the first tick's pinning, also sets its own policy back to SCHED_OTHER)
+        wait_for(
+            lambda: b"fake_watcher" in Path(f"/proc/{watcher.pid}/cmdline").read_bytes(),
+            "the watcher's exec",
+        )
         pin = OneCpu(watcher.pid, cpu=cpus[0], realtime=True, spares=b"fake_watcher")
         wait_for(lambda: pin.apply() > 0 or watcher.pid in pin.done, "the watcher's threads")
         assert os.sched_getaffinity(watcher.pid) == {cpus[0]}
