@@ -84,8 +84,8 @@ def main() -> None:
 
 
 def test_a_mission_cannot_leave_its_cpu_set_or_see_its_cgroup(tmp_path: Path) -> None:
-    if not cpu_sets.free_cpus():
-        pytest.skip("no free CPU set here")
+    if not cpu_sets.usable_cpus():  # the run waits for a CPU another run (or worker) holds
+        pytest.skip("no writable cgroup v1 cpuset hierarchy here (not root?)")
     out, _ = _record(tmp_path, ESCAPE, cpus=1)
     lines = _said(out)
     assert any(line.startswith("ATTACK affinity") and line.endswith(": 1") for line in lines), lines
