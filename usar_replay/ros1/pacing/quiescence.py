@@ -419,13 +419,19 @@ class Quiescence:
         last call (``/proc/loadavg``'s last field, the namespace's last PID, moved; True at the
         first call). In the kernel sandbox the namespace is the run's: when this is False,
         the tree's processes and threads are those of the last walk, or fewer."""
-        try:
-            last = os.pread(self._loadavg, 128, 0).split()[-1]
-        except (OSError, IndexError):
+        last = self._last_pid_now()
+        if last is None:
             return True
         new = last != self._last_pid
         self._last_pid = last
         return new
+
+    def _last_pid_now(self) -> bytes | None:
+        """The PID namespace's last PID (``/proc/loadavg``'s last field; None: unreadable)."""
+        try:
+            return os.pread(self._loadavg, 128, 0).split()[-1]
+        except (OSError, IndexError):
+            return None
 
     def _nothing_runnable(self) -> bool:
         """No thread of the machine runnable but the caller (``/proc/loadavg``'s fourth field
@@ -533,16 +539,11 @@ class Quiescence:
         self._confined = bool(self._threads)
         return self._confined
 
-    def _switches(self) -> tuple[int, int, bytes]:
-        """The asking thread's voluntary and involuntary context switches, and the PID
-        namespace's last PID (as :meth:`created` reads it: a thread made since the tree was
-        last found is not in the sample)."""
+    @staticmethod
+    def _switches() -> tuple[int, int]:
+        """The asking thread's voluntary and involuntary context switches."""
         use = resource.getrusage(resource.RUSAGE_THREAD)
-        try:
-            last = os.pread(self._loadavg, 128, 0).split()[-1]
-        except (OSError, IndexError):
-            last = b"?"
-        return use.ru_nvcsw, use.ru_nivcsw, last
+        return use.ru_nvcsw, use.ru_nivcsw
 
     # -- the wait --------------------------------------------------------------------------------
 
@@ -560,8 +561,9 @@ class Quiescence:
             elif (
                 before is not None
                 and self._switches() == before
-                and before[2] == self._last_pid  # no thread made since the tree was found
                 and not any(s.polling for s in now.values())
+                # no thread made since the tree was found (it would not be in the sample)
+                and self._last_pid_now() == self._last_pid
             ):
                 # a snapshot: nothing of the tree ran while it was read (see :meth:`confined`)
                 if self.sockets_waiting() == 0:
