@@ -117,6 +117,7 @@ def from_ros1(cls: type[msgs.Message], value: Any) -> msgs.Message:
 _HEADER = struct.Struct("<3I")
 _U32 = struct.Struct("<I")
 _LEVEL = struct.Struct("<b")
+_LINE_TOPICS = struct.Struct("<2I")
 
 
 def log_from_ros1_bytes(data: bytes) -> msgs.Log | None:
@@ -128,21 +129,14 @@ def log_from_ros1_bytes(data: bytes) -> msgs.Log | None:
     (UTF-8, a bad byte replaced)."""
     try:
         _seq, secs, nsecs = _HEADER.unpack_from(data, 0)
-        at = _HEADER.size
-        texts: list[str] = []
-        for field in range(5):  # header.frame_id, then (after the level) name msg file function
-            (n,) = _U32.unpack_from(data, at)
-            at += 4
-            if at + n > len(data):
-                return None
-            texts.append(data[at : at + n].decode("utf-8", "replace"))
-            at += n
-            if field == 0:
-                (level,) = _LEVEL.unpack_from(data, at)
-                at += 1
-        (line,) = _U32.unpack_from(data, at)
-        (count,) = _U32.unpack_from(data, at + 4)  # topics[]: read, as rospy's would, not kept
-        at += 8
+        _frame_id, at = _text(data, _HEADER.size)
+        (level,) = _LEVEL.unpack_from(data, at)
+        name, at = _text(data, at + 1)
+        text, at = _text(data, at)
+        file, at = _text(data, at)
+        function, at = _text(data, at)
+        (line, count) = _LINE_TOPICS.unpack_from(data, at)  # topics[]: read as rospy's, not kept
+        at += _LINE_TOPICS.size
         for _ in range(count):  # as genpy: a length must be there, its string may run short
             (n,) = _U32.unpack_from(data, at)
             at += 4 + n
@@ -151,9 +145,19 @@ def log_from_ros1_bytes(data: bytes) -> msgs.Log | None:
     return msgs.Log(
         stamp=msgs.Time(sec=secs, nanosec=nsecs),
         level=_ROS1_LEVELS.get(level, msgs.Log.INFO),
-        name=texts[1].lstrip("/"),
-        msg=texts[2],
-        file=texts[3],
-        function=texts[4],
+        name=name.lstrip("/"),
+        msg=text,
+        file=file,
+        function=function,
         line=line,
     )
+
+
+def _text(data: bytes, at: int) -> tuple[str, int]:
+    """The ROS 1 string at ``at`` (a length, then UTF-8) and where the next field starts;
+    struct.error where it runs past the end (genpy then fails at the field after it)."""
+    (n,) = _U32.unpack_from(data, at)
+    at += 4
+    if at + n > len(data):
+        raise struct.error("a string past the message's end")
+    return data[at : at + n].decode("utf-8", "replace"), at + n
