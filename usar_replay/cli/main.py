@@ -24,23 +24,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     from usar_replay.core import signals
     from usar_replay.core.safe_text import safe, safe_stdout
 
-    with signals.handled(), safe_stdout():
-        try:
-            parser = build_parser()
-            args = parser.parse_args(argv)
-            code: int = args.func(args)
-        except UsarError as err:
-            # its text may quote a log's (a topic's name, a definition's type): shown, not obeyed
-            print(f"usar: error: {safe(str(err))}", file=sys.stderr)
-            return err.exit_code
-        except KeyboardInterrupt as err:
-            # a plain Ctrl-C is "interrupted"; SIGTERM/SIGHUP say which signal ended the command
-            code = signals.exit_code(err)
-            text = str(err) if code != EXIT_INTERRUPTED else "interrupted"
-            print(f"usar: {text}", file=sys.stderr)
-            return code
-        except BrokenPipeError:
-            return EXIT_OK
+    try:
+        with signals.handled(), safe_stdout():
+            try:
+                parser = build_parser()
+                args = parser.parse_args(argv)
+                code: int = args.func(args)
+            except UsarError as err:
+                # its text may quote a log's (a topic's name, a definition's type): shown, not
+                # obeyed
+                print(f"usar: error: {safe(str(err))}", file=sys.stderr)
+                return err.exit_code
+            except BrokenPipeError:
+                return EXIT_OK
+    except KeyboardInterrupt as err:
+        # here too when it came while the handlers were being set (a Ctrl-C at start-up)
+        # a plain Ctrl-C is "interrupted"; SIGTERM/SIGHUP say which signal ended the command
+        code = signals.exit_code(err)
+        text = str(err) if code != EXIT_INTERRUPTED else "interrupted"
+        print(f"usar: {text}", file=sys.stderr)
+        return code
     return code
 
 
