@@ -1,7 +1,7 @@
 """`usar record --ros1`: build time and the real-time factor a C++ course node sustains.
 
     python bench/bench_ros1.py [--world room|course] [--rtf 0.5] [--package DIR]
-                               [--launch FILE ...]
+                               [--launch FILE ...] [--latency 0|1]
 
 Builds the package once into an empty build cache (catkin_make: the build time), then records
 it on the world with each ``--rtf`` wall cap (the slowest pace, a safety net: the graph itself
@@ -18,6 +18,10 @@ is printed beside the mean of the Python runs just before and after it (the rati
 wants at 0.8 or more): a shared machine's speed drifts by 10-20% over the minutes a
 course-world bench takes (one Python run went from 6.4x to 7.7x within six minutes), and
 Python runs at the ends only would put the drift into the ratios of the runs in the middle.
+The ROS 1 runs use ``record.actuation_latency_ticks`` as ``usar record --ros1`` does (unset:
+1, the graph reacts while the simulator steps the next tick); ``--latency 0`` measures them
+one core at a time, as before 2026-11-27. The Python runs always use their own default, 0
+(bench/bench_record.py: with 1 the Python mission was slower).
 Nothing is asserted; the numbers go into docs/ros1.md.
 """
 
@@ -30,8 +34,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from usar_replay.core.settings import RunSettings
+from usar_replay.core.settings import RecordSettings, RunSettings
 from usar_replay.grading.grade import grade_file
+from usar_replay.log.run import open_run
 from usar_replay.node.mission_process import MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline import record as python_record
 from usar_replay.ros1.build import workspace as build_mod
@@ -53,7 +58,11 @@ def main() -> None:
     ap.add_argument("--rtf", type=float, nargs="+", default=[0.5])
     ap.add_argument("--package", default=str(EXAMPLE))
     ap.add_argument("--launch", nargs="+", help="launch files (default: the example's twins)")
+    ap.add_argument(
+        "--latency", type=int, choices=[0, 1], help="the ROS 1 runs' actuation latency (ticks)"
+    )
     args = ap.parse_args()
+    ros1_settings = RunSettings(record=RecordSettings(actuation_latency_ticks=args.latency))
     launches = args.launch or (TWINS if Path(args.package) == EXAMPLE else [""])
     scenario = one_room() if args.world == "room" else course_world()
     with tempfile.TemporaryDirectory(prefix="bench-ros1-") as tmp:
@@ -78,7 +87,7 @@ def main() -> None:
                     scenario,
                     out,
                     args.package,
-                    RunSettings(),
+                    ros1_settings,
                     options=Ros1Options(launch=launch, rtf=rtf),
                 )
                 wall = time.perf_counter() - start
@@ -86,8 +95,10 @@ def main() -> None:
                 report = grade_file(out)
                 rate_wall = rate_wall or wall
                 twin = f", {wall / rate_wall:.2f}x the Rate run's wall" if launch in TWINS else ""
+                latency = open_run(out).settings.record.actuation_latency_ticks
                 print(
-                    f"{launch or pkg.name}, wall cap dt/{rtf:g}: {result.outcome}, "
+                    f"{launch or pkg.name}, wall cap dt/{rtf:g}, latency {latency}:"
+                    f" {result.outcome}, "
                     f"{report.points:g}/{report.max_points:g} points, {result.sim_duration_s:.1f}"
                     f" s sim in {wall:.1f} s wall (incl. start-up): "
                     f"{result.sim_duration_s / wall:.2f}x real time{twin}{steal}; build + run +"

@@ -12,6 +12,7 @@ from clitools import usar
 from example_worlds import quick_room
 
 from usar_replay.core.settings import RunSettings
+from usar_replay.log.run import open_run
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_course"
 
@@ -44,6 +45,9 @@ def example_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_an_unchanged_package_replays_bit_for_bit(example_log: Path) -> None:
+    # the graph reacted while the simulator stepped on (record.actuation_latency_ticks unset:
+    # 1 for a ROS 1 package), and the log says so
+    assert open_run(example_log).settings.record.actuation_latency_ticks == 1
     done = usar("replay", "--grade", str(example_log))
     assert done.returncode == 0, done.stdout + done.stderr
     assert "bit for bit" in done.stdout

@@ -132,9 +132,13 @@ class RecordSettings:
     max_sim_time_s: float | None = setting(None, unit="s", lo=0.0, lo_open=True, hi=86_400.0)
     """Hard stop; unset: 1.5 x the scenario's time limit (a run past the limit fails grading)."""
     renderer: str = setting("auto", choices=RENDERERS)
-    actuation_latency_ticks: int = setting(0, unit="ticks", lo=0, hi=1)
-    """1: each tick's ``cmd_vel`` acts from the step after the next one, so the mission thinks
-    while the simulator renders (both cores busy); 0: it acts at once (one core at a time)."""
+    actuation_latency_ticks: int | None = setting(None, unit="ticks", lo=0, hi=1)
+    """1: a tick's ``cmd_vel`` acts from the step after the next one, so the mission thinks
+    while the simulator steps and renders the next tick (two cores busy); 0: from the next
+    step (one core at a time). Unset: 1 for a ROS 1 package, whose graph's reaction (some
+    3 ms a tick) then overlaps the simulator's, as on Gazebo, where a node's command never
+    acts at the instant of the odometry it answers; 0 for a Python mission, whose turn is too
+    short for the overlap to pay (bench/bench_record.py). The log stores the value that ran."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

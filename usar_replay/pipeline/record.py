@@ -70,6 +70,7 @@ __all__ = [
     "mission_parameters",
     "print_summary",
     "record",
+    "with_latency",
 ]
 
 OUTCOMES = {
@@ -287,7 +288,7 @@ def record(
 
     ``thresholds`` are the rubric's for :attr:`RecordResult.grade` (default: the course's).
     """
-    settings = settings or RunSettings()
+    settings = with_latency(settings or RunSettings(), 0)
     rs = settings.record
     asg = assignment_of(scenario)
     target = target or resolve_target(mission or asg.builtin_mission)
@@ -336,6 +337,16 @@ def record(
         grade=live,
         stored_on=run.stored.where if run.stored is not None else contract.MARKER_POSES,
     )
+
+
+def with_latency(settings: RunSettings, default: int) -> RunSettings:
+    """``settings`` with ``record.actuation_latency_ticks`` set: ``default`` where it is unset
+    (1 for a ROS 1 package, 0 for a Python mission: the setting's doc), so the log stores
+    the value that ran."""
+    if settings.record.actuation_latency_ticks is not None:
+        return settings
+    latency = dataclasses.replace(settings.record, actuation_latency_ticks=default)
+    return dataclasses.replace(settings, record=latency)
 
 
 def _simulator(scenario: Scenario, settings: RunSettings, asg: Assignment) -> Simulator:

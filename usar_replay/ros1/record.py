@@ -22,7 +22,7 @@ from typing import Any
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
 from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
-from usar_replay.pipeline.record import Progress, RecordResult, record
+from usar_replay.pipeline.record import Progress, RecordResult, record, with_latency
 from usar_replay.ros1.build import debian
 from usar_replay.ros1.build.workspace import (
     Built,
@@ -101,7 +101,7 @@ def record_ros1(
         result = record(
             scenario,
             out,
-            settings,
+            with_latency(settings or RunSettings(), 1),  # the graph thinks while the world moves
             progress,
             limits=limits,
             target=target,
