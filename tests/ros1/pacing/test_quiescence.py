@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 
+import pytest
 from proctools import child as start_child
 from proctools import wait_for
 
@@ -180,3 +181,57 @@ def test_one_sample_is_enough_only_for_a_real_time_tree_on_the_askers_only_cpu()
         os.sched_setaffinity(0, mine)
         child.kill()
         child.wait()
+
+
+def test_a_confined_tree_is_read_quietly_while_the_machine_is_busy_elsewhere(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The recorder renders the next tick on the run's other CPU while the watcher samples
+    (``record.actuation_latency_ticks``): the machine is never quiet then. A tree real-time on
+    the asker's only CPU still has no thread waiting for a CPU while the asker runs, so a
+    thread that has not run since its last reading keeps it (one ``schedstat`` read, no
+    ``syscall``); without that confinement the same busy machine gets full readings."""
+    import os
+
+    mine = os.sched_getaffinity(0)
+    if len(mine) < 2:
+        pytest.skip("needs a second CPU for the busy process")
+    cpu = max(mine)
+    child = start_child("import time; time.sleep(600)")
+    busy = start_child("while True: pass")
+    real_pread = os.pread
+    try:
+        quiet = Quiescence(root=child.pid)
+        wait_for(lambda: quiet.refresh() == [child.pid], "the child")
+        try:
+            for tid in (int(t) for t in os.listdir(f"/proc/{child.pid}/task")):
+                os.sched_setaffinity(tid, {cpu})
+                os.sched_setscheduler(tid, os.SCHED_RR, os.sched_param(1))
+        except PermissionError:
+            pytest.skip("real-time priority needs root (CAP_SYS_NICE)")
+        os.sched_setaffinity(busy.pid, mine - {cpu})
+        os.sched_setaffinity(0, {cpu})
+        quiet.created()
+        quiet.refresh()
+        assert quiet.confined()
+        wait_for(lambda: not quiet._nothing_runnable(), "the busy process in the load average")
+        first = quiet.threads(confined=True)  # full readings: none before
+        syscall = {t.syscall for t in quiet._threads.values()}
+        reads: list[int] = []
+
+        def counted(fd: int, n: int, offset: int) -> bytes:
+            reads.append(fd)
+            return real_pread(fd, n, offset)
+
+        monkeypatch.setattr(os, "pread", counted)
+        assert quiet.threads(confined=True) == first
+        assert reads and not syscall & set(reads)  # schedstat only
+        reads.clear()
+        quiet.threads()  # the machine is busy, and nothing says the tree is confined
+        assert syscall & set(reads)
+    finally:
+        monkeypatch.undo()
+        os.sched_setaffinity(0, mine)
+        for proc in (child, busy):
+            proc.kill()
+            proc.wait()

@@ -346,14 +346,17 @@ class Quiescence:
             self._inodes = self._socket_inodes()
         return sum(n for ino, n in waiting.items() if ino in self._inodes)
 
-    def threads(self) -> dict[int, ThreadState]:
+    def threads(self, confined: bool = False) -> dict[int, ThreadState]:
         """Every thread of the tree now (gone ones left out).
 
         A thread's ``schedstat`` moves whenever it is given a CPU. When the kernel reports no
         runnable thread on the machine but the one asking (``/proc/loadavg``), a thread whose
         ``schedstat`` has not moved since its last full reading is blocked in the same call as
         then, and that reading stands: an idle graph costs one small read per thread. So it
-        does once this sample found a thread running (the sample says "not idle" whatever the
+        does where the tree is ``confined`` (:meth:`confined`: every thread real-time on the
+        asker's only CPU, so none can wait for a CPU while the asker runs; whatever runs on
+        the other CPUs, the recorder rendering the next tick meanwhile, is not the tree's),
+        and once this sample found a thread running (the sample says "not idle" whatever the
         others do; they are read in full again once they have run). Otherwise the
         thread's ``syscall`` file says ``running`` for a thread on or waiting for a CPU, else
         the call it is blocked in; its ``stat`` (the state letter, ``D`` for a thread in
@@ -361,7 +364,7 @@ class Quiescence:
         (a ``write`` to a file)."""
         out: dict[int, ThreadState] = {}
         untimed: set[int] = set()
-        quiet = self._nothing_runnable()
+        quiet = confined or self._nothing_runnable()
         busy = False  # a thread found running: this sample is no base, the rest may be stale
         for tid, t in list(self._threads.items()):
             try:
@@ -555,7 +558,7 @@ class Quiescence:
         alone = self.confined()
         while True:
             before = self._switches() if alone else None
-            now = self.threads()
+            now = self.threads(alone)
             if any(s.running for s in now.values()):
                 base = None
             elif (
