@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import importlib
 import json
 import multiprocessing.connection
 import os
@@ -58,7 +59,7 @@ import time
 import traceback
 import xmlrpc.client
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from usar_replay.core import contract, msgs
 from usar_replay.node import kernel_sandbox
@@ -85,9 +86,11 @@ from usar_replay.ros1.pacing.graph_start import (
 )
 from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.pacing.watcher import Watcher
-from usar_replay.ros1.publishing import Publishing
 from usar_replay.ros1.receiving import Inbox
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
+
+if TYPE_CHECKING:
+    from usar_replay.ros1.publishing import Publishing
 
 __all__ = ["main"]
 
@@ -157,8 +160,8 @@ class Bridge:
         self.master: subprocess.Popen[bytes] | None = None
         self.graph: Graph | None = None
         self.move_base: dict[str, Any] = {}
-        self.out = Publishing(self.move_base)
-        """The simulator's side of the graph (:mod:`.publishing`)."""
+        self.out: Publishing
+        """The simulator's side of the graph (:mod:`.publishing`; made in :meth:`start`)."""
         self.inbox = Inbox(NODE)
         """What the graph publishes (:mod:`.receiving`)."""
         self.last_t: int | None = None
@@ -182,6 +185,8 @@ class Bridge:
         """Package nodes seen unregistered."""
         self._exited: set[int] = set()
         """Package processes seen exited by the end of the last tick."""
+        self._before_clock: frozenset[int] = frozenset()
+        """Package processes that had exited when ``/clock`` started (roslaunch's helpers)."""
         self._connected: frozenset[int] = frozenset()
         self._cap: float | None = None
         self.shutdown = ShutdownWatch(collected_by_launcher=bool(config.get("launch")))
@@ -189,8 +194,16 @@ class Bridge:
     # -- start-up -------------------------------------------------------------------------------
 
     def start(self) -> None:
-        """The master, the parameters, the bridge's node, then the student's graph; returns
-        once the graph has registered a node with the master (or raises with its output)."""
+        """The master, the parameters, the student's graph, then the bridge's node; returns
+        once the graph is ready for the first ``/clock`` (or raises with its output).
+
+        What overlaps, on the run's two CPUs: the master starts while this process imports
+        what its node needs (rospy, the navigator's SciPy: half a second), and roslaunch starts
+        the package's nodes while the bridge's node comes up (its ``/clock``, topics and
+        move_base servers). A node up before them is connected to them by the master's
+        ``publisherUpdate``, and the start-up gate (:meth:`_wait_for_graph`) holds ``/clock``
+        until every subscription is connected and the graph idle, whichever came first. The
+        parameters are set before the graph starts (a ``rosrun`` node reads them at once)."""
         ws = Path(self.config["run_dir"])
         # the launch file's node names (roslaunch --nodes, half a second of parsing) are only
         # needed by the start-up gate: asked while the master and the bridge's node start
@@ -213,6 +226,10 @@ class Bridge:
                 stdout=log,
                 stderr=subprocess.STDOUT,
             )
+        from usar_replay.ros1.publishing import Publishing  # the navigator's SciPy
+
+        importlib.import_module("rospy")
+        self.out = Publishing(self.move_base)
         master = xmlrpc.client.ServerProxy(self.uri)
         deadline = time.monotonic() + 20.0
         while True:
@@ -223,15 +240,15 @@ class Bridge:
                 if time.monotonic() > deadline or self.master.poll() is not None:
                     text = tail(ws / "master.log")
                     raise RuntimeError(f"the ROS master did not start: {text}") from err
-                time.sleep(0.05)
+                time.sleep(0.01)
         master.setParam(NODE, "/use_sim_time", True)
         for key, value in sorted(self.parameters.items()):
             if value is not None and key != "use_sim_time":
                 master.setParam(NODE, _ros_param(key), _xmlrpc_value(value))
+        self.graph = Graph(self.config, self.env)
         self._start_node()
         self.out.advertise(self.sim_topics, self.robots)
         self.quiet = Watcher(os.getpid())
-        self.graph = Graph(self.config, self.env)
         wanted = [] if expected is None else expected.result()
         self._wait_for_graph(master, wanted, float(self.config.get("connect_timeout_s", 60.0)))
 
@@ -313,6 +330,7 @@ class Bridge:
             self.shutdown.starting(quiet.untimed)
             graph.watch.ended()  # processes that came and went before tick 1 are no sign
             self._exited = set(graph.watch.exited)
+            self._before_clock = frozenset(self._exited)
         except RuntimeError as err:
             if "ended (exit" in str(err):
                 raise
@@ -480,6 +498,11 @@ class Bridge:
         failures = self.graph.watch.failures()
         if failures:
             return 1, failures[0]
+        # every process that ran at /clock seen exiting with status 0, and roslaunch has
+        # reported no death (of a process gone before /clock: roslaunch's helpers, a node):
+        # nothing its exit can add, a third of a second later
+        if self.graph.watch.all_clean(self._before_clock) and not self.graph.death_reported():
+            return 0, ""
         # all exited cleanly as far as the table showed (a zombie collected before it was
         # seen shows no status): roslaunch's report of a death, once it has seen it, decides
         deadline = time.monotonic() + 3.0

@@ -70,11 +70,15 @@ class Graph:
         code = self.proc.poll()
         if code is None:
             return None
+        return code, self.death_reported()
+
+    def death_reported(self) -> str:
+        """roslaunch's report so far of a node that died with an error (empty: none)."""
         for line in tail(self.log_path, 400).splitlines():  # roslaunch's own lines
             died = _DIED.search(line)
             if died and int(died.group(1)) != 0:
-                return code, without_prefix(line.strip())
-        return code, ""
+                return without_prefix(line.strip())
+        return ""
 
     def launcher_stopping(self) -> bool:
         """roslaunch said it stops the launch (a required node died, or all of them did)."""

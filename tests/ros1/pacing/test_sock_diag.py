@@ -140,3 +140,25 @@ def test_busy_finds_udp_and_unix_sockets_made_after_its_first_call() -> None:
     done = subprocess.run(argv, capture_output=True, text=True, timeout=60, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "ok"
+
+
+def test_busy_reads_a_run_of_records_as_they_are_read_one_by_one() -> None:
+    """busy() reads a run of same-sized TCP records as one array (sock_diag._run): the bytes
+    waiting and the established connections it finds are those of the record-by-record read,
+    with sockets waiting at the run's start, middle and end, and one that never waits."""
+    with socket.create_server(("127.0.0.1", 0), backlog=32) as server, SockDiag() as diag:
+        clients = [socket.create_connection(server.getsockname()) for _ in range(12)]
+        peers = [server.accept()[0] for _ in clients]
+        with contextlib.ExitStack() as stack:
+            for s in clients + peers:
+                stack.enter_context(s)
+            mine = {_ino(s) for s in clients + peers}
+            for n, s in zip((1, 7, 300), (clients[0], peers[5], clients[11]), strict=True):
+                s.sendall(b"z" * n)
+            waiting_now, established = diag.busy()
+            one_by_one = [q for q in diag.tcp() if q.inode in mine]
+            assert len(one_by_one) == 24
+            expected = {q.inode: q.waiting for q in one_by_one if q.waiting > 0}
+            assert {i: n for i, n in waiting_now.items() if i in mine} == expected
+            assert sorted(expected.values()) == [1, 7, 300]
+            assert established & mine == mine

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 from usar_replay.ros1.pacing.quiescence import descendants
@@ -109,6 +110,12 @@ class ProcWatch:
         """Close the files kept open."""
         for pid in list(self._fds):
             self._close(pid)
+
+    def all_clean(self, besides: Collection[int] = ()) -> bool:
+        """Every process seen, ``besides`` those, has exited and was seen as a zombie with
+        status 0 (at least one was)."""
+        rest = [pid for pid in self.seen if pid not in besides]
+        return bool(rest) and all(self.codes.get(pid) == 0 for pid in rest)
 
     def failures(self) -> list[str]:
         """``name exit N`` (or ``killed by signal N``) for the processes that ended badly."""
