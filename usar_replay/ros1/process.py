@@ -207,6 +207,8 @@ class Ros1Process(MissionProcess):
         try:
             super().close()
         finally:
+            if self._one_cpu is not None:
+                self._one_cpu.close()
             # the bridge leads its own process group: whatever of the graph outlived it goes too
             with contextlib.suppress(OSError):
                 os.killpg(self.pid, signal.SIGKILL)

@@ -107,3 +107,42 @@ def test_beside_a_real_time_graph_the_spared_process_shares_its_cpu(tmp_path: Pa
     finally:
         watcher.kill()
         watcher.wait()
+
+
+def test_threads_are_listed_again_only_once_a_pid_was_given_out() -> None:
+    """OneCpu.apply lists the run's threads only when /proc/loadavg's last PID moved (a new
+    thread anywhere takes one): with none made, no listing; a thread the child makes later is
+    pinned at the next apply."""
+    code = (
+        "import sys, threading, time\n"
+        "sys.stdin.readline()\n"
+        "threading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n"
+        "time.sleep(60)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE)
+    listed: list[int] = []
+    try:
+        pin = OneCpu(child.pid, realtime=False)
+        tids = pin._tids
+
+        def counted() -> list[int]:
+            listed.append(1)
+            return tids()
+
+        pin._tids = counted  # type: ignore[method-assign]
+        wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
+        before = len(listed)
+        if (pin._last_pid_now(), child.pid) == pin._last_pid:  # no PID given out meanwhile
+            assert pin.apply() == 0 and len(listed) == before
+        assert child.stdin is not None
+        child.stdin.write(b"go\n")
+        child.stdin.flush()
+        wait_for(lambda: len(os.listdir(f"/proc/{child.pid}/task")) == 2, "the child's thread")
+        new = pin.apply()
+        assert new == 1 and len(listed) > before
+        (thread,) = set(map(int, os.listdir(f"/proc/{child.pid}/task"))) - {child.pid}
+        assert os.sched_getaffinity(thread) == {pin.cpu}
+    finally:
+        child.kill()
+        child.wait()
+        pin.close()

@@ -40,6 +40,8 @@ from usar_replay.ros1.pacing.quiescence import descendants
 
 __all__ = ["OneCpu"]
 
+_LOADAVG = "/proc/loadavg"
+
 PRIORITY = 1
 _POLICY = os.SCHED_RR | os.SCHED_RESET_ON_FORK
 """SCHED_RR whose processes and threads start as SCHED_OTHER: real-time priority is given by
@@ -80,6 +82,28 @@ class OneCpu:
         self.done: set[int] = set()
         self.refused = "" if realtime else "no CPU set of the run's own"
         """Why the policy could not be set (empty while it could)."""
+        self._last_pid: tuple[bytes, int] | None = None
+        """The machine's last PID (and the root) when the threads were last listed
+        (:meth:`apply`)."""
+        self._loadavg: int | None = None
+        """``/proc/loadavg``, kept open until :meth:`close`."""
+
+    def _last_pid_now(self) -> bytes | None:
+        """The last PID given out in this PID namespace (``/proc/loadavg``'s last field; None:
+        unreadable)."""
+        try:
+            if self._loadavg is None:
+                self._loadavg = os.open(_LOADAVG, os.O_RDONLY | os.O_CLOEXEC)
+            return os.pread(self._loadavg, 128, 0).split()[-1]
+        except (OSError, IndexError):
+            return None
+
+    def close(self) -> None:
+        """Close what :meth:`apply` keeps open."""
+        if self._loadavg is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._loadavg)
+            self._loadavg = None
 
     def _tids(self) -> list[int]:
         if self.tasks is not None:
@@ -111,7 +135,18 @@ class OneCpu:
         return _POLICY
 
     def apply(self) -> int:
-        """Pin the threads not pinned yet; returns how many were."""
+        """Pin the threads not pinned yet; returns how many were.
+
+        The run's threads are listed again only when a process or thread was made anywhere
+        on the machine since the last time (``/proc/loadavg``'s last PID moved: a new thread
+        of the run takes a PID in every PID namespace above its own, this one's included).
+        Listing them every tick was a fifth of a millisecond of the recorder's own turn (a
+        cgroup's ``tasks`` file is built anew on every read), and most ticks make none."""
+        now = self._last_pid_now()
+        last = None if now is None else (now, self.root)
+        if last is not None and last == self._last_pid:
+            return 0
+        self._last_pid = last
         new = sorted(t for t in self._tids() if t not in self.done)
         for tid in new:
             self.done.add(tid)
@@ -130,3 +165,4 @@ class OneCpu:
             except PermissionError as err:
                 self.refused = str(err)
         return len(new)
+
