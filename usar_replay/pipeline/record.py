@@ -443,23 +443,34 @@ def _tick_loop(
         # inputs, then outputs, tick by tick; the bytes are the same). Why: they overlap the
         # mission's turn (a ROS 1 graph's few milliseconds a tick) instead of adding to it
         unwritten: _Outputs | None = None
+        ahead: BaseException | None = None  # the next tick was sent ahead (None: sent fine)
+        sent_ahead = False
         try:
             while tick is not None:
-                if not written and detector is not None:
+                if not sent_ahead and not written and detector is not None:
                     tick.wire = detector.add_detections(tick.wire)
                 try:
-                    proc.send(tick.t, tick.wire)
+                    if ahead is not None:
+                        raise ahead  # the send ahead failed: as if it failed here
+                    if not sent_ahead:
+                        proc.send(tick.t, tick.wire)
                 finally:
                     if unwritten is not None:
                         _write_outputs(writer, unwritten)
                         unwritten = None
                     if not written:
                         _write_inputs(writer, tick, run)
-                written = False
+                written = sent_ahead = False
                 nxt: _Observed | None = None
                 if latency:
                     _step(sim, commands, steps_per_tick)
                     nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                    if nxt is not None and not nxt.frame:
+                        # a tick without a camera frame depends on nothing the mission says
+                        # in this one: sent now, the mission takes it up as soon as it is
+                        # done with this tick, not after the recorder's turn in between
+                        sent_ahead = True
+                        ahead = _send_ahead(proc, nxt, detector)
                 unwritten = _take_outputs(proc, tick.t, run, detector, asg.robot_names)
                 commands = unwritten.commands
                 if progress is not None:
@@ -474,6 +485,25 @@ def _tick_loop(
         finally:
             if unwritten is not None:
                 _write_outputs(writer, unwritten)
+
+
+def _send_ahead(
+    proc: MissionProcess, tick: _Observed, detector: CourseDetector | None
+) -> BaseException | None:
+    """Send ``tick`` (one without a camera frame) before the outputs of the tick in flight are
+    read; what the send raised, to be raised where the tick would have been sent (so the
+    outputs before it are read and written first, as they were). Why it may: with an
+    actuation latency the tick's messages follow from the commands of the tick before, and
+    without a frame there is nothing for the course's detector, whose switch the outputs in
+    flight may flip. A tick sent after the mission said it was done is answered and dropped
+    (the worker runs no more mission code; the bridge reports the package's end again)."""
+    if detector is not None:
+        tick.wire = detector.add_detections(tick.wire)  # no frame: only the calibration noted
+    try:
+        proc.send(tick.t, tick.wire)
+    except (MissionEnded, OSError) as err:
+        return err
+    return None
 
 
 @contextlib.contextmanager

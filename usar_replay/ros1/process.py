@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from usar_replay.core import contract
+from usar_replay.core import contract, msgs
 from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
@@ -116,6 +116,7 @@ def _text(value: Any) -> str:
 class Ros1Process(MissionProcess):
     """Run the bridge as the mission process on ``built`` (see the module doc)."""
 
+
     def __init__(
         self,
         target: MissionTarget,
@@ -202,6 +203,15 @@ class Ros1Process(MissionProcess):
                 )
             self._one_cpu.apply()
         super().send(t_ns, inputs)
+
+    def receive(self) -> list[tuple[str, str, bytes, msgs.Message]]:
+        """:meth:`MissionProcess.receive`, then the threads the graph made in that tick go onto
+        its CPU at once: the next tick may have been sent ahead and be running already
+        (:func:`usar_replay.pipeline.record._send_ahead`)."""
+        out = super().receive()
+        if self._one_cpu is not None:
+            self._one_cpu.apply()
+        return out
 
     def close(self) -> None:
         try:
