@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import shutil
 import textwrap
 from pathlib import Path
@@ -317,9 +318,10 @@ def test_a_ros1_node_that_steals_the_bridges_socket_is_a_verdict_in_a_closed_log
     assert done.returncode == 4, done.stdout + done.stderr
     run = open_run(out)
     assert run.file_state == "complete"
-    # the recorder's write of the next tick to the stopped bridge ran into its deadline
+    # the recorder's write of the next tick to the stopped bridge ran into its deadline: the
+    # tick timeout for each tick in flight (two where a tick without a frame was sent ahead)
     assert run.outcome == "hung", (run.outcome, run.outcome_reason)
-    assert "did not read its input within 3 s" in run.outcome_reason
+    assert re.search(r"did not read its input within [36] s", run.outcome_reason)
     shutil.rmtree(pkg)
 
 
