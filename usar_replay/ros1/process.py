@@ -116,7 +116,6 @@ def _text(value: Any) -> str:
 class Ros1Process(MissionProcess):
     """Run the bridge as the mission process on ``built`` (see the module doc)."""
 
-
     def __init__(
         self,
         target: MissionTarget,

@@ -430,11 +430,8 @@ class Quiescence:
         return new
 
     def _last_pid_now(self) -> bytes | None:
-        """The PID namespace's last PID (``/proc/loadavg``'s last field; None: unreadable)."""
-        try:
-            return os.pread(self._loadavg, 128, 0).split()[-1]
-        except (OSError, IndexError):
-            return None
+        """The PID namespace's last PID (:func:`last_pid`)."""
+        return last_pid(self._loadavg)
 
     def _nothing_runnable(self) -> bool:
         """No thread of the machine runnable but the caller (``/proc/loadavg``'s fourth field
@@ -588,6 +585,17 @@ class Quiescence:
                 return False
             if nap_s > 0:
                 time.sleep(nap_s)
+
+
+def last_pid(loadavg: int) -> bytes | None:
+    """The last PID given out in the caller's PID namespace: ``/proc/loadavg``'s last field,
+    read from ``loadavg`` (that file, kept open); None where it cannot be read. A new process
+    or thread anywhere below the namespace takes a PID in it too, so an unchanged value means
+    none was made since."""
+    try:
+        return os.pread(loadavg, 128, 0).split()[-1]
+    except (OSError, IndexError):
+        return None
 
 
 def _untimed_wait(call: list[int]) -> bool:

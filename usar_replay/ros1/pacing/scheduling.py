@@ -36,7 +36,7 @@ import contextlib
 import os
 from pathlib import Path
 
-from usar_replay.ros1.pacing.quiescence import descendants
+from usar_replay.ros1.pacing.quiescence import descendants, last_pid
 
 __all__ = ["OneCpu"]
 
@@ -89,14 +89,13 @@ class OneCpu:
         """``/proc/loadavg``, kept open until :meth:`close`."""
 
     def _last_pid_now(self) -> bytes | None:
-        """The last PID given out in this PID namespace (``/proc/loadavg``'s last field; None:
-        unreadable)."""
-        try:
-            if self._loadavg is None:
+        """The machine's last PID (:func:`.quiescence.last_pid`); None where unreadable."""
+        if self._loadavg is None:
+            try:
                 self._loadavg = os.open(_LOADAVG, os.O_RDONLY | os.O_CLOEXEC)
-            return os.pread(self._loadavg, 128, 0).split()[-1]
-        except (OSError, IndexError):
-            return None
+            except OSError:
+                return None
+        return last_pid(self._loadavg)
 
     def close(self) -> None:
         """Close what :meth:`apply` keeps open."""
@@ -165,4 +164,3 @@ class OneCpu:
             except PermissionError as err:
                 self.refused = str(err)
         return len(new)
-
