@@ -127,3 +127,40 @@ def test_replay_puts_its_own_detections_in_place_of_the_recorded() -> None:
         "/x/odom",
     ]
     assert not det.enabled  # the recorded switch, for the next frame
+
+
+def test_with_a_latency_a_frames_detections_come_first_in_the_next_tick() -> None:
+    """``record.detection_latency_ticks`` 1: the frame goes out alone, the recorder detects
+    after sending it (with the switch as it was), and the next tick starts with the answer,
+    as :meth:`add_detections` would have put it after the frame."""
+    now = CourseDetector(DetectorParams(), USAR)
+    later = CourseDetector(DetectorParams(), USAR, latency_ticks=1)
+    framed, plain = _tick(USAR, 7), [w for w in _tick(USAR, None) if w[0] == "/x/odom"]
+    expected = now.add_detections(framed)[2]
+    sent = later.deliver(framed)
+    assert sent == framed  # nothing detected yet
+    later.after_send(sent)
+    nxt = later.deliver(plain)
+    assert nxt == [expected, *plain]
+    assert later.deliver(plain) == plain  # delivered once
+    # switched off before the frame was sent: no detections the tick after
+    later.note_outputs([(contract.ENABLE_DETECTIONS, msgs.Bool(data=False))])
+    later.after_send(later.deliver(framed))
+    assert later.deliver(plain) == plain
+
+
+def test_replay_delivers_a_latent_detection_where_it_was_recorded() -> None:
+    """Replay re-runs a latency-1 detector as the recorder ran it: the recorded detections
+    (first in the tick after the frame) compared with the re-run's of the tick before."""
+    live = CourseDetector(DetectorParams(), USAR, latency_ticks=1)
+    framed, plain = _tick(USAR, 7), [w for w in _tick(USAR, None) if w[0] == "/x/odom"]
+    recorded_ticks = []
+    for wire in (framed, plain, plain):
+        sent = live.deliver(wire)
+        live.after_send(sent)
+        recorded_ticks.append(sent)
+    again = CourseDetector(DetectorParams(), USAR, latency_ticks=1)
+    results = [again.replay_tick(inputs, []) for inputs in recorded_ticks]
+    assert [out for out, _, _ in results] == recorded_ticks
+    assert [len(redone) for _, _, redone in results] == [0, 1, 0]
+    assert [recorded == redone for _, recorded, redone in results] == [True, True, True]

@@ -139,6 +139,14 @@ class RecordSettings:
     3 ms a tick) then overlaps the simulator's, as on Gazebo, where a node's command never
     acts at the instant of the odometry it answers; 0 for a Python mission, whose turn is too
     short for the overlap to pay (bench/bench_record.py). The log stores the value that ran."""
+    detection_latency_ticks: int | None = setting(None, unit="ticks", lo=0, hi=1)
+    """1: the course's detections of a camera frame (``/fiducial_transforms``) come with the
+    next tick, stamped with their frame's time, as a real ``aruco_detect`` answers a frame some
+    milliseconds after Gazebo sent it; the recorder detects while the mission takes in the
+    frame, instead of before sending it; 0: in the frame's own tick, right after it. Unset: 1
+    for a ROS 1 package (whose frame ticks then wait for the detector no longer: bench/
+    bench_ros1.py), 0 for a Python mission (the order its own ``ArucoDetect`` once had). The
+    log stores the value that ran, and replay delivers its re-run detections the same way."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

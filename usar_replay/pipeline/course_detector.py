@@ -16,9 +16,14 @@ frames taken on the way are never decoded, as before). Everything is a pure func
 recorded bytes and the mission's recorded outputs, so the detections replay exactly: they are
 recorded inputs, which replay hands to the mission as they were logged.
 
-Where the detections go in a tick: right after the camera frame, where the mission's own
+Where the detections go: with ``record.detection_latency_ticks`` 0 (a Python mission's
+default), in the frame's tick right after the camera frame, where the mission's own
 ``ArucoDetect`` used to deliver them (before odometry), so a mission sees the same messages in
-the same order as when it ran the detector itself, and keeps its score.
+the same order as when it ran the detector itself, and keeps its score. With 1 (a ROS 1
+package's default), first in the next tick, stamped with their frame's time, as a real
+``aruco_detect`` publishes its answer a little after Gazebo's frame: the recorder then detects
+(:meth:`CourseDetector.after_send`) while the mission takes in the frame, not before it is
+sent, and a frame tick no longer waits for the detector (some 2 ms a frame).
 
 The ROS 2 final project's world runs ros2_aruco's ``aruco_node`` the same way: the detections of
 each frame with a marker in it, as ``ros2_aruco_interfaces/msg/ArucoMarkers`` on
@@ -55,8 +60,19 @@ def mission_inputs(asg: Assignment, course_detections: bool) -> tuple[str, ...]:
 class CourseDetector:
     """aruco_detect on the recorder's side: one instance per run, fed tick by tick."""
 
-    def __init__(self, params: DetectorParams, asg: Assignment, pixel_scale: float = 1.0) -> None:
+    def __init__(
+        self,
+        params: DetectorParams,
+        asg: Assignment,
+        pixel_scale: float = 1.0,
+        latency_ticks: int = 0,
+    ) -> None:
         self.params = params
+        self.latency_ticks = latency_ticks
+        """``record.detection_latency_ticks``: 1, a frame's detections come with the next
+        tick (:meth:`deliver`, :meth:`after_send`)."""
+        self._later: list[Wire] = []
+        """The last frame's detections, for the next tick (latency 1)."""
         self.pixel_scale = pixel_scale
         """``fiducial_area`` and ``image_error`` in the pixels of a camera this many times the
         image's width (the world's ``camera.pixel_fields_width``: the course's 1920)."""
@@ -74,10 +90,14 @@ class CourseDetector:
 
     @classmethod
     def for_run(
-        cls, params: DetectorParams, asg: Assignment, pixel_scale: float = 1.0
+        cls,
+        params: DetectorParams,
+        asg: Assignment,
+        pixel_scale: float = 1.0,
+        latency_ticks: int = 0,
     ) -> CourseDetector | None:
         """The run's detector; None for an assignment whose world has none."""
-        return cls(params, asg, pixel_scale) if asg.course_detections else None
+        return cls(params, asg, pixel_scale, latency_ticks) if asg.course_detections else None
 
     def note_outputs(self, outputs: Iterable[tuple[str, msgs.Message]]) -> None:
         """The mission's outputs of a tick: an ``enable_detections`` switch acts from the next
@@ -88,13 +108,36 @@ class CourseDetector:
             if topic == contract.ENABLE_DETECTIONS and isinstance(value, msgs.Bool):
                 self.enabled = value.data
 
+    def deliver(self, wire: Sequence[Wire]) -> list[Wire]:
+        """The tick's inputs as the mission is sent them: with latency 0
+        (:meth:`add_detections`) with its frame's detections; with 1, with the last frame's
+        detections first (:meth:`after_send` made them)."""
+        if not self.latency_ticks:
+            return self.add_detections(wire)
+        later, self._later = self._later, []
+        return [*later, *wire]
+
+    def after_send(self, wire: Sequence[Wire]) -> None:
+        """With latency 1, detect the frame of a tick just sent (:meth:`deliver`'s result),
+        for the next tick, with the switch as it is now, as :meth:`add_detections` would have
+        before sending; with 0, nothing (the detections went with the frame)."""
+        if self.latency_ticks:
+            self._later = self._detections(wire)[1]
+
     def add_detections(self, wire: Sequence[Wire]) -> list[Wire]:
         """The tick's inputs with the detections of its camera frame right after the frame
         (unchanged when there is no frame, no ``CameraInfo`` yet, or detection is off; for
         ros2_aruco, also when the frame has no marker)."""
         out = list(wire)
+        at, found = self._detections(wire)
+        out[at:at] = found
+        return out
+
+    def _detections(self, wire: Sequence[Wire]) -> tuple[int, list[Wire]]:
+        """(where the frame's detections go: right after it, the message to publish, if any),
+        the calibration noted on the way; (0, []) when the detector is off."""
         if not self.enabled:
-            return out
+            return 0, []
         for i, (topic, msgtype, data) in enumerate(wire):
             if topic == self.info_topic:
                 self._note_info(data, msgtype)
@@ -106,11 +149,11 @@ class CourseDetector:
                 )
                 self.seq += 1
                 if not self.ros2_aruco:
-                    out.insert(i + 1, (self.topic, _FIDUCIALS_TYPE, cdr.encode(found)))
-                elif found.transforms:
-                    out.insert(i + 1, (self.topic, _ARUCO_TYPE, cdr.encode(aruco_markers(found))))
-                break
-        return out
+                    return i + 1, [(self.topic, _FIDUCIALS_TYPE, cdr.encode(found))]
+                if found.transforms:
+                    return i + 1, [(self.topic, _ARUCO_TYPE, cdr.encode(aruco_markers(found)))]
+                return i + 1, []
+        return 0, []
 
     def replay_tick(
         self, inputs: Sequence[Wire], recorded_outputs: Sequence[Wire]
@@ -120,7 +163,8 @@ class CourseDetector:
         ``enable_detections`` switches then act from the next frame, as they did live (so the
         re-run needs no answer from the mission and replay keeps ticks in flight)."""
         recorded = [w for w in inputs if w[0] == self.topic]
-        out = self.add_detections([w for w in inputs if w[0] != self.topic])
+        out = self.deliver([w for w in inputs if w[0] != self.topic])
+        self.after_send(out)
         redone = [w for w in out if w[0] == self.topic]
         for topic, msgtype, data in recorded_outputs:
             if topic == contract.ENABLE_DETECTIONS and msgtype == msgs.Bool.__msgtype__:

@@ -340,12 +340,17 @@ def record(
 
 
 def with_latency(settings: RunSettings, default: int) -> RunSettings:
-    """``settings`` with ``record.actuation_latency_ticks`` set: ``default`` where it is unset
-    (1 for a ROS 1 package, 0 for a Python mission: the setting's doc), so the log stores
-    the value that ran."""
-    if settings.record.actuation_latency_ticks is not None:
+    """``settings`` with ``record.actuation_latency_ticks`` and
+    ``record.detection_latency_ticks`` set: ``default`` where unset (1 for a ROS 1 package, 0
+    for a Python mission: the settings' doc), so the log stores the values that ran."""
+    rs = settings.record
+    actuation = default if rs.actuation_latency_ticks is None else rs.actuation_latency_ticks
+    detection = default if rs.detection_latency_ticks is None else rs.detection_latency_ticks
+    if (actuation, detection) == (rs.actuation_latency_ticks, rs.detection_latency_ticks):
         return settings
-    latency = dataclasses.replace(settings.record, actuation_latency_ticks=default)
+    latency = dataclasses.replace(
+        rs, actuation_latency_ticks=actuation, detection_latency_ticks=detection
+    )
     return dataclasses.replace(settings, record=latency)
 
 
@@ -422,7 +427,12 @@ def _tick_loop(
     # the log being written holds the truth: unreadable to the mission even next to its file
     hidden = hide_from_mission(limits, str(writer.part_path))
     # the course's, trusted; pixel fields in the course camera's pixels (CameraSettings)
-    detector = CourseDetector.for_run(settings.detector, asg, scenario.camera.pixel_scale())
+    detector = CourseDetector.for_run(
+        settings.detector,
+        asg,
+        scenario.camera.pixel_scale(),
+        latency_ticks=rs.detection_latency_ticks or 0,
+    )
     inputs = mission_inputs(asg, detector is not None)
     # the first tick (the world's static facts, ground truth at t0) is written before the
     # mission starts: a mission that never reaches its first tick (a crash at import, a ROS 1
@@ -448,12 +458,15 @@ def _tick_loop(
         try:
             while tick is not None:
                 if not sent_ahead and not written and detector is not None:
-                    tick.wire = detector.add_detections(tick.wire)
+                    tick.wire = detector.deliver(tick.wire)
                 try:
                     if ahead is not None:
                         raise ahead  # the send ahead failed: as if it failed here
                     if not sent_ahead:
                         proc.send(tick.t, tick.wire)
+                        if detector is not None:
+                            # with a detection latency: while the mission takes in the frame
+                            detector.after_send(tick.wire)
                 finally:
                     if unwritten is not None:
                         _write_outputs(writer, unwritten)
@@ -498,11 +511,13 @@ def _send_ahead(
     flight may flip. A tick sent after the mission said it was done is answered and dropped
     (the worker runs no more mission code; the bridge reports the package's end again)."""
     if detector is not None:
-        tick.wire = detector.add_detections(tick.wire)  # no frame: only the calibration noted
-    try:
+        tick.wire = detector.deliver(tick.wire)  # no frame: the calibration, or the last
+    try:  # frame's detections with a detection latency
         proc.send(tick.t, tick.wire)
     except (MissionEnded, OSError) as err:
         return err
+    if detector is not None:
+        detector.after_send(tick.wire)  # no frame: nothing to detect
     return None
 
 
@@ -524,7 +539,7 @@ def _write_tick(
     """One tick's inputs into the log, with the course's detections (after the previous
     tick's enable switch) added to what the mission will be sent."""
     if detector is not None:
-        tick.wire = detector.add_detections(tick.wire)
+        tick.wire = detector.deliver(tick.wire)
     _write_inputs(writer, tick, run)
 
 

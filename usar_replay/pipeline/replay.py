@@ -483,7 +483,14 @@ def replay(
         asg.course_detections
     )
     redetect = (
-        CourseDetector(use.detector, asg, scenario.camera.pixel_scale()) if world_detects else None
+        CourseDetector(
+            use.detector,
+            asg,
+            scenario.camera.pixel_scale(),
+            latency_ticks=use.record.detection_latency_ticks or 0,
+        )
+        if world_detects
+        else None
     )
     replayer.never_graded = frozenset({asg.course_detections} - {""})
     crashed: MissionEnded | None = None
