@@ -84,7 +84,7 @@ def test_overrides_parse_by_the_fields_type() -> None:
         ("mission", "1", "--set mission: a group of settings; set one of its fields"),
         ("mission.spin_speed.x", "1", "--set mission.spin_speed.x: mission.spin_speed is not a"),
         ("mission.nope", "1", "--set mission.nope: unknown setting (known: mission.spin_speed"),
-        ("mission.settle_frames", "many", "expected a int, got 'many'"),
+        ("mission.settle_frames", "many", "expected a whole number, got 'many'"),
         ("mission.settle_frames", "0", "--set mission.settle_frames: 0 is out of range"),
     ],
 )

@@ -255,7 +255,7 @@ def test_a_truncated_log_replays_as_far_as_it_goes(
     [
         (["--set", "detector.dictionary=DICT_9X9_1"], "is not one of"),
         (["--set", "detector.colour=red"], "unknown setting"),
-        (["--set", "max_detection_range=far"], "expected a float"),
+        (["--set", "max_detection_range=far"], "expected a number"),
         (["--set", "settle_frames"], "expected NAME=VALUE"),
         (["--set", "detector=DICT_5X5_50"], "set one of its fields"),
         (["--set", "settle_frames=-3"], "out of range"),

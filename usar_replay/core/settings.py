@@ -346,7 +346,8 @@ def _parse_text(key: str, raw: str, kind: type[Any]) -> Any:
         try:
             return float(text) if kind is float else int(text)
         except ValueError as err:
-            raise UsageError(f"{key}: expected a {kind.__name__}, got {raw!r}") from err
+            what = "a number" if kind is float else "a whole number"  # as a TOML file's check
+            raise UsageError(f"{key}: expected {what}, got {raw!r}") from err
     return text
 
 
