@@ -145,6 +145,26 @@ def test_a_detection_outline_is_its_pose_projected_through_k() -> None:
     assert outline[0] == pytest.approx([295, 215]) and outline[1] == pytest.approx([345, 215])
 
 
+def test_a_detection_a_tick_late_is_drawn_at_its_frame() -> None:
+    """With ``record.detection_latency_ticks`` 1 the course's detections of a frame come a
+    tick later, stamped with the frame: the outline goes at the frame's time, over the image
+    it was found in; a stamp that is no time before the message's (0, the future, long ago)
+    leaves it at the message's own time."""
+    scene = Scene(None, marker_size=0.2)
+    scene.feed(contract.CAMERA_INFO, CAMERA, S)
+    tick = 50_000_000
+
+    def array(stamp_ns: int) -> msgs.FiducialTransformArray:
+        return msgs.FiducialTransformArray(
+            header=msgs.Header(stamp=msgs.Time.from_ns(stamp_ns), frame_id="camera")
+        )
+
+    scene.feed(contract.FIDUCIALS, array(S), S + tick)  # frame S, delivered a tick later
+    scene.feed(contract.FIDUCIALS, array(3 * S), 2 * S)  # from the future: its own time
+    scene.feed(contract.FIDUCIALS, array(S), 5 * S)  # long before: its own time
+    assert scene.detections.times == [S, 2 * S, 5 * S]
+
+
 def test_projection_of_a_point_behind_the_camera_is_none() -> None:
     assert project(np.array([[0.0, 0.0, -1.0]]), CAMERA) is None
 

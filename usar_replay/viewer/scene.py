@@ -327,6 +327,20 @@ def _fiducial_poses(msg: msgs.FiducialTransformArray) -> list[_Found]:
     return [(f.fiducial_id, f.transform.translation, f.transform.rotation) for f in msg.transforms]
 
 
+FRAME_LAG_NS = 1_000_000_000
+"""How long before its message a detection's frame may be and still be the one it is drawn
+on (the course's detector answers one tick, 50 ms, after its frame by default for a ROS 1
+package: ``record.detection_latency_ticks``)."""
+
+
+def _frame_time(stamp_ns: int, t_ns: int) -> int:
+    """Where on the timeline a detection's outline goes: at its frame (the header stamp, the
+    image's), so it is drawn over the image it was found in, not the next one; at the
+    message's own time where the stamp is not a time up to :data:`FRAME_LAG_NS` before it (a
+    missing or forged stamp of an old log's mission detector)."""
+    return stamp_ns if 0 < t_ns - stamp_ns <= FRAME_LAG_NS and stamp_ns > 0 else t_ns
+
+
 def _aruco_poses(msg: msgs.ArucoMarkers) -> list[_Found]:
     """The ROS 2 project's ``ros2_aruco`` output, the same way (IDs and poses in one order)."""
     return [
@@ -402,9 +416,9 @@ class Scene:
                 self.camera_frame = msg.header.frame_id or self.camera_frame
             self.camera_info = msg
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.FIDUCIALS:
-            self._on_detections(_fiducial_poses(msg), t_ns)
+            self._on_detections(_fiducial_poses(msg), _frame_time(msg.header.stamp.ns, t_ns))
         elif isinstance(msg, msgs.ArucoMarkers) and topic == contract.ARUCO_MARKERS:
-            self._on_detections(_aruco_poses(msg), t_ns)
+            self._on_detections(_aruco_poses(msg), _frame_time(msg.header.stamp.ns, t_ns))
         elif isinstance(msg, msgs.FiducialTransformArray) and topic == contract.TRUTH_MARKERS:
             self._on_true_markers(msg, t_ns)
         elif is_marker_topic(topic, type(msg).__msgtype__):
