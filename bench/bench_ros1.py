@@ -1,7 +1,7 @@
 """`usar record --ros1`: build time and the real-time factor a C++ course node sustains.
 
     python bench/bench_ros1.py [--world room|course] [--rtf 0.5] [--package DIR]
-                               [--launch FILE ...] [--latency 0|1]
+                               [--launch FILE ...] [--latency 0|1] [--detection-latency 0|1]
 
 Builds the package once into an empty build cache (catkin_make: the build time), then records
 it on the world with each ``--rtf`` wall cap (the slowest pace, a safety net: the graph itself
@@ -20,8 +20,10 @@ course-world bench takes (one Python run went from 6.4x to 7.7x within six minut
 Python runs at the ends only would put the drift into the ratios of the runs in the middle.
 The ROS 1 runs use ``record.actuation_latency_ticks`` as ``usar record --ros1`` does (unset:
 1, the graph reacts while the simulator steps the next tick); ``--latency 0`` measures them
-one core at a time, as before 2026-11-27. The Python runs always use their own default, 0
-(bench/bench_record.py: with 1 the Python mission was slower).
+one core at a time, as before 2026-11-27. Likewise ``record.detection_latency_ticks`` (unset:
+1, the course's detections of a frame come with the next tick); ``--detection-latency 0``
+measures them in the frame's own tick, as before. The Python runs always use their own
+defaults, 0 and 0 (bench/bench_record.py: with 1 the Python mission was slower).
 Nothing is asserted; the numbers go into docs/ros1.md.
 """
 
@@ -31,6 +33,7 @@ import argparse
 import os
 import sys
 import tempfile
+import textwrap
 import time
 from pathlib import Path
 
@@ -61,8 +64,18 @@ def main() -> None:
     ap.add_argument(
         "--latency", type=int, choices=[0, 1], help="the ROS 1 runs' actuation latency (ticks)"
     )
+    ap.add_argument(
+        "--detection-latency",
+        type=int,
+        choices=[0, 1],
+        help="the ROS 1 runs' detection latency (ticks)",
+    )
     args = ap.parse_args()
-    ros1_settings = RunSettings(record=RecordSettings(actuation_latency_ticks=args.latency))
+    ros1_settings = RunSettings(
+        record=RecordSettings(
+            actuation_latency_ticks=args.latency, detection_latency_ticks=args.detection_latency
+        )
+    )
     launches = args.launch or (TWINS if Path(args.package) == EXAMPLE else [""])
     scenario = one_room() if args.world == "room" else course_world()
     with tempfile.TemporaryDirectory(prefix="bench-ros1-") as tmp:
@@ -72,7 +85,7 @@ def main() -> None:
         cpu0 = _children_cpu()
         # built as the recording will want it (at the sandbox's fixed paths when there is one)
         build_mod.cached_build(pkg, fixed=uses_kernel_sandbox(MissionLimits()))
-        print(
+        say(
             f"build: {time.perf_counter() - t0:.1f} s wall, {_children_cpu() - cpu0:.1f} s CPU"
             f" (catkin_make -j2, {pkg.name} + fiducial_msgs)"
         )
@@ -95,9 +108,11 @@ def main() -> None:
                 report = grade_file(out)
                 rate_wall = rate_wall or wall
                 twin = f", {wall / rate_wall:.2f}x the Rate run's wall" if launch in TWINS else ""
-                latency = open_run(out).settings.record.actuation_latency_ticks
-                print(
-                    f"{launch or pkg.name}, wall cap dt/{rtf:g}, latency {latency}:"
+                ran = open_run(out).settings.record
+                latency = ran.actuation_latency_ticks
+                say(
+                    f"{launch or pkg.name}, wall cap dt/{rtf:g}, latency {latency}, detection"
+                    f" latency {ran.detection_latency_ticks}:"
                     f" {result.outcome}, "
                     f"{report.points:g}/{report.max_points:g} points, {result.sim_duration_s:.1f}"
                     f" s sim in {wall:.1f} s wall (incl. start-up): "
@@ -109,11 +124,16 @@ def main() -> None:
                 ros1.append((what, result.sim_duration_s / wall, (python + after) / 2))
                 python = after
         for what, rtf_reached, beside in ros1:
-            print(
+            say(
                 f"  ROS 1 {what}: {rtf_reached:.2f}x vs Python {beside:.2f}x (the runs before "
                 f"and after it): {rtf_reached / beside:.2f} of the Python mission's real-time "
                 "factor"
             )
+
+
+def say(text: str) -> None:
+    """One result for people: wrapped at 100 columns, its later lines indented."""
+    print(textwrap.fill(text, 100, subsequent_indent="    ", break_on_hyphens=False))
 
 
 def _python_rtf(scenario: Scenario, out: Path, when: str) -> float:
@@ -123,7 +143,7 @@ def _python_rtf(scenario: Scenario, out: Path, when: str) -> float:
     wall = time.perf_counter() - start
     steal = steal_since(stolen)
     report = grade_file(out)
-    print(
+    say(
         f"built-in Python mission ({when}): {result.outcome}, {report.points:g}/"
         f"{report.max_points:g} points, {result.sim_duration_s:.1f} s sim in {wall:.1f} s wall:"
         f" {result.sim_duration_s / wall:.2f}x real time{steal}"
