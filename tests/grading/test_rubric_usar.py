@@ -62,7 +62,11 @@ def drive(g: Grader, robot: str, points: list[tuple[float, float]], t: int) -> i
     return t
 
 
-def detect(g: Grader, ids: list[int], t: int) -> msgs.FiducialTransformArray:
+def detect(
+    g: Grader, ids: list[int], t: int, *, came: int | None = None
+) -> msgs.FiducialTransformArray:
+    """The course's detections of the image stamped ``t``, come at log time ``came`` (default
+    ``t``: with the image; a tick later where the detector answers a tick later)."""
     arr = msgs.FiducialTransformArray(
         header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.OPTICAL_FRAME),
         transforms=tuple(
@@ -76,7 +80,7 @@ def detect(g: Grader, ids: list[int], t: int) -> msgs.FiducialTransformArray:
             for k in ids
         ),
     )
-    g.feed(contract.FIDUCIALS, arr, t)
+    g.feed(contract.FIDUCIALS, arr, t if came is None else came)
     return arr
 
 
@@ -434,6 +438,25 @@ def test_a_broadcast_later_than_one_camera_period_has_no_detection() -> None:
     only = only_on_detection(g)
     assert not only.passed and only.evidence_ns == 5 * S + 150 * MS
     assert only.evidence == "first bad broadcast: target_0 stamped 5.150 s"
+
+
+def test_with_detections_a_tick_late_the_period_counts_from_their_arrival() -> None:
+    """``record.detection_latency_ticks`` 1 (a ROS 1 package's default): the image stamped
+    5.0 s is answered at 5.05 s, and a node whose loop runs at the camera's rate stamps its
+    broadcast "now" up to one camera period after that: 5.15 s counts; 5.2 s, and one stamped
+    before its image, do not."""
+    g = Grader(world())
+    for t in (5 * S, 5 * S + 50 * MS, 5 * S + 150 * MS, 5 * S + 200 * MS):
+        camera(g, t)
+    detect(g, [0], 5 * S, came=5 * S + 50 * MS)
+    send(g, "marker_frame", MARKERS[0], 5 * S + 150 * MS)
+    line = marker_broadcast(g, 0)
+    assert line.passed and line.evidence.endswith("stamped 5.150 s, image 5.000 s")
+    assert only_on_detection(g).passed
+    send(g, "marker_frame", MARKERS[0], 5 * S + 200 * MS)
+    send(g, "marker_frame", MARKERS[0], 5 * S + 50 * MS, stamp=5 * S - 50 * MS)
+    only = only_on_detection(g)
+    assert not only.passed and only.measured.startswith("3 broadcasts (marker_frame), 2 without")
 
 
 def test_a_zero_stamp_is_the_time_it_was_published() -> None:

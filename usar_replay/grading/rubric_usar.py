@@ -30,15 +30,17 @@ line (``Check.id``)                  points  passes when
 ``marker_k.detected``                12      the course's detector's ``/fiducial_transforms``
                                              (trusted; never a mission's) holds ID k once
 ``marker_k.broadcast``               8       a frame broadcast on ``/tf`` (any name but the
-                                             simulator's) within one camera period after an
-                                             image where marker k was detected, every such
+                                             simulator's) within one camera period after the
+                                             detection of an image where marker k was seen
+                                             (it came with the image, or a tick later where
+                                             the detector answers a tick later), every such
                                              broadcast of that frame, placed in ``map``
                                              through its parent at its stamp, within
                                              ``marker_map_error_m`` of the true marker (a
                                              non-finite one is the worst)
 ``marker_frame.only_on_detection``   4       something was broadcast, and every broadcast is a
                                              child of the camera's optical frame, stamped
-                                             within one camera period after a detected image
+                                             within one camera period after a detection
                                              (a zero stamp: when it was sent), and not an
                                              older frame's detection stamped anew ("nothing
                                              broadcast" fails: no credit without evidence)
@@ -215,9 +217,9 @@ class FrameBroadcasts:
 
 @dataclass(slots=True)
 class Broadcasts:
-    """The broadcasts attributed to one marker: only those within one camera period after an
-    image in which the course's detector saw it (a broadcast without one is no evidence of a
-    detection; :func:`only_on_detection` judges it), by child frame name."""
+    """The broadcasts attributed to one marker: only those within one camera period after the
+    detection of an image in which the course's detector saw it (a broadcast without one is no
+    evidence of a detection; :func:`only_on_detection` judges it), by child frame name."""
 
     frames: dict[str, FrameBroadcasts] = field(default_factory=dict)
 
@@ -269,7 +271,12 @@ class Grader:
         self._stamps: list[int] = []
         """The keys of :attr:`_recent`, sorted (for the window of a broadcast's stamp)."""
         self.period_ns = math.ceil(1e9 / scenario.camera.rate_hz)
-        """One camera period: how long after an image its broadcast may be stamped."""
+        """One camera period: how long after an image's detection its broadcast may be
+        stamped."""
+        self._arrived: dict[int, int] = {}
+        """When each image's detections came (by image stamp): with the image, or up to one
+        camera period later (``record.detection_latency_ticks``: a tick later, as a real
+        ``aruco_detect`` answers)."""
         self._not_candidates = frozenset((contract.MAP, *contract.sim_frames()))
         self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
         self.broadcast_count = 0
@@ -353,11 +360,15 @@ class Grader:
             stamp = msg.header.stamp.ns
             if stamp not in self._recent:
                 bisect.insort(self._stamps, stamp)
+                # a later answer than one period (a forged stamp of an old log's mission
+                # detector) counts as one period late
+                self._arrived[stamp] = stamp + min(max(t_ns - stamp, 0), self.period_ns)
             self._recent[stamp] = self._recent.get(stamp, ()) + msg.transforms
         # forget detections older than the tf cache
         horizon = t_ns - DETECTION_MEMORY_NS
         while self._stamps and self._stamps[0] < horizon:
-            del self._recent[self._stamps.pop(0)]
+            old = self._stamps.pop(0)
+            del self._recent[old], self._arrived[old]
 
     def _on_follower(self, xy: tuple[float, float], t_ns: int) -> None:
         if self.follower_start is None:
@@ -398,12 +409,19 @@ class Grader:
             self._on_broadcast(tf, stamp, t_ns, times, where)
 
     def _window(self, stamp: int) -> list[tuple[int, msgs.FiducialTransform]]:
-        """The detections a broadcast stamped ``stamp`` may be: those of images stamped at most
-        one camera period before it (a callback that ran a tick late and stamped "now"),
-        newest image first."""
-        lo = bisect.bisect_left(self._stamps, stamp - self.period_ns)
+        """The detections a broadcast stamped ``stamp`` may be: those of images stamped at or
+        before it whose detections came at most one camera period before it (a callback that
+        ran a tick late and stamped "now"; where the detector answers a tick after the image,
+        the period counts from its answer, as a TA's course machine has it), newest image
+        first."""
+        lo = bisect.bisect_left(self._stamps, stamp - 2 * self.period_ns)
         hi = bisect.bisect_right(self._stamps, stamp)
-        return [(s, f) for s in reversed(self._stamps[lo:hi]) for f in self._recent[s]]
+        return [
+            (s, f)
+            for s in reversed(self._stamps[lo:hi])
+            if stamp <= self._arrived[s] + self.period_ns
+            for f in self._recent[s]
+        ]
 
     def _on_broadcast(
         self,
@@ -736,8 +754,8 @@ def _stamps_text(frame: str, stamps: tuple[int, int]) -> str:
 
 def marker_broadcast(g: Grader, mid: int) -> Check:
     """``marker_k.broadcast``: a frame broadcast on ``/tf`` (any name) within one camera period
-    after an image in which marker k was detected, every such broadcast of that frame near the
-    truth in ``map`` (as a TA sees it in RViz)."""
+    after the detection of an image in which marker k was seen, every such broadcast of that
+    frame near the truth in ``map`` (as a TA sees it in RViz)."""
     b = g.broadcasts[mid]
     limit = g.th.marker_map_error_m
     shown = b.shown(limit)
@@ -781,8 +799,8 @@ def only_on_detection(g: Grader) -> Check:
     """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera.
 
     Every frame broadcast on ``/tf`` that is not the simulator's counts (whatever its name);
-    one without a detection within one camera period before its stamp, or an older frame's
-    detection stamped anew, is one broadcast without a detection. A line that judges
+    one without a detection that came within one camera period before its stamp, or an older
+    frame's detection stamped anew, is one broadcast without a detection. A line that judges
     broadcasts gives no credit when there were none: a mission that never broadcast (it
     crashed at its first target, or has no broadcaster yet) has shown nothing this line can
     judge, so it fails with "nothing broadcast" rather than passing by default."""
