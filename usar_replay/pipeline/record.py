@@ -511,8 +511,9 @@ def _send_ahead(
     flight may flip. A tick sent after the mission said it was done is answered and dropped
     (the worker runs no more mission code; the bridge reports the package's end again)."""
     if detector is not None:
-        tick.wire = detector.deliver(tick.wire)  # no frame: the calibration, or the last
-    try:  # frame's detections with a detection latency
+        # no frame here: with a detection latency, the last frame's detections go with it
+        tick.wire = detector.deliver(tick.wire)
+    try:
         proc.send(tick.t, tick.wire)
     except (MissionEnded, OSError) as err:
         return err
