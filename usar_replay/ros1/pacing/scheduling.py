@@ -89,7 +89,7 @@ class OneCpu:
         """``/proc/loadavg``, kept open until :meth:`close`."""
 
     def _last_pid_now(self) -> bytes | None:
-        """The machine's last PID (:func:`.quiescence.last_pid`); None where unreadable."""
+        """The PID namespace's last PID (:func:`.quiescence.last_pid`); None where unreadable."""
         if self._loadavg is None:
             try:
                 self._loadavg = os.open(_LOADAVG, os.O_RDONLY | os.O_CLOEXEC)
