@@ -34,7 +34,7 @@ from pathlib import Path
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RecordSettings, RunSettings
 from usar_replay.grading.grade import grade_file
-from usar_replay.ros1.build import find_package
+from usar_replay.ros1.building import find_package
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario import Scenario, course_world
 

@@ -42,7 +42,7 @@ from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
 from usar_replay.node.mission_process import MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline import record as python_record
-from usar_replay.ros1.build import workspace as build_mod
+from usar_replay.ros1.building import workspace as build_mod
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario import Scenario, course_world

@@ -94,7 +94,7 @@ def test_every_usar_error_is_defined_in_core_errors() -> None:
     [
         ("usar_replay.node.mission_process", "MissionEnded"),
         ("usar_replay.world.detect", "DetectError"),
-        ("usar_replay.ros1.build.debian", "MissingRos1"),
+        ("usar_replay.ros1.building.debian", "MissingRos1"),
     ],
 )
 def test_moved_errors_are_importable_where_they_are_raised(module: str, name: str) -> None:

@@ -20,8 +20,8 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
-from usar_replay.ros1.build import debian
-from usar_replay.ros1.build.workspace import find_package, package_sha256
+from usar_replay.ros1.building import debian
+from usar_replay.ros1.building.workspace import find_package, package_sha256
 from usar_replay.world.scenario import course_world
 from usar_replay.world.scenario_toml import save
 

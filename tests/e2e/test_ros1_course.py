@@ -24,7 +24,7 @@ from usar_replay.grading.grade import grade_file
 from usar_replay.log import ros1_run
 from usar_replay.log.info import describe
 from usar_replay.log.run import open_run
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.world.scenario_toml import save
 
 TEMPLATE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "course_template"

@@ -3,7 +3,8 @@
 A package's ``CMakeLists.txt`` runs code at configure time (``execute_process``), as the team's
 own code, before any node runs. Each attack here is a tiny package whose CMakeLists.txt does the
 attack while catkin configures it (no C++ to compile, so each build takes seconds), against the
-sandboxed build of :mod:`usar_replay.ros1.build.workspace`: links planted for usar to write through
+sandboxed build of :mod:`usar_replay.ros1.building.workspace`: links planted for usar to write
+through
 (``build.log`` to a ``.pth``, to another team's grade), writes into another package's cached
 build, a fork bomb, a 5 GiB allocation, a big file, a build that never ends. Every test asserts
 the verdict, that the files targeted outside are untouched and, for a class, that the other
@@ -33,8 +34,8 @@ from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
 from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.node.mission_process import MissionEnded, MissionLimits
-from usar_replay.ros1.build import tree
-from usar_replay.ros1.build.workspace import BuildLimits, cached_build, find_package
+from usar_replay.ros1.building import tree
+from usar_replay.ros1.building.workspace import BuildLimits, cached_build, find_package
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario_toml import to_toml

@@ -35,7 +35,7 @@ from usar_replay.grading.grade import grade_file
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo, open_run
 from usar_replay.pipeline.record import record
-from usar_replay.ros1.build.workspace import find_package, package_sha256, remove_tree
+from usar_replay.ros1.building.workspace import find_package, package_sha256, remove_tree
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario_toml import to_toml

@@ -26,7 +26,7 @@ from conftest import one_room
 from usar_replay.log import bag
 from usar_replay.node import cpu_sets
 from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.world.scenario_toml import save
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -37,7 +37,7 @@ from usar_replay.log.run import open_run
 from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import replay
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.world.ros2_world import ros2_final_world
 from usar_replay.world.scenario import Scenario
 from usar_replay.world.scenario_toml import save

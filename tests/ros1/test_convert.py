@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 
 from usar_replay.core import msgs
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 
 
 def _ros1() -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from proctools import wait_for
 
-from usar_replay.ros1.build.workspace import catkin_env
+from usar_replay.ros1.building.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
 
 PACKAGE_XML = """<?xml version="1.0"?>

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from usar_replay.ros1 import launch_filter, launch_output
-from usar_replay.ros1.build import debian, standins
+from usar_replay.ros1.building import debian, standins
 
 TEMPLATE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "course_template"
 WORLD = {"/aruco_lookup_locations/target_1": [1.1, 0.3], "/explorer/home": [-1.2, 0.6, 0.0]}

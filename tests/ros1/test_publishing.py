@@ -12,7 +12,7 @@ import sys
 import pytest
 
 from usar_replay.core import cdr, contract, msgs
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.ros1.publishing import LATCHED, Publishing, genpy_time
 
 # queue_size=None is the bridge's choice (synchronous publishing: the pacing needs it)

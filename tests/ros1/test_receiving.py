@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from usar_replay.core import contract, msgs
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.ros1.receiving import Inbox, caller
 
 BRIDGE = "/usar_sim"

@@ -24,7 +24,7 @@ from example_worlds import quick_room
 from usar_replay.core import msgs
 from usar_replay.grading.htmlreport import collect
 from usar_replay.log.run import open_run
-from usar_replay.ros1.build.workspace import find_package, package_sha256
+from usar_replay.ros1.building.workspace import find_package, package_sha256
 from usar_replay.viewer.scene import Scene
 from usar_replay.world.scenario_toml import save
 

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from usar_replay.core import cdr, msgs, ros1msg
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 
 BRIDGE = "/usar_sim"

@@ -41,7 +41,7 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
 from usar_replay.core.errors import UsageError
-from usar_replay.ros1.build.workspace import NoPackage, SeveralPackages, find_package
+from usar_replay.ros1.building.workspace import NoPackage, SeveralPackages, find_package
 from usar_replay.world.world_key import WorldKey
 
 __all__ = [

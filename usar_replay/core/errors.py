@@ -89,7 +89,7 @@ class DetectError(UsarError):
 
 class MissingRos1(UsageError):
     """ROS 1 is not installed: the message is the ``apt-get install`` line to run. (Raised by
-    :mod:`usar_replay.ros1.build.debian`, which re-exports it.)"""
+    :mod:`usar_replay.ros1.building.debian`, which re-exports it.)"""
 
 
 class UnusableSubmission(UsarError):
@@ -100,7 +100,8 @@ class UnusableSubmission(UsarError):
 
 class TreeRefused(UsarError):
     """A built catkin workspace holds something usar will not use (a link leading out, a
-    special file); the message says what (one line). (Raised by :mod:`usar_replay.ros1.build.tree`:
+    special file); the message says what (one line). (Raised by
+    :mod:`usar_replay.ros1.building.tree`:
     the build's verdict is ``build_failed``.)"""
 
     exit_code = 4
@@ -119,12 +120,12 @@ class ProtocolMismatch(MissionEnded):
 
 class NoPackage(UsageError):
     """No catkin package in the folder given (a batch then looks for a Python mission). (Raised
-    by :func:`usar_replay.ros1.build.workspace.find_package`.)"""
+    by :func:`usar_replay.ros1.building.workspace.find_package`.)"""
 
 
 class SeveralPackages(UsageError):
     """Several catkin packages build nodes in the folder given: the message lists them and
-    says how to choose one. (Raised by :func:`usar_replay.ros1.build.workspace.find_package`.)"""
+    says how to choose one. (Raised by :func:`usar_replay.ros1.building.workspace.find_package`.)"""
 
 
 class DefinitionRefused(UsarError, ValueError):

@@ -5,7 +5,7 @@ the package in it. When each read the folder its own way, a hidden ``.cache/blob
 2 GiB (sparse) was skipped by the batch's checks and then read and copied by the build
 (issue 33). Here one walk decides which entries exist, under one set of rules and caps, and
 every reader (:mod:`usar_replay.batch.team_files`,
-:mod:`usar_replay.ros1.build.workspace`) takes its
+:mod:`usar_replay.ros1.building.workspace`) takes its
 list: what is checked is what is hashed, copied and built.
 
 The rules: links are never followed (one that stays inside is kept as its text, one that

@@ -178,7 +178,7 @@ def sandbox_argv(
     outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first
     process's host PID (:attr:`KernelSandbox.info_fd`). ``ro_mounts``: (host path, path in the
     sandbox) pairs, each host folder mounted read-only at the other path (a built ROS 1
-    workspace at a path that does not depend on the host: :mod:`usar_replay.ros1.build.layout`);
+    workspace at a path that does not depend on the host: :mod:`usar_replay.ros1.building.layout`);
     ``work_at``: where ``work_dir`` appears in the sandbox (default: its own path). Neither
     adds a writable path: ``work_dir`` stays the only one.
     """

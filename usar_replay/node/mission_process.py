@@ -102,7 +102,8 @@ class MissionLimits:
     folder its module was found in); a batch gives the team's submission."""
     read_mounts: tuple[tuple[str, str], ...] = ()
     """(host folder, path in the sandbox) pairs the sandboxed mission reads at another path
-    than the host's (a built ROS 1 workspace: :mod:`usar_replay.ros1.build.layout`); read-only."""
+    than the host's (a built ROS 1 workspace: :mod:`usar_replay.ros1.building.layout`);
+    read-only."""
     hidden: tuple[str, ...] = ()
     """Files and folders the sandboxed mission may not read even when they lie in a readable
     folder (the log being written or replayed, and every file the grader passed in: the

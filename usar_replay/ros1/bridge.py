@@ -74,9 +74,9 @@ from usar_replay.node.protocol import (
 )
 from usar_replay.node.wire_io import send_within
 from usar_replay.ros1 import launch_filter, run_files
-from usar_replay.ros1.build import standins
-from usar_replay.ros1.build.debian import DIST_PACKAGES
-from usar_replay.ros1.build.workspace import catkin_env
+from usar_replay.ros1.building import standins
+from usar_replay.ros1.building.debian import DIST_PACKAGES
+from usar_replay.ros1.building.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, tail
 from usar_replay.ros1.pacing.graph_start import (
     launch_nodes,

@@ -6,7 +6,8 @@ tick protocol, the same checks on what comes back (a student's ``/tf`` that move
 is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is ``crashed``
 with its output, one that stops answering is ``hung``). The package was built before
 (:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only,
-in the kernel sandbox at the fixed paths they were built at (:mod:`usar_replay.ros1.build.layout`).
+in the kernel sandbox at the fixed paths they were built at
+(:mod:`usar_replay.ros1.building.layout`).
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ from usar_replay.node.protocol import Wire
 from usar_replay.node.run_folder import RunFolder
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
-from usar_replay.ros1.build.jail import BUILD_WALL_S
-from usar_replay.ros1.build.workspace import BuildLimits, Built, Package, package_sha256
+from usar_replay.ros1.building.jail import BUILD_WALL_S
+from usar_replay.ros1.building.workspace import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
 from usar_replay.ros1.pacing import watcher

@@ -23,8 +23,8 @@ from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
 from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline.record import Progress, RecordResult, record, with_latency
-from usar_replay.ros1.build import debian
-from usar_replay.ros1.build.workspace import (
+from usar_replay.ros1.building import debian
+from usar_replay.ros1.building.workspace import (
     Built,
     Package,
     cached_build,

@@ -28,8 +28,8 @@ from usar_replay.core.safe_text import safe_line
 from usar_replay.log.run import Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
-from usar_replay.ros1.build import debian
-from usar_replay.ros1.build.workspace import Package, cached_build, find_package, package_sha256
+from usar_replay.ros1.building import debian
+from usar_replay.ros1.building.workspace import Package, cached_build, find_package, package_sha256
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
 from usar_replay.ros1.record import choose_entry
 

@@ -24,7 +24,7 @@ from conftest import one_room
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
-from usar_replay.ros1.build import workspace as build
+from usar_replay.ros1.building import workspace as build
 from usar_replay.ros1.pacing import shim
 from usar_replay.ros1.process import Ros1Options
 

@@ -1,4 +1,4 @@
-"""ros1/build.find_package on the shapes real student repositories have (issue 31, point 6).
+"""ros1.building.find_package on the shapes real student repositories have (issue 31, point 6).
 
 Each fixture is a folder written here in the shape of a real hand-in: the package in a
 subfolder, a catkin workspace (``src/<pkg>``) with its ``build/`` and ``devel/`` committed
@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.batch.plan import discover
-from usar_replay.ros1.build.workspace import (
+from usar_replay.ros1.building.workspace import (
     NoPackage,
     SeveralPackages,
     _copy,

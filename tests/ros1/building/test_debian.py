@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from usar_replay.ros1.build import debian
+from usar_replay.ros1.building import debian
 
 
 def test_missing_packages_are_named_in_one_apt_line() -> None:

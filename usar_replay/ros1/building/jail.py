@@ -129,7 +129,7 @@ def run_jailed(
     ``sandbox`` (no bubblewrap, ``USAR_SANDBOX=off``) it runs with the same rlimits only, as a
     mission does then. In the sandbox, ``workspace`` appears at ``workspace_at`` (default: its
     own path) and each ``ro_mounts`` host folder read-only at its other path
-    (:mod:`usar_replay.ros1.build.layout`)."""
+    (:mod:`usar_replay.ros1.building.layout`)."""
     box = kernel_sandbox.KernelSandbox(
         kernel_sandbox.SandboxLimits(
             memory_mb=limits.memory_mb,

@@ -1,6 +1,6 @@
 """ros1/standins: usar's underlay source (fiducial_msgs and the stand-in packages), written
 and run as it is built (the underlay's build itself:
-tests/ros1/build/test_workspace.py and the course
+tests/ros1/building/test_workspace.py and the course
 template's recording, tests/e2e/test_ros1_course.py)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from usar_replay.ros1.build import ros_debian, standins
+from usar_replay.ros1.building import ros_debian, standins
 
 
 def test_every_stand_in_is_a_catkin_package_and_the_tree_is_deterministic(

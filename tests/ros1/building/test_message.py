@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from usar_replay.ros1.build import message as buildmsg
+from usar_replay.ros1.building import message as buildmsg
 
 
 def test_hints_and_paths_for_a_missing_dependency_and_an_own_message() -> None:

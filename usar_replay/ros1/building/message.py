@@ -15,8 +15,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import usar_replay.ros1.build.ros_debian as ros_debian
-import usar_replay.ros1.build.standins as standins
+import usar_replay.ros1.building.ros_debian as ros_debian
+import usar_replay.ros1.building.standins as standins
 
 __all__ = ["errors", "hint", "student_paths"]
 

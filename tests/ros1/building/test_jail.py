@@ -1,6 +1,6 @@
 """ros1/buildjail: a build's commands run jailed, their output kept and the limit they went past
 named; on small shell commands (the real catkin builds and the attacks on them:
-tests/ros1/build/test_workspace.py, tests/redteam/test_build.py)."""
+tests/ros1/building/test_workspace.py, tests/redteam/test_build.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.ros1.build.jail import BuildLimits, _prlimit, run_jailed
+from usar_replay.ros1.building.jail import BuildLimits, _prlimit, run_jailed
 
 ENV = {"PATH": "/usr/bin:/bin", "LANG": "C"}
 

@@ -1,4 +1,4 @@
-"""ros1.build: a course's catkin package built as on a course machine, or ``build_failed``.
+"""ros1.building: a course's catkin package built as on a course machine, or ``build_failed``.
 
 One concern, the build side, in one folder (as ``rosbags`` keeps one per concern):
 ``debian`` (the Debian packages a course machine has, and the check that names the missing
@@ -13,9 +13,9 @@ The catkin packages usar ships live in ``catkin/``.
 The face below is what the rest of usar uses; tests reach the modules themselves.
 """
 
-from usar_replay.ros1.build.debian import check as check_debian
-from usar_replay.ros1.build.jail import BuildLimits
-from usar_replay.ros1.build.workspace import (
+from usar_replay.ros1.building.debian import check as check_debian
+from usar_replay.ros1.building.jail import BuildLimits
+from usar_replay.ros1.building.workspace import (
     Built,
     Package,
     cache_root,

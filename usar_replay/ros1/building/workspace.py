@@ -11,12 +11,12 @@ overlay holds a copy of the package alone, so the student's folder is never writ
 nothing else on the machine can change the build.
 
 Why so careful with what the build leaves (issue 26): the build is the team's code
-(``execute_process`` at configure time) and runs as such (:mod:`usar_replay.ros1.build.jail`).
+(``execute_process`` at configure time) and runs as such (:mod:`usar_replay.ros1.building.jail`).
 usar writes nothing into the workspace the build can write: the build's output comes through a
 pipe, and what usar keeps about a build (its manifest, its time) lives in the workspace's
 parent folder, which no sandbox ever binds, created ``O_EXCL|O_NOFOLLOW``. Once the sandbox is
 gone the workspace is checked (no link out of it, no special file), frozen read-only and listed
-(:mod:`usar_replay.ros1.build.tree`); a run mounts it read-only, and a cached build is verified
+(:mod:`usar_replay.ros1.building.tree`); a run mounts it read-only, and a cached build is verified
 against its manifest before it is reused. A build that fails, or goes past a limit, is the
 *package's* outcome, ``build_failed`` with the compiler's errors (paths in the student's
 folder) and a hint; never a traceback of usar's.
@@ -24,7 +24,7 @@ folder) and a hint; never a traceback of usar's.
 In the sandbox the package's workspace is built at ``/ros1/ws`` and the underlay at
 ``/ros1/underlay``, whatever host folders hold them, so that nothing the build writes (catkin's
 absolute paths, a node's ``__FILE__`` in its ``/rosout`` lines) depends on the host
-(:mod:`usar_replay.ros1.build.layout`).
+(:mod:`usar_replay.ros1.building.layout`).
 
 catkin_make runs as Debian's own program with a clean environment (``PATH=/usr/bin:/bin``,
 ``PYTHON_EXECUTABLE=/usr/bin/python3``): a virtual environment's or pyenv's ``python3`` on the
@@ -47,10 +47,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import usar_replay.ros1.build.layout as layout
-import usar_replay.ros1.build.message as buildmsg
-import usar_replay.ros1.build.standins as standins
-import usar_replay.ros1.build.tree as tree
+import usar_replay.ros1.building.layout as layout
+import usar_replay.ros1.building.message as buildmsg
+import usar_replay.ros1.building.standins as standins
+import usar_replay.ros1.building.tree as tree
 from usar_replay.core.errors import (
     MissionEnded,
     NoPackage,
@@ -59,7 +59,7 @@ from usar_replay.core.errors import (
     UsageError,
 )
 from usar_replay.core.folder_walk import Entry, shown, stream, walk
-from usar_replay.ros1.build.jail import BuildLimits, run_jailed
+from usar_replay.ros1.building.jail import BuildLimits, run_jailed
 
 __all__ = [
     "FIDUCIAL_MSGS",
@@ -114,7 +114,8 @@ class Built:
     """Workspaces this one extends (sourced by its ``devel/setup.bash``): usar's messages."""
     at: str = ""
     """Where it was built inside the sandbox and must be mounted to run
-    (:data:`usar_replay.ros1.build.layout.WORKSPACE`, its underlays at theirs); '': at its host path
+    (:data:`usar_replay.ros1.building.layout.WORKSPACE`, its underlays at theirs); '': at its
+    host path
     (built without a kernel sandbox)."""
 
     @property
@@ -291,7 +292,8 @@ def _toplevel(src: Path) -> None:
 
 def sandboxed() -> bool:
     """Does a build run in the kernel sandbox here? (bubblewrap works, ``USAR_SANDBOX`` is not
-    ``off``): only then can it be built at :mod:`~usar_replay.ros1.build.layout`'s fixed paths."""
+    ``off``): only then can it be built at :mod:`~usar_replay.ros1.building.layout`'s fixed
+    paths."""
     from usar_replay.node import kernel_sandbox
 
     ok, _ = kernel_sandbox.bwrap_available()
@@ -308,7 +310,7 @@ def _catkin_make(
     at: str = "",
 ) -> None:
     """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox, where it appears
-    at ``at`` and its underlays at :func:`~usar_replay.ros1.build.layout.underlay_at`
+    at ``at`` and its underlays at :func:`~usar_replay.ros1.building.layout.underlay_at`
     (``at`` '': all
     at their host paths); raise ``build_failed`` with the errors (paths as the student's) and
     a hint, or return."""
@@ -377,7 +379,8 @@ def build(
     at: str = "",
 ) -> Built:
     """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``; in the
-    sandbox at ``at`` (:data:`usar_replay.ros1.build.layout.WORKSPACE`, the underlays at theirs) or,
+    sandbox at ``at`` (:data:`usar_replay.ros1.building.layout.WORKSPACE`, the underlays at
+    theirs) or,
     with ``at`` '', at its host path.
 
     ``entry`` is usar's: only ``entry/ws`` is writable by the build. A failure raises
@@ -490,7 +493,7 @@ def underlay(
     stand-ins (:mod:`.standins`) built in a workspace of their
     own (cached and verified like any build: they are usar's own bytes, so every run may share
     them, and no sandbox can write them); ``fixed``: at
-    :data:`usar_replay.ros1.build.layout.UNDERLAY` in the sandbox (when there is one)."""
+    :data:`usar_replay.ros1.building.layout.UNDERLAY` in the sandbox (when there is one)."""
     root = _private_root(root or cache_root())
     fixed = fixed and sandboxed()
     h = hashlib.sha256(b"underlay")
@@ -522,7 +525,8 @@ def cached_build(
     packages are the same bytes: the build ran those bytes alone, and nothing but usar can
     write the cache. Built in place (catkin writes absolute paths into ``devel/``), under a
     lock; a failed build is not kept. ``fixed``: built at the sandbox's fixed paths
-    (:mod:`usar_replay.ros1.build.layout`) when the build has a sandbox, for a run that has one."""
+    (:mod:`usar_replay.ros1.building.layout`) when the build has a sandbox, for a run that has
+    one."""
     root = _private_root(root or cache_root())
     fixed = fixed and sandboxed()
     under = () if pkg.name == "fiducial_msgs" else (underlay(root, limits, fixed=fixed),)

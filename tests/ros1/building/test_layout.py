@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from usar_replay.ros1.build import layout
+from usar_replay.ros1.building import layout
 
 
 def test_each_underlay_has_its_own_fixed_read_only_place() -> None:

@@ -8,7 +8,7 @@ import subprocess
 
 import pytest
 
-from usar_replay.ros1.build import debian, ros_debian, standins
+from usar_replay.ros1.building import debian, ros_debian, standins
 
 
 def _owners() -> dict[str, str]:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.ros1.build import tree
+from usar_replay.ros1.building import tree
 
 
 def _workspace(root: Path) -> Path:
