@@ -43,7 +43,7 @@ def test_debian_ros1_is_installed() -> None:
 
 def test_usage_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["record", "--launch", "x.launch", "--out", str(tmp_path / "a.mcap")]) == 2
-    assert "--launch and --node go with --ros1 PKG" in capsys.readouterr().err
+    assert "--launch, --node and --after-launch go with --ros1 PKG" in capsys.readouterr().err
     missing = tmp_path / "nothing"
     assert main(["record", "--ros1", str(missing), "--out", str(tmp_path / "b.mcap")]) == 2
     assert f"--ros1 {missing}: no such folder" in capsys.readouterr().err

@@ -12,18 +12,23 @@ import csv
 import io
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from usar_replay.batch.plan import GRADE_FORMAT, Plan, read_json
 
 __all__ = [
+    "CLASS_FILE",
+    "CLASS_FORMAT",
+    "class_json",
+    "from_folder",
     "GRADESCOPE_VISIBILITY",
     "OUTCOME_MARKS",
     "ClassGrades",
     "collect",
     "gradescope_results",
+    "start_text",
     "to_csv",
     "to_table",
 ]
@@ -82,6 +87,8 @@ class ClassGrades:
     cells: dict[tuple[str, str], Cell]
     problems: dict[str, str]
     """Teams whose submission has no mission: why."""
+    starts: dict[str, tuple[str, str]] = field(default_factory=dict)
+    """A ROS 1 team's start as it ran (or as the plan read it) and where it was read."""
 
     def total(self, team: str) -> tuple[float, float]:
         cells = [self.cells[(team, w)] for w in self.worlds]
@@ -94,6 +101,7 @@ def collect(plan: Plan, max_points: dict[str, float]) -> ClassGrades:
     worlds = [w.name for w in plan.worlds]
     problems = {s.team: s.problem for s in plan.submissions if s.problem}
     problem_outcomes = {s.team: s.problem_outcome for s in plan.submissions if s.problem}
+    starts = {s.team: (s.start, s.start_source) for s in plan.submissions if s.start}
     cells: dict[tuple[str, str], Cell] = {}
     for team in teams:
         for world in worlds:
@@ -112,7 +120,66 @@ def collect(plan: Plan, max_points: dict[str, float]) -> ClassGrades:
                 float(g.get("max_points", full)),
                 g,
             )
-    return ClassGrades(teams, worlds, cells, problems)
+            if g.get("start"):  # as it ran (the first world's)
+                starts.setdefault(team, (str(g["start"]), str(g.get("start_source", ""))))
+    return ClassGrades(teams, worlds, cells, problems, starts)
+
+
+CLASS_FORMAT = "usar-batch-class/1"
+CLASS_FILE = "class.json"
+
+
+def class_json(grades: ClassGrades) -> str:
+    """``OUT/class.json`` (format ``usar-batch-class/1``, docs/batch.md): the batch's teams and
+    worlds in its order, each team's problem (outcome, reason) and start (commands, where read),
+    so that ``usar report OUT`` rebuilds the class from the folder alone."""
+    outcomes = {t: grades.cells[(t, grades.worlds[0])].outcome for t in grades.problems}
+    data = {
+        "format": CLASS_FORMAT,
+        "teams": grades.teams,
+        "worlds": grades.worlds,
+        "problems": {t: [outcomes.get(t, "no_mission"), why] for t, why in grades.problems.items()},
+        "starts": {t: list(s) for t, s in grades.starts.items()},
+    }
+    return json.dumps(data, indent=2, sort_keys=True) + "\n"
+
+
+def from_folder(out_root: Path) -> ClassGrades | None:
+    """The class of a batch's output folder (its ``class.json`` and the runs' grades), or None
+    when the folder is not one."""
+    data = read_json(out_root / CLASS_FILE)
+    if data is None or data.get("format") != CLASS_FORMAT:
+        return None
+    teams = [str(t) for t in data.get("teams", [])]
+    worlds = [str(w) for w in data.get("worlds", [])]
+    problems = {str(t): str(v[1]) for t, v in dict(data.get("problems", {})).items()}
+    outcomes = {str(t): str(v[0]) for t, v in dict(data.get("problems", {})).items()}
+    starts = {str(t): (str(v[0]), str(v[1])) for t, v in dict(data.get("starts", {})).items()}
+    cells: dict[tuple[str, str], Cell] = {}
+    for team in teams:
+        for world in worlds:
+            g = read_json(out_root / team / f"{world}.grade.json")
+            if team in problems:
+                cells[(team, world)] = Cell(True, outcomes[team], 0.0, 0.0, {})
+            elif g is None or g.get("format") != GRADE_FORMAT:
+                cells[(team, world)] = Cell(False, "", 0.0, 0.0, {})
+            else:
+                cells[(team, world)] = Cell(
+                    True,
+                    str(g.get("outcome", "")),
+                    float(g.get("points", 0.0)),
+                    float(g.get("max_points", 0.0)),
+                    g,
+                )
+    return ClassGrades(teams, worlds, cells, problems, starts)
+
+
+def start_text(grades: ClassGrades, team: str) -> str:
+    """``roslaunch P F; rosrun P N (doc/instructions.txt line 7)``, or '' (not a ROS 1 team)."""
+    how, source = grades.starts.get(team, ("", ""))
+    if not how:
+        return ""
+    return f"{how} ({source})" if source else how
 
 
 def _num(x: float) -> str:
@@ -124,7 +191,7 @@ def to_csv(grades: ClassGrades) -> str:
     ``done`` (``world: outcome``)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["team", *grades.worlds, "total", "max_total", "problems"])
+    w.writerow(["team", *grades.worlds, "total", "max_total", "problems", "start", "start_from"])
     for team in grades.teams:
         cells = [grades.cells[(team, wn)] for wn in grades.worlds]
         total, full = grades.total(team)
@@ -142,6 +209,7 @@ def to_csv(grades: ClassGrades) -> str:
                 _num(total),
                 _num(full),
                 "; ".join(notes),
+                *grades.starts.get(team, ("", "")),
             ]
         )
     return buf.getvalue()
@@ -192,6 +260,15 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
         lines.append(_wrap("runs that did not finish: " + "; ".join(legend), width))
     if shown < len(grades.worlds):
         lines.append(f"({len(grades.worlds) - shown} more worlds in summary.csv)")
+    for team in grades.teams:  # why a team has no run, and how each ROS 1 team was started
+        if team in grades.problems:
+            outcome = grades.cells[(team, grades.worlds[0])].outcome if grades.worlds else ""
+            why = f"{team}: {outcome or 'no_mission'}: {grades.problems[team]}"
+            lines.append(_wrap(why, width))
+    started = [(t, start_text(grades, t)) for t in grades.teams if start_text(grades, t)]
+    if started:
+        lines.append("started as:")
+        lines += [_wrap(f"  {team}: {text}", width) for team, text in started]
     return "\n".join(lines)
 
 
@@ -231,6 +308,8 @@ def gradescope_results(
         lines.append(f"Outcome: {c.outcome or 'not graded'} - {OUTCOME_WORDS.get(c.outcome, '')}")
         if team in grades.problems:
             lines.append(grades.problems[team])
+        if start_text(grades, team):
+            lines.append(f"Started with: {start_text(grades, team)}")
         reason = str(c.grade.get("outcome_reason", "")) if c.outcome != "done" else ""
         if reason:
             lines += ["", reason.rstrip()[-4000:]]
@@ -252,6 +331,10 @@ def gradescope_results(
     summary = f"usar batch: {_num(total)}/{_num(full)} points on {len(grades.worlds)} worlds"
     if failed:
         summary += f"; did not finish on: {', '.join(failed)}"
+    if team in grades.problems:
+        summary += f"\n{grades.problems[team]}"
+    if start_text(grades, team):
+        summary += f"\nStarted with: {start_text(grades, team)}"
     return {
         "score": round(total, 3),
         "max_score": round(full, 3),

@@ -20,7 +20,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
 
+from usar_replay.batch.classpage import class_page
 from usar_replay.batch.classreport import (
+    CLASS_FILE,
+    class_json,
     collect,
     gradescope_json,
     gradescope_results,
@@ -47,6 +50,7 @@ __all__ = ["BatchSummary", "grade_class", "plan_class", "require_sandbox"]
 
 SUMMARY_CSV = "summary.csv"
 SUMMARY_TXT = "summary.txt"
+CLASS_PAGE = "class.html"
 GRADESCOPE_FILE = "results.json"
 
 
@@ -237,6 +241,8 @@ def grade_class(
     write_text(out / SUMMARY_CSV, to_csv(grades), overwrite=True)
     summary.table = to_table(grades)
     write_text(out / SUMMARY_TXT, summary.table + "\n", overwrite=True)
+    write_text(out / CLASS_FILE, class_json(grades), overwrite=True)
+    write_text(out / CLASS_PAGE, class_page(grades, _no_link), overwrite=True)
     if gradescope:
         sources = {w.name: w.source for w in plan.worlds}
         for team in grades.teams:
@@ -249,6 +255,12 @@ def grade_class(
             )
             write_text(out / team / GRADESCOPE_FILE, gradescope_json(results), overwrite=True)
     return summary
+
+
+def _no_link(_team: str, _world: str) -> None:
+    """The batch's page links no run page: ``usar report OUT -o DIR`` writes them, and a class
+    page that links each."""
+    return None
 
 
 def summary_paths(plan: Plan) -> tuple[Path, Path]:

@@ -40,7 +40,8 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
-from usar_replay.core.errors import UsageError
+from usar_replay.core.errors import UnclearStart, UsageError
+from usar_replay.ros1 import start
 from usar_replay.ros1.building.workspace import NoPackage, SeveralPackages, find_package
 from usar_replay.world.world_key import WorldKey
 
@@ -85,6 +86,10 @@ class Submission:
     problem_outcome: str = "no_mission"
     """The verdict of every run of a submission with a :attr:`problem`: ``no_mission``, or
     ``bad_submission`` for a folder usar will not read (:mod:`usar_replay.batch.team_files`)."""
+    start: str = ""
+    """A ROS 1 team's start as a TA types it (``roslaunch P F; rosrun P N``); '' otherwise."""
+    start_source: str = ""
+    """Where :attr:`start` was read (``doc/instructions.txt line 7``, ``usar.toml [ros1]``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -153,6 +158,9 @@ class RunJob:
     submissions_root: str
     inputs: dict[str, str]
     grade_only: bool = False
+    start: str = ""
+    """A ROS 1 team's start as the plan read it (:attr:`Submission.start`), for its grade."""
+    start_source: str = ""
 
     @property
     def inputs_key(self) -> str:
@@ -245,41 +253,53 @@ def team_name(raw: str) -> str:
     return name
 
 
-def _folder_target(folder: Path) -> tuple[str, str]:
-    """(target, problem) of a team folder: ``usar.toml``'s ``[mission] target`` or
-    ``mission.py``."""
+def _folder_target(folder: Path) -> tuple[str, str, str, str]:
+    """(target, problem, start, start source) of a team folder: ``usar.toml``'s ``[mission]
+    target``, ``mission.py``, or a catkin package started as :func:`usar_replay.ros1.start.decide`
+    reads it (``usar.toml [ros1]``, the instructions, the README, the package's shape)."""
     config = folder / CONFIG_FILE
+    data: Any = {}
     if config.is_file():
         try:
-            data = tomllib.loads(config.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-            return "", f"{CONFIG_FILE} is not valid TOML: {err}"
-        spec = data.get("mission", {}).get("target") if isinstance(data, dict) else None
+            data = tomllib.loads(config.read_text(encoding="utf-8", errors="replace"))
+        except tomllib.TOMLDecodeError as err:
+            return "", f"{CONFIG_FILE} is not valid TOML: {err}", "", ""
+    if config.is_file() and ("mission" in data or "ros1" not in data):  # a Python mission
+        mission_table = data.get("mission", {})
+        spec = mission_table.get("target") if isinstance(mission_table, dict) else None
         if not isinstance(spec, str) or not spec.strip():
-            return "", f'{CONFIG_FILE} has no [mission] target = "FILE.py[:function]"'
+            return "", f'{CONFIG_FILE} has no [mission] target = "FILE.py[:function]"', "", ""
         file_part, colon, func = spec.strip().partition(":")
         file = (folder / file_part).resolve()
         if not file.is_relative_to(folder.resolve()):
-            return "", f"{CONFIG_FILE}: target {spec!r} is outside the team's folder"
+            return "", f"{CONFIG_FILE}: target {spec!r} is outside the team's folder", "", ""
         if file.suffix != ".py" or not file.is_file():
-            return "", f"{CONFIG_FILE}: target {spec!r}: no such .py file in the team's folder"
-        return str(file) + (f":{func}" if colon and func else ""), ""
+            why = f"{CONFIG_FILE}: target {spec!r}: no such .py file in the team's folder"
+            return "", why, "", ""
+        return str(file) + (f":{func}" if colon and func else ""), "", "", ""
     mission = folder / DEFAULT_MISSION_FILE
     if mission.is_file():
-        return str(mission.resolve()), ""
+        return str(mission.resolve()), "", "", ""
+    target = ROS1_TARGET_PREFIX + str(folder.resolve())
     try:  # a catkin package (the course's deliverable), found as `--ros1 FOLDER` finds it
-        find_package(folder)
+        pkg = find_package(folder)
     except NoPackage:
         pass
     except SeveralPackages as err:  # which, and how to choose
-        return "", str(err).removeprefix("--ros1 ")
+        return "", str(err).removeprefix("--ros1 "), "", ""
     except UsageError:  # a package usar will say more about when it runs (no <name>...)
-        return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
-    else:  # built and run by usar's ROS 1 bridge
-        return ROS1_TARGET_PREFIX + str(folder.resolve()), ""
+        return target, "", "", ""
+    else:  # built and run by usar's ROS 1 bridge, started as the team's text says
+        try:
+            chosen = start.decide(pkg.path, pkg.name, team_dir=folder)
+        except UnclearStart as err:
+            return "", str(err), "", ""
+        return target, "", "; ".join(chosen.commands(pkg.name)), chosen.source
     return (
         "",
         f"no {DEFAULT_MISSION_FILE}, no {CONFIG_FILE} and no package.xml in the team's folder",
+        "",
+        "",
     )
 
 
@@ -303,6 +323,7 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
             continue
         team = team_name(raw)
         outcome = "no_mission"
+        how = source = ""
         try:  # first: nothing else of a folder is read before it is known to be safe to read
             digest = submission_digest(entry.resolve())
         except (UnusableSubmission, OSError) as err:
@@ -311,13 +332,15 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
             outcome = "bad_submission"
         else:
             if entry.is_dir():
-                target, problem = _folder_target(entry)
+                target, problem, how, source = _folder_target(entry)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(Submission(team, entry.resolve(), target, digest, problem, outcome))
+        subs.append(
+            Submission(team, entry.resolve(), target, digest, problem, outcome, how, source)
+        )
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
     return subs
@@ -448,6 +471,8 @@ def make_plan(
                     "settings_sha256": settings_sha,
                     "usar_version": __version__,
                 },
+                start=sub.start,
+                start_source=sub.start_source,
             )
             if sub.problem:
                 plan.invalid.append(

@@ -39,7 +39,7 @@ from usar_replay.batch.plan import (
     RunJob,
     finished_record,
 )
-from usar_replay.core.errors import UsarError
+from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.outfiles import write_text
 from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB
 
@@ -191,11 +191,30 @@ def grade_job(
         "log": log.name,
         "log_sha256": record["log_sha256"],
         "thresholds_sha256": job.thresholds_sha256,
+        **_start(job, log),
         **lines,
     }
     text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
     write_text(job.path(".grade.json"), text, overwrite=True)
     return grade
+
+
+def _start(job: RunJob, log: Path) -> dict[str, str]:
+    """A ROS 1 team's start and where it was read: as the log's ``ros1.toml`` says it ran,
+    else as the plan read it (a run that ended before its package started)."""
+    if not job.target.startswith(ROS1_TARGET_PREFIX):
+        return {}
+    start, source = job.start, job.start_source
+    try:
+        from usar_replay.log import ros1_run
+        from usar_replay.log.run import open_run
+
+        ran = ros1_run.of(open_run(log, check="summary"))
+        if ran is not None:
+            start, source = ran.started_with, ran.start_source or source
+    except (UsarError, OSError):
+        pass
+    return {"start": start, "start_source": source}
 
 
 def _mission_limits(job: RunJob) -> Any:
@@ -281,7 +300,11 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
     graded = None
     try:
         if job.target.startswith(ROS1_TARGET_PREFIX):
-            result = _record_ros1(job, scenario, log, settings, watchdog)
+            try:
+                result = _record_ros1(job, scenario, log, settings, watchdog)
+            except UsageError as err:  # the team's package cannot be started: its verdict
+                result = None
+                outcome, reason, sim_s = "no_mission", str(err), 0.0
         else:
             result = record(
                 scenario,
@@ -293,8 +316,9 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
                 thresholds=_thresholds(job.thresholds_toml),
             )
             graded = result.grade
-        outcome, reason = result.outcome, result.outcome_reason
-        sim_s = result.sim_duration_s
+        if result is not None:
+            outcome, reason = result.outcome, result.outcome_reason
+            sim_s = result.sim_duration_s
     except WallLimit:
         wall = float(job.limits["wall_s"])
         outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"

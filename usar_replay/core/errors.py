@@ -25,6 +25,7 @@ __all__ = [
     "ProtocolMismatch",
     "NoPackage",
     "SeveralPackages",
+    "UnclearStart",
     "DefinitionRefused",
 ]
 
@@ -121,6 +122,13 @@ class ProtocolMismatch(MissionEnded):
 class NoPackage(UsageError):
     """No catkin package in the folder given (a batch then looks for a Python mission). (Raised
     by :func:`usar_replay.ros1.building.workspace.find_package`.)"""
+
+
+class UnclearStart(UsageError):
+    """What starts a team's ROS 1 package is not decided by its instructions, its README, its
+    ``usar.toml`` or the package's shape: the message names the candidates and how to choose.
+    (Raised by :func:`usar_replay.ros1.start.decide`; a batch makes it the team's
+    ``no_mission``.)"""
 
 
 class SeveralPackages(UsageError):

@@ -107,6 +107,8 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
     lines = _field("ROS 1 package", f"{ros1.package} ({ros1.path})" if ros1.path else ros1.package)
     lines += _field("sha256", ros1.sha256 or "(not recorded)")
     lines += _field("Started with", ros1.started_with)
+    if ros1.start_source:
+        lines += _field("Start read from", ros1.start_source)
     nodes = [f"{n.name} ({n.package}/{n.type})" if n.type else n.name for n in ros1.nodes]
     lines += _field("Nodes", ", ".join(nodes) or "(none started)")
     if ros1.replaced:

@@ -56,6 +56,10 @@ class Ros1Run:
     sha256: str = ""
     launch: str = ""
     node: str = ""
+    after_launch: tuple[str, ...] = ()
+    """Commands run once the graph was up (the TA's third terminal)."""
+    start_source: str = ""
+    """Where the start was read (``doc/instructions.txt line 7``, ``usar.toml [ros1]``)."""
     build_seconds: float = 0.0
     build_cached: bool = False
     nodes: tuple[Ros1Node, ...] = ()
@@ -77,9 +81,13 @@ class Ros1Run:
 
     @property
     def started_with(self) -> str:
+        """The start as a TA types it: ``roslaunch P F; rosrun P N; rosservice call ...``."""
+        words = []
         if self.launch:
-            return f"roslaunch {self.package} {self.launch}"
-        return f"rosrun {self.package} {self.node}"
+            words.append(f"roslaunch {self.package} {self.launch}")
+        if self.node or not self.launch:
+            words.append(f"rosrun {self.package} {self.node}")
+        return "; ".join([*words, *self.after_launch])
 
     @property
     def build(self) -> str:
@@ -100,6 +108,8 @@ class Ros1Run:
             "sha256": self.sha256,
             "launch": self.launch,
             "node": self.node,
+            "after_launch": list(self.after_launch),
+            "start_source": self.start_source,
             "build_seconds": round(self.build_seconds, 3),
             "build_cached": self.build_cached,
             "applied_settings": list(self.applied_settings),
@@ -125,6 +135,8 @@ class Ros1Run:
             sha256=str(data.get("sha256", "")),
             launch=str(data.get("launch", "")),
             node=str(data.get("node", "")),
+            after_launch=tuple(str(c) for c in data.get("after_launch", [])),
+            start_source=str(data.get("start_source", "")),
             build_seconds=float(data.get("build_seconds", 0.0)),
             build_cached=bool(data.get("build_cached", False)),
             applied_settings=tuple(str(s) for s in data.get("applied_settings", [])),

@@ -77,7 +77,7 @@ from usar_replay.ros1 import launch_filter, run_files
 from usar_replay.ros1.building import standins
 from usar_replay.ros1.building.debian import DIST_PACKAGES
 from usar_replay.ros1.building.workspace import catkin_env
-from usar_replay.ros1.graph import Graph, tail
+from usar_replay.ros1.graph import Graph, launch_target, tail
 from usar_replay.ros1.pacing.graph_start import (
     launch_nodes,
     missing_connections,
@@ -212,7 +212,7 @@ class Bridge:
         if self.config.get("launch"):
             plan = self._write_launch_plan(ws)
             setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
-            pkg, launch = self.config["package"], self.config["launch"]
+            pkg, launch = launch_target(self.config)
             expected = names.submit(launch_nodes, setup, pkg, launch, self.env, plan)
         names.shutdown(wait=False)
         # every call logged (getParam included): ``usar info`` lists the parameters the
@@ -322,6 +322,13 @@ class Bridge:
             while quiet.long_waits() and time.monotonic() < deadline:
                 for mb in self.move_base.values():
                     mb.server.publish_status()
+                wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+            after = [str(c) for c in self.config.get("after_launch", ())]
+            if after:  # the TA's third terminal, once the graph is up; held until it acted
+                graph.run_after_launch(after)
+                wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
+                if self.topics.discover():
+                    self.topics.wait_connected(5.0)
                 wait_until_ready(master, NODE, expected, idle, alive, timeout_s)
             self._master = master
             self._package_nodes = registered_nodes(master, NODE)

@@ -17,11 +17,20 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.ros1 import run_files
-from usar_replay.ros1.launch_output import launch_command, rosrun_command, without_prefix
+from usar_replay.ros1.launch_output import (
+    OUTPUT_SUFFIX,
+    launch_command,
+    rosrun_command,
+    start_file,
+    without_prefix,
+)
 from usar_replay.ros1.pacing import shim
 from usar_replay.ros1.pacing.proc_watch import ProcWatch
 
-__all__ = ["Graph", "tail"]
+__all__ = ["START_FILE", "Graph", "launch_target", "tail"]
+
+START_FILE = "usar_start.launch"
+"""usar's launch file that starts a package's launch file and executable together."""
 
 _DIED = re.compile(r"has died \[pid \d+, exit code (-?\d+)")
 """roslaunch's report of a node's death (exit code 0 is a clean end)."""
@@ -40,11 +49,11 @@ class Graph:
         self.output_dir.mkdir(exist_ok=True)
         if config.get("launch"):
             what = f"roslaunch {config['package']} {config['launch']}"
+            if config.get("node"):
+                what += f" with rosrun {config['package']} {config['node']}"
             nodes = run / run_files.NODES_FILE
             plan = run / run_files.LAUNCH_PLAN
-            cmd = launch_command(
-                self.output_dir, nodes, config["package"], config["launch"], plan
-            )
+            cmd = launch_command(self.output_dir, nodes, *launch_target(config), plan)
         else:
             what = f"rosrun {config['package']} {config['node']}"
             cmd = rosrun_command(self.output_dir, config["package"], config["node"])
@@ -63,6 +72,30 @@ class Graph:
                 stderr=subprocess.STDOUT,
             )
         self.watch = ProcWatch(self.proc.pid, launcher_is_package=not config.get("launch"))
+        self._env = shim.preloaded(env, config.get("underlays", ()))
+        self._run = run
+        self.after: list[subprocess.Popen[bytes]] = []
+        """The TA's third commands (``rosservice call /start ...``), once started."""
+
+    def run_after_launch(self, commands: list[str]) -> None:
+        """Start each command as a TA types it in a third terminal, in the workspace's
+        environment (the pacing shim preloaded), beside the graph, its output in a file of its
+        own (``after_launch_N``); they run on (a service call whose callback is the mission
+        returns when the mission does) and are stopped with the graph."""
+        for number, command in enumerate(commands, start=1):
+            label = f"after_launch_{number}"
+            out = self.output_dir / (label + OUTPUT_SUFFIX)
+            with out.open("wb") as f:
+                self.after.append(
+                    subprocess.Popen(
+                        ["bash", "-c", f"{self.setup} && exec {command}"],
+                        cwd=self._run,
+                        env=self._env,
+                        stdin=subprocess.DEVNULL,
+                        stdout=f,
+                        stderr=subprocess.STDOUT,
+                    )
+                )
 
     def exit_status(self) -> tuple[int, str] | None:
         """None while running; (exit code, problem) once it ended: roslaunch exits 0 even when
@@ -92,6 +125,15 @@ class Graph:
         return without_prefix(_ANSI.sub("", text))
 
     def stop(self) -> None:
+        for proc in self.after:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+        for proc in self.after:
+            try:
+                proc.wait(timeout=2.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
         if self.proc.poll() is None and self.watch.seen and self.watch.ended():
             self.proc.kill()  # the package is gone: roslaunch has nothing left to stop
             self.proc.wait()
@@ -103,6 +145,19 @@ class Graph:
                 self.proc.kill()
                 self.proc.wait()
         self.watch.close()
+
+
+def launch_target(config: dict[str, Any]) -> tuple[str, str]:
+    """(package, launch file) for roslaunch: the package's own, or, where an executable is to
+    run beside it, usar's launch file in the run's folder that starts both
+    (:func:`.launch_output.start_file`; package '')."""
+    if not config.get("node"):
+        return str(config["package"]), str(config["launch"])
+    path = Path(config["run_dir"]) / START_FILE
+    if not path.exists():
+        rel = str(config.get("launch_rel") or config["launch"])
+        path.write_text(start_file(config["package"], rel, config["node"]), encoding="utf-8")
+    return "", str(path)
 
 
 def tail(path: Path, lines: int = 20) -> str:

@@ -36,6 +36,7 @@ __all__ = [
     "launch_command",
     "nodes_command",
     "rosrun_command",
+    "start_file",
     "without_prefix",
 ]
 
@@ -75,14 +76,35 @@ def launch_command(
     # -P: this file's folder (usar's ros1 modules: build.py, process.py, ...) is not put on
     # sys.path, where it could shadow a module roslaunch imports
     words = ["python3", "-P", str(Path(__file__).resolve()), str(output_dir), str(nodes_file)]
-    return shlex.join([*words, str(plan or "-"), package, launch])
+    return shlex.join([*words, str(plan or "-"), *([package] if package else []), launch])
 
 
 def nodes_command(package: str, launch: str, plan: Path | None = None) -> str:
     """The shell words that print the nodes ``roslaunch PACKAGE LAUNCH`` starts (``roslaunch
     --nodes``), ``plan`` followed."""
     words = ["python3", "-P", str(Path(__file__).resolve()), "-", "-", str(plan or "-")]
-    return shlex.join([*words, "--nodes", package, launch])
+    return shlex.join([*words, "--nodes", *([package] if package else []), launch])
+
+
+def start_file(package: str, launch_rel: str, node: str) -> str:
+    """A launch file of usar's that starts a package's launch file and one of its executables
+    together, as a TA's two terminals do (``roslaunch PKG FILE``, then ``rosrun PKG EXE``):
+    the launch file included as it is, the executable as a node named after it (``.py`` left
+    out; roslaunch
+    gives every node a name: ``__name:=EXE``, where ``rosrun`` leaves the name ``ros::init``
+    chose)."""
+    from xml.sax.saxutils import quoteattr
+
+    name = re.sub(r"[^A-Za-z0-9_]", "_", node.removesuffix(".py"))
+    name = name if name[:1].isalpha() else "n_" + name
+    include = f"$(find {package})/{launch_rel}"
+    return (
+        "<launch>\n"
+        f"  <include file={quoteattr(include)}/>\n"
+        f"  <node pkg={quoteattr(package)} type={quoteattr(node)} name={quoteattr(name)}"
+        ' output="screen"/>\n'
+        "</launch>\n"
+    )
 
 
 def rosrun_command(output_dir: Path, package: str, node: str) -> str:

@@ -48,7 +48,14 @@ class Ros1Options:
     launch: str = ""
     """A launch file of the package (name or path inside it): ``roslaunch PKG FILE``."""
     node: str = ""
-    """An executable of the package: ``rosrun PKG NODE`` (when no launch file is given)."""
+    """An executable of the package: ``rosrun PKG NODE``; with a launch file too, both run
+    (one roslaunch of a launch file of usar's that includes the one and starts the other, as
+    a TA's two terminals do: :mod:`.start`)."""
+    after_launch: tuple[str, ...] = ()
+    """Commands run in the graph's sandbox once it is up, as a TA types them in a third
+    terminal (``rosservice call /start "data: true"``)."""
+    start_source: str = ""
+    """Where the start was read (``doc/instructions.txt line 7``; :func:`.start.decide`)."""
     rtf: float = 0.5
     """The slowest pace, a safety net: a tick waits at most ``dt / rtf`` of wall time for the
     graph to go idle (docs/ros1.md, "Pacing"; 0: no cap). The graph sets the pace: a tick ends
@@ -97,7 +104,9 @@ def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits
 def ros1_target(pkg: Package, options: Ros1Options, *, hashed: bool = True) -> MissionTarget:
     """What the log's ``mission.toml`` says: how the package was started and its sha256
     ('' unless ``hashed``: a package whose folder could not be hashed is still logged)."""
-    how = f"--launch {options.launch}" if options.launch else f"--node {options.node}"
+    how = " ".join(
+        f"--{k} {v}" for k, v in (("launch", options.launch), ("node", options.node)) if v
+    )
     return MissionTarget(
         spec=f"ros1:{pkg.path} {how}".strip(),
         module=f"ros1:{pkg.name}",
@@ -105,6 +114,21 @@ def ros1_target(pkg: Package, options: Ros1Options, *, hashed: bool = True) -> M
         path=str(pkg.path.resolve()),
         sha256=package_sha256(pkg) if hashed else "",
     )
+
+
+def _launch_rel(package: Package, launch: str) -> str:
+    """The launch file's path inside the package (what ``roslaunch PKG FILE`` finds), for a
+    launch file of usar's that includes it (:func:`.graph.launch_target`)."""
+    if not launch:
+        return ""
+    found = sorted(
+        p
+        for p in package.path.rglob(Path(launch).name)
+        if p.is_file()
+        and not p.is_symlink()
+        and not {"build", "devel", "install"} & set(p.relative_to(package.path).parts)
+    )
+    return found[0].relative_to(package.path).as_posix() if found else launch
 
 
 def _text(value: Any) -> str:
@@ -151,6 +175,7 @@ class Ros1Process(MissionProcess):
                 "run_dir": str(self.run_dir),
             }
             config.update({k: v for k, v in asdict(options).items()})
+            config["launch_rel"] = _launch_rel(package, options.launch)
             self._config_path = self.run_dir / "bridge.json"
             self._config_path.write_text(json.dumps(config), encoding="utf-8")
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
@@ -236,7 +261,7 @@ class Ros1Process(MissionProcess):
     def _collect(self) -> list[tuple[str, str, bytes]]:
         outputs = run_files.node_outputs(self.run_dir)
         nodes = run_files.launch_nodes(self.run_dir)
-        if self.options.node:  # rosrun: the nodes as they registered with the master
+        if self.options.node and not self.options.launch:  # rosrun: as registered
             names = run_files.registered_nodes(self.run_dir)
             nodes = [(name, self.package.name, self.options.node) for name in names]
             if len(names) == 1:  # the executable's output is that node's
@@ -252,6 +277,8 @@ class Ros1Process(MissionProcess):
             sha256=self.target.sha256,
             launch=self.options.launch,
             node=self.options.node,
+            after_launch=tuple(self.options.after_launch),
+            start_source=self.options.start_source,
             build_seconds=self.built.seconds,
             build_cached=self.built.cached,
             nodes=tuple(Ros1Node(*row) for row in nodes),

@@ -19,10 +19,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RunSettings
 from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline.record import Progress, RecordResult, record, with_latency
+from usar_replay.ros1 import start
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import (
     Built,
@@ -38,27 +38,27 @@ from usar_replay.world.scenario import Scenario
 __all__ = ["choose_entry", "record_ros1"]
 
 
-def choose_entry(pkg: Package, options: Ros1Options) -> Ros1Options:
-    """Check ``--launch``/``--node`` against the package; with neither, its launch file named
-    after the package, or its only launch file."""
-    if options.launch and options.node:
-        raise UsageError("--launch and --node: give one of them")
-    if options.launch:
-        name = Path(options.launch).name
-        if not any(p.name == name for p in pkg.path.rglob("*.launch")):
-            raise UsageError(f"--launch {options.launch}: no such launch file in {pkg.name}")
-        return options
-    if options.node:
-        return options  # an executable exists only once built: a missing one is a crash
-    found = sorted(pkg.path.rglob("*.launch"))
-    named = [p for p in found if p.stem == pkg.name]
-    found = named or found
-    if len(found) != 1:
-        raise UsageError(
-            f"--ros1 {pkg.path}: {len(found)} launch files; say which with --launch FILE "
-            "or --node EXECUTABLE"
-        )
-    return dataclasses.replace(options, launch=found[0].name)
+def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = None) -> Ros1Options:
+    """The start of the package (:func:`usar_replay.ros1.start.decide`: ``--launch``/``--node``,
+    else the team's ``usar.toml``, instructions, README, the package's shape), with where it
+    was read; :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when
+    nothing decides it. ``team_dir``: the folder handed in (a repository around the
+    package)."""
+    chosen = start.decide(
+        pkg.path,
+        pkg.name,
+        launch=options.launch,
+        node=options.node,
+        team_dir=team_dir,
+        after_launch=tuple(options.after_launch),
+    )
+    return dataclasses.replace(
+        options,
+        launch=chosen.launch,
+        node=chosen.node,
+        after_launch=chosen.after_launch,
+        start_source=chosen.source,
+    )
 
 
 def record_ros1(
@@ -74,7 +74,8 @@ def record_ros1(
     """Build ``package`` and record it on ``scenario`` into ``out`` (see the module doc)."""
     debian.check()
     pkg = find_package(package)
-    opts = choose_entry(pkg, options or Ros1Options())
+    given = Path(package)
+    opts = choose_entry(pkg, options or Ros1Options(), given if given.is_dir() else None)
     build_limits = build_limits_for(limits or MissionLimits(), opts)
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None

@@ -25,6 +25,7 @@ from typing import Any
 
 from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.core.safe_text import safe_line
+from usar_replay.log import ros1_run
 from usar_replay.log.run import Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
@@ -37,13 +38,19 @@ __all__ = ["recorded_entry", "recorded_package", "ros1_process"]
 
 
 def recorded_entry(target: str) -> tuple[str, str, str]:
-    """(package path, launch file, executable) from a log's ``ros1:PATH --launch FILE``."""
+    """(package path, launch file, executable) from a log's ``ros1:PATH --launch FILE``
+    (``--launch FILE --node EXE`` where both ran)."""
     rest = target.removeprefix("ros1:")
-    for flag in (" --launch ", " --node "):
-        path, found, entry = rest.rpartition(flag)
-        if found:
-            return (path, entry, "") if flag == " --launch " else (path, "", entry)
-    return rest.strip(), "", ""
+    launch = node = ""
+    for flag in (" --node ", " --launch "):  # written launch first: read from the end
+        before, found, entry = rest.rpartition(flag)
+        if found and " --" not in entry:
+            rest = before
+            if flag == " --node ":
+                node = entry
+            else:
+                launch = entry
+    return rest.strip(), launch, node
 
 
 def ros1_process(
@@ -60,10 +67,12 @@ def ros1_process(
     debian.check()
     path, rec_launch, rec_node = recorded_entry(run.mission.target)
     pkg = find_package(package) if package is not None else recorded_package(run, path)
+    recorded = ros1_run.of(run)
     if launch or node:
         options = Ros1Options(launch=launch or "", node=node or "")
-    else:
-        options = Ros1Options(launch=rec_launch, node=rec_node)
+    else:  # as recorded: the same start, the same third command
+        after = recorded.after_launch if recorded is not None else ()
+        options = Ros1Options(launch=rec_launch, node=rec_node, after_launch=after)
     options = choose_entry(pkg, options)
     target = ros1_target(pkg, options)
     given = limits or MissionLimits()

@@ -47,6 +47,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     ros1.add_argument("--launch", metavar="FILE", help="with --ros1: roslaunch this launch file")
     ros1.add_argument("--node", metavar="EXE", help="with --ros1: rosrun this executable")
     ros1.add_argument(
+        "--after-launch",
+        action="append",
+        default=[],
+        metavar="CMD",
+        help="with --ros1: run CMD once the graph is up, as a TA types it in a third terminal "
+        "('rosservice call /start \"data: true\"'); repeatable. Without --launch/--node the "
+        "package starts as its doc/instructions.txt, README or usar.toml says",
+    )
+    ros1.add_argument(
         "--rtf",
         type=float,
         default=0.5,
@@ -87,8 +96,8 @@ def run(args: argparse.Namespace) -> int:
         if args.ros1:
             result = _record_ros1(args, scenario, out, settings, progress)
         else:
-            if args.launch or args.node:
-                raise UsageError("--launch and --node go with --ros1 PKG")
+            if args.launch or args.node or args.after_launch:
+                raise UsageError("--launch, --node and --after-launch go with --ros1 PKG")
             result = record(
                 scenario,
                 out,
@@ -149,6 +158,7 @@ def _record_ros1(
     opts = Ros1Options(
         launch=args.launch or "",
         node=args.node or "",
+        after_launch=tuple(args.after_launch),
         rtf=args.rtf,
         build_wall_s=args.build_timeout,
     )

@@ -77,4 +77,29 @@ def run(args: argparse.Namespace) -> int:
             worst = max(worst, EXIT_INCOMPLETE)
     write_text(outputs[-1], index_page(entries), overwrite=args.overwrite, inputs=files)
     print(f"wrote {outputs[-1]} ({len(files)} recordings)")
+    _class_pages(args, files, outputs)
     return worst
+
+
+def _class_pages(args: argparse.Namespace, files: list[str], outputs: list[Path]) -> None:
+    """For each folder given that is a ``usar batch`` output (its ``class.json``): the class
+    page, ``class.html`` (``class-2.html``, ... for more), each run linked to its page."""
+    from usar_replay.batch.classpage import class_page
+    from usar_replay.batch.classreport import from_folder
+    from usar_replay.core.outfiles import write_text
+
+    pages = {str(Path(f).resolve()): page.name for f, page in zip(files, outputs, strict=False)}
+    n = 0
+    for given in args.files:
+        root = Path(given)
+        grades = from_folder(root) if root.is_dir() else None
+        if grades is None:
+            continue
+        n += 1
+
+        def link(team: str, world: str, root: Path = root) -> str | None:
+            return pages.get(str((root / team / f"{world}.mcap").resolve()))
+
+        out = Path(args.out) / ("class.html" if n == 1 else f"class-{n}.html")
+        write_text(out, class_page(grades, link), overwrite=True)
+        print(f"wrote {out} (the class of {root}: {len(grades.teams)} teams)")

@@ -58,6 +58,9 @@ APT_PACKAGES: dict[str, str] = {
     "python3-move-base-msgs": "move_base_msgs for the bridge",
     "python3-nav-msgs": "nav_msgs for the bridge",
     "python3-sensor-msgs": "sensor_msgs for the bridge",
+    "python3-rosservice": "rosservice call, a TA's third command (--after-launch)",
+    "python3-rostopic": "rostopic pub, a TA's third command (--after-launch)",
+    "python3-std-srvs": "std_srvs in Python, for rosservice call /start (SetBool, Trigger)",
 }
 """What ``apt-get install`` needs, with why (``--no-install-recommends`` is enough)."""
 
@@ -92,6 +95,9 @@ _PROBES: dict[str, str] = {
     "python3-move-base-msgs": str(DIST_PACKAGES / "move_base_msgs" / "msg" / "__init__.py"),
     "python3-nav-msgs": str(DIST_PACKAGES / "nav_msgs" / "msg" / "__init__.py"),
     "python3-sensor-msgs": str(DIST_PACKAGES / "sensor_msgs" / "msg" / "__init__.py"),
+    "python3-rosservice": "/usr/bin/rosservice",
+    "python3-rostopic": "/usr/bin/rostopic",
+    "python3-std-srvs": str(DIST_PACKAGES / "std_srvs" / "srv" / "__init__.py"),
 }
 
 
