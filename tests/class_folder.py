@@ -138,3 +138,30 @@ def make_class(root: Path) -> Path:
     (team / "README.md").write_text("rosrun chosen wrong.py\n", encoding="utf-8")
     (team / "usar.toml").write_text('[ros1]\nnode = "right.py"\n', encoding="utf-8")
     return root
+
+
+ENDS = """
+import rospy
+rospy.init_node("{name}")
+rospy.sleep({after})
+rospy.loginfo("{name} is home")
+"""
+
+
+def make_pair(root: Path) -> Path:
+    """A two-node team whose launch ends when its required node is done (the follower home):
+    roslaunch then stops the other node with SIGINT, as the course's packages end."""
+    launch = (
+        '<launch>\n  <node pkg="pair" type="explorer.py" name="explorer" output="screen"/>\n'
+        '  <node pkg="pair" type="follower.py" name="follower" output="screen" required="true"/>'
+        "\n</launch>\n"
+    )
+    team = package(
+        root / "pair",
+        "pair",
+        {"explorer.py": SPIN.format(name="explorer"),
+         "follower.py": ENDS.format(name="follower", after=1.5)},
+        {"pair.launch": launch},
+    )
+    (team / "README.md").write_text("roslaunch pair pair.launch\n", encoding="utf-8")
+    return root

@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 
 import pytest
-from class_folder import make_class
+from class_folder import make_class, make_pair
 from conftest import one_room
 
 from usar_replay.batch.plan import discover
@@ -116,3 +116,32 @@ def test_a_class_folder_grades_end_to_end(
     assert main(["report", str(out), "-o", str(pages)]) in (0, 1)
     linked = (pages / "class.html").read_text()
     assert "href='room.html'" in linked or "href='room-2.html'" in linked
+
+
+def test_engines_agree_for_a_ros1_team(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A two-node team whose launch ends with roslaunch's SIGINT to the other node: the same
+    verdict and the same log bytes from the local engine and from a Ray worker (which blocks
+    SIGINT and runs at nice 15: the run's process takes a state of its own, whatever its
+    parent's; usar_replay/batch/run_state.py)."""
+    ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'usar-replay[ray]')")
+    subs = make_pair(tmp_path / "subs")
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    args = ["batch", str(subs), "--scenario", str(world), "--jobs", "1", "--quiet"]
+    args += ["--max-sim-time", "6"]
+    assert main([*args, "-o", str(tmp_path / "local")]) == 0, capsys.readouterr().err
+    ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)
+    try:
+        assert main([*args, "-o", str(tmp_path / "ray"), "--engine", "ray"]) == 0
+    finally:
+        ray.shutdown()
+    local, remote = (
+        json.loads((tmp_path / d / "pair" / "room.grade.json").read_text())
+        for d in ("local", "ray")
+    )
+    assert local["outcome"] == "done" or local["outcome"] == "max_sim_time", local
+    assert (remote["outcome"], remote["outcome_reason"]) == (
+        local["outcome"],
+        local["outcome_reason"],
+    )
+    assert remote["log_sha256"] == local["log_sha256"]

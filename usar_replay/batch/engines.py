@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from usar_replay.batch.plan import RunJob, RunResult, read_json
+from usar_replay.batch.run_state import clean_environment
 from usar_replay.core.errors import UsageError
 from usar_replay.node import cpu_sets
 from usar_replay.node.run_folder import unmount_under
@@ -76,7 +77,8 @@ def execute(job_json: str) -> dict[str, Any]:
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
     output = work / "output.txt"
-    env = dict(os.environ, TMPDIR=str(work), OMP_NUM_THREADS="1", PYTHONDONTWRITEBYTECODE="1")
+    env = clean_environment(os.environ)  # an engine's own variables left out (.run_state)
+    env.update(TMPDIR=str(work), OMP_NUM_THREADS="1", PYTHONDONTWRITEBYTECODE="1")
     # a new file in a folder only usar writes (the run's sandbox gets a folder inside it)
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC
     with os.fdopen(os.open(output, flags, 0o666), "wb") as out:

@@ -298,6 +298,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
 
     start = time.perf_counter()  # wall time is for people and the wall-limit verdict only
     graded = None
+    build = ""  # a ROS 1 package's build: "cached", "catkin_make 12.3 s" (not the log's)
     try:
         if job.target.startswith(ROS1_TARGET_PREFIX):
             try:
@@ -319,6 +320,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
         if result is not None:
             outcome, reason = result.outcome, result.outcome_reason
             sim_s = result.sim_duration_s
+            build = result.build
     except WallLimit:
         wall = float(job.limits["wall_s"])
         outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"
@@ -336,6 +338,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
         "outcome": outcome,
         "outcome_reason": reason,
         "sim_duration_s": round(sim_s, 3),
+        "build": build,
         "wall_s": round(wall_s, 3),
     }
     return rec, graded
@@ -368,6 +371,9 @@ def run(job: RunJob) -> dict[str, Any]:
 
 
 def main() -> int:
+    from usar_replay.batch.run_state import main_prelude
+
+    main_prelude()  # the same state whichever engine started this process
     job = RunJob.from_json(sys.stdin.read())
     try:
         run(job)

@@ -114,7 +114,8 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
     if ros1.replaced:
         gone = [f"{n.name} ({n.package}/{n.type})" for n in ros1.replaced]
         lines += _field("Replaced", "not started, usar stands in: " + ", ".join(gone))
-    lines += _field("Build", ros1.build)
+    if ros1.build:  # a log recorded before the build's wall time left the log
+        lines += _field("Build", ros1.build)
     lines += _field("Pacing", ros1.pacing)
     kept = ros1_run.node_outputs(run)
     if kept:

@@ -91,6 +91,10 @@ class Ros1Run:
 
     @property
     def build(self) -> str:
+        """The build as logs before issue 42 recorded it ('' for a newer log, which leaves
+        the build's wall time out: the same run, the same bytes, cached or not)."""
+        if not (self.build_cached or self.build_seconds):
+            return ""
         if self.build_cached:
             return "cached (built before; catkin_make did not run)"
         return f"{self.build_seconds:.1f} s (catkin_make, wall time)"
@@ -110,8 +114,8 @@ class Ros1Run:
             "node": self.node,
             "after_launch": list(self.after_launch),
             "start_source": self.start_source,
-            "build_seconds": round(self.build_seconds, 3),
-            "build_cached": self.build_cached,
+            **({"build_seconds": round(self.build_seconds, 3)} if self.build_seconds else {}),
+            **({"build_cached": True} if self.build_cached else {}),
             "applied_settings": list(self.applied_settings),
             "holds": self.holds,
             "capped": self.capped,

@@ -279,8 +279,9 @@ class Ros1Process(MissionProcess):
             node=self.options.node,
             after_launch=tuple(self.options.after_launch),
             start_source=self.options.start_source,
-            build_seconds=self.built.seconds,
-            build_cached=self.built.cached,
+            # no build time, nor whether the build was cached: wall facts of this machine's
+            # cache, which would make the same run's log differ between its first run and the
+            # next (the recorder's summary and a batch's run.json say them)
             nodes=tuple(Ros1Node(*row) for row in nodes),
             replaced=tuple(Ros1Node(*row) for row in run_files.replaced_nodes(self.run_dir)),
             parameters=tuple(read),
