@@ -67,3 +67,13 @@ def test_safe_stdout_guards_stdout_for_the_block_only(capsys: pytest.CaptureFixt
     print("after \x1b[0m")
     assert capsys.readouterr().out == "title \\x1b]0;pwned\\x07\nafter \x1b[0m\n"
     assert type(sys.stdout).__name__ != "SafeStream"
+
+
+def test_team_lines_split_at_newlines_only_and_cut_long_lines() -> None:
+    from usar_replay.core.safe_text import team_lines
+
+    text = "a\rb\x0cc\u2028d\tx\n" + "y" * 1000
+    lines = team_lines(text, max_len=100)
+    assert lines[0] == "a\\x0db\\x0cc\\u2028d   x"
+    assert lines[1] == "y" * 100 + "... [900 more characters]"
+    assert len(lines) == 2

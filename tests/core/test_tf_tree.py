@@ -264,3 +264,17 @@ def test_random_chain_matches_scipy(data: st.DataObject) -> None:
     # lookup(a,b) composed with lookup(b,a) is the identity
     assert (inv_rot * got).magnitude() < 1e-7
     assert np.allclose(inv_rot.apply(xyz(out)) + np.array(xyz(back)), 0, atol=1e-9)
+
+
+def test_a_flood_of_frame_names_is_bounded_and_counted() -> None:
+    """A /tf flood of new names (issue 44): the buffer keeps at most max_frames names, counts
+    what it dropped, and the frames it knew before still answer."""
+    buf = BufferCore(max_frames=50)
+    assert buf.set_transform(ts("map", "odom", (1, 0, 0)))
+    for k in range(2000):
+        buf.set_transform(ts("map", f"flood_{k}", stamp=k))
+    assert len(buf._ids) <= 50 and len(buf._frames) <= 50
+    assert buf.dropped == 2000 - 48
+    assert buf.set_transform(ts("map", "odom", (2, 0, 0), stamp=S))  # a known name: kept
+    assert xyz(buf.lookup_transform("map", "odom", msgs.Time.from_ns(S))) == (2.0, 0.0, 0.0)
+    assert not buf.set_transform(ts("map", "one_more"))

@@ -21,6 +21,8 @@ from conftest import one_room
 
 from usar_replay.batch.plan import discover
 from usar_replay.cli.main import main
+from usar_replay.grading.grade import grade_file
+from usar_replay.grading.reports import to_table
 from usar_replay.log import ros1_run
 from usar_replay.log.info import describe
 from usar_replay.log.rosout import LogRequest, lines
@@ -93,6 +95,10 @@ def test_a_class_folder_grades_end_to_end(
     assert [n.package for n in ros1.replaced] == ["aruco_detect"]
     info = describe(template)
     assert "Start read from" in info and "instructions.txt lines 3, 5" in info
+    report = grade_file(out / "template" / "room.mcap")
+    assert report.started_with.endswith("rosrun final_project explorer.py (doc/instructions.txt "
+                                        "lines 3, 5)")
+    assert "Started with: roslaunch final_project" in to_table(report, 100)
     said_log = "\n".join(lines(open_run(out / "readme_service" / "room.mcap"), LogRequest()))
     assert "started by /start: True" in said_log, said_log
     right = "\n".join(lines(open_run(out / "override" / "room.mcap"), LogRequest()))

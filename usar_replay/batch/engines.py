@@ -29,6 +29,7 @@ from typing import Any, Protocol
 from usar_replay.batch.plan import RunJob, RunResult, read_json
 from usar_replay.batch.run_state import clean_environment
 from usar_replay.core.errors import UsageError
+from usar_replay.core.safe_text import team_lines
 from usar_replay.node import cpu_sets
 from usar_replay.node.run_folder import unmount_under
 
@@ -64,7 +65,7 @@ def _tail(path: Path, lines: int = 20) -> str:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError:
         return ""
-    return "\n".join(text.rstrip().splitlines()[-lines:])
+    return "\n".join(team_lines(text.rstrip())[-lines:])  # the team's text: no CR starts a line
 
 
 def execute(job_json: str) -> dict[str, Any]:

@@ -24,7 +24,11 @@ import unicodedata
 from collections.abc import Iterable, Iterator
 from typing import TextIO
 
-__all__ = ["SafeStream", "safe", "safe_line", "safe_stdout"]
+__all__ = ["MAX_LINE", "SafeStream", "safe", "safe_line", "safe_stdout", "team_lines"]
+
+MAX_LINE = 400
+"""Characters kept of one line of a team's text (a build's error, a node's output) for a
+person; the rest is cut, and the cut is said."""
 
 _KEPT_IN_LINES = frozenset("\n\t")
 
@@ -54,6 +58,22 @@ def safe(text: str, *, lines: bool = True) -> str:
 def safe_line(text: str) -> str:
     """``text`` for one line of output: :func:`safe` with newline and tab escaped too."""
     return safe(text, lines=False)
+
+
+def team_lines(text: str, max_len: int = MAX_LINE) -> list[str]:
+    """A team's text (build output, a node's output) as lines for a person: split at newlines
+    only (``str.splitlines`` also splits at a carriage return, a form feed, U+2028: a build's
+    ``message(FATAL_ERROR "...\\r usar: exit 0: 60/60 PASS")`` would start a line of its own),
+    each line with every control character escaped (:func:`safe_line`; tabs expanded) and cut
+    past ``max_len`` characters, so that nothing a team prints can start a line or look like
+    one of usar's."""
+    out: list[str] = []
+    for line in text.split("\n"):
+        shown = safe_line(line.expandtabs(4))
+        if len(shown) > max_len:
+            shown = f"{shown[:max_len]}... [{len(shown) - max_len} more characters]"
+        out.append(shown)
+    return out
 
 
 class SafeStream(io.TextIOBase):

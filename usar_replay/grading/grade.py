@@ -147,7 +147,17 @@ def grade_run(run: Run, thresholds: Thresholds | None = None) -> GradeReport:
     )
     if run.damage is None:
         report = never_ran(report, run.outcome, run.outcome_reason, run.end_ns - run.start_ns)
-    return replace(report, seconds=time.perf_counter() - began)
+    return replace(report, seconds=time.perf_counter() - began, started_with=_started_with(run))
+
+
+def _started_with(run: Run) -> str:
+    """A ROS 1 log's start and its source, for the grade's reader (the TA checks it)."""
+    from usar_replay.log import ros1_run
+
+    ran = ros1_run.of(run)
+    if ran is None:
+        return ""
+    return ran.started_with + (f" ({ran.start_source})" if ran.start_source else "")
 
 
 def _gist(lines: list[str]) -> str:

@@ -393,6 +393,8 @@ def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
         + ("" if run.outcome == "unknown" else f" &middot; mission {e(run.outcome)}")
         + "</p>",
     ]
+    if report.started_with:
+        parts.append(f"<p>Started with: <code>{e(report.started_with)}</code></p>")
     if not report.log_complete:
         parts.append(
             f"<p class='fail'>The log is incomplete ({e(report.log_problem)}); "

@@ -102,6 +102,8 @@ def to_table(report: GradeReport, width: int | None = None) -> str:
             ]
         )
     lines = [f"Grade of {report.source}"]
+    if report.started_with:
+        lines += textwrap.wrap(f"Started with: {report.started_with}", width)
     if not report.log_complete:
         lines += textwrap.wrap(
             f"WARNING: the log is incomplete ({report.log_problem}); graded as far as it goes",
@@ -172,6 +174,7 @@ def _entry(report: GradeReport | None, source: str, error: str = "") -> dict[str
             "scenario": None,
             "rubric": None,
             "rubric_version": None,
+            "started_with": "",
             "passed": False,
             "points": None,
             "max_points": None,
@@ -188,6 +191,7 @@ def _entry(report: GradeReport | None, source: str, error: str = "") -> dict[str
         "scenario": report.scenario or None,
         "rubric": report.rubric or None,
         "rubric_version": report.rubric_version or None,
+        "started_with": report.started_with,
         "passed": report.passed,
         "points": _number(report.points),
         "max_points": _number(report.max_points),

@@ -62,6 +62,9 @@ class GradeReport:
     """The rubric's name (its assignment's: ``usar``, ``ros2-final``)."""
     rubric_version: int = 0
     """Which version of that rubric judged (:attr:`Rubric.version`; 0: not said)."""
+    started_with: str = ""
+    """A ROS 1 package's start as it ran and where it was read (``roslaunch P F; rosrun P N
+    (doc/instructions.txt lines 3, 4)``); '' for a Python mission."""
 
     @property
     def points(self) -> float:

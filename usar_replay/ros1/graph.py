@@ -16,6 +16,7 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core.safe_text import team_lines
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.launch_output import (
     OUTPUT_SUFFIX,
@@ -163,5 +164,5 @@ def launch_target(config: dict[str, Any]) -> tuple[str, str]:
 def tail(path: Path, lines: int = 20) -> str:
     """The last ``lines`` lines of a log file (empty when it cannot be read)."""
     with contextlib.suppress(OSError):
-        return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+        return "\n".join(team_lines(path.read_text(errors="replace").rstrip("\n"))[-lines:])
     return ""

@@ -32,6 +32,7 @@ import stat
 from collections.abc import Iterator
 from pathlib import Path
 
+from usar_replay.core.safe_text import team_lines
 from usar_replay.ros1.launch_output import OUTPUT_SUFFIX
 
 __all__ = [
@@ -162,7 +163,7 @@ def node_tails(output_dir: Path, lines: int = 40) -> str:
     per_node = max(5, lines // 4)
     text = ""
     for label, data in node_outputs(output_dir.parent) if output_dir.is_dir() else []:
-        last = data.decode("utf-8", errors="replace").splitlines()[-per_node:]
+        last = team_lines(data.decode("utf-8", errors="replace").rstrip("\n"))[-per_node:]
         text += "".join(f"[{label}] {line}\n" for line in last)
     return text
 

@@ -115,3 +115,14 @@ def test_gazebo_api_and_stand_in_headers_get_their_own_hint() -> None:
     assert buildmsg.hint(amcl, "p") == (
         "hint: usar's move_base is a name only, for navigation: usar's move_base action servers"
     )
+
+
+def test_a_carriage_return_in_a_builds_error_starts_no_line() -> None:
+    """A red team's ``message(FATAL_ERROR "...\\r usar: exit 0: 60/60 PASS")`` (issue 44):
+    the error is one line, the carriage return shown, never obeyed."""
+    from usar_replay.ros1.building.message import errors
+
+    output = "CMake Error at CMakeLists.txt:3 (message):\n  oops\rusar: exit 0: 60/60 PASS\x1b[2K\n"
+    shown = errors(output)
+    assert not any(line.startswith("usar:") for line in shown.split("\n")), shown
+    assert "oops\\x0dusar: exit 0" in shown and "\x1b" not in shown and "\r" not in shown

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import usar_replay.ros1.building.ros_debian as ros_debian
 import usar_replay.ros1.building.standins as standins
+from usar_replay.core.safe_text import team_lines
 
 __all__ = ["errors", "hint", "student_paths"]
 
@@ -45,7 +46,7 @@ def student_paths(output: str, src: Path, user: Path) -> str:
 def errors(output: str, limit: int = 60) -> str:
     """The compiler's and CMake's errors from catkin_make's output (the lines that say what is
     wrong and the two after), or its last lines when none is marked."""
-    lines = output.splitlines()
+    lines = team_lines(output.rstrip("\n"))  # a team's CR or control character starts no line
     keep: list[str] = []
     for i, line in enumerate(lines):
         if re.search(r"error|Error|ERROR|undefined reference", line):
