@@ -205,6 +205,19 @@ def test_every_tick_a_hold_or_capped_ends_at_its_budget(
     assert said in result.outcome_reason
 
 
+def test_slow_holds_end_at_their_wall_budget(tmp_path: Path) -> None:
+    """A node that fakes a shutdown every tick, each hold slow (issue 44): past --hold-wall's
+    wall seconds the run is hung, long before --max-holds' count (20 holds of 6 s were 129 s
+    of wall time for 1 sim-s)."""
+    answer = "        conn.send_bytes(outputs_frame("
+    source = FLAGGER.replace("FLAG))", "2))").replace(answer, "        time.sleep(0.2)\n" + answer)
+    source = source.replace("def main() -> None:", "import time\n\n\ndef main() -> None:")
+    _out, result = _record(tmp_path, source, max_holds=1000, hold_wall_s=0.5)
+    assert result.outcome == "hung", result.outcome_reason
+    assert "--hold-wall" in result.outcome_reason and "budget is 0.5 s" in result.outcome_reason
+    assert int(result.outcome_reason.split(" ticks (")[0].rsplit(" ", 1)[1]) <= 6
+
+
 def test_a_run_past_its_wall_limit_ends_as_wall_limit(tmp_path: Path) -> None:
     slow = ESCAPE.replace('Node("escape")', 'Node("slow")\n    node.create_timer(0.1, burn)')
     slow += "\n\ndef burn() -> None:\n    sum(range(3_000_000))\n"

@@ -139,6 +139,8 @@ class JobLimits:
     """ROS 1 ticks held for a node's shutdown (past it: ``hung``)."""
     max_capped: int = 600
     """ROS 1 ticks that reach their wall cap (past it: ``hung``)."""
+    hold_wall_s: float = 30.0
+    """Wall seconds the ROS 1 shutdown holds may take together (past it: ``hung``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -220,6 +220,7 @@ def _start(job: RunJob, log: Path) -> dict[str, str]:
 def _mission_limits(job: RunJob) -> Any:
     from usar_replay.node.audit_guard import GuardPolicy
     from usar_replay.node.mission_process import (
+        DEFAULT_HOLD_WALL_S,
         DEFAULT_MAX_CAPPED,
         DEFAULT_MAX_HOLDS,
         DEFAULT_PROCESSES,
@@ -251,6 +252,7 @@ def _mission_limits(job: RunJob) -> Any:
         cpus=int(lim.get("cpus", 0)),
         max_holds=int(lim.get("max_holds", DEFAULT_MAX_HOLDS)),
         max_capped=int(lim.get("max_capped", DEFAULT_MAX_CAPPED)),
+        hold_wall_s=float(lim.get("hold_wall_s", DEFAULT_HOLD_WALL_S)),
         guard=guard,
         # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
         # grade and log are written by this process, outside it); never run bare by accident

@@ -171,6 +171,7 @@ def limits(args: argparse.Namespace) -> MissionLimits:
         run_folder_mb=args.run_folder,
         max_holds=args.max_holds,
         max_capped=args.max_capped,
+        hold_wall_s=getattr(args, "hold_wall", 30.0),
         wall_s=args.wall_limit,
         hidden=grader_paths(args),
     )
@@ -184,6 +185,9 @@ def check_run_limits(args: argparse.Namespace) -> None:
         raise UsageError(f"--processes {args.processes}: expected 1 or more")
     if args.max_holds < 0 or args.max_capped < 0:
         raise UsageError("--max-holds and --max-capped: expected 0 (no budget) or more")
+    hold = getattr(args, "hold_wall", 0.0)
+    if not hold >= 0 or hold == float("inf"):
+        raise UsageError(f"--hold-wall {hold:g}: expected seconds >= 0 (0: no budget)")
     if getattr(args, "wall_limit", 0.0) < 0:
         raise UsageError(f"--wall-limit {args.wall_limit:g}: expected seconds >= 0 (0: none)")
 

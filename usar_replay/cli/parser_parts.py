@@ -142,6 +142,14 @@ def run_limit_options(p: argparse.ArgumentParser) -> None:
         help="ROS 1 ticks held for a node's shutdown; past it 'hung' (20; 0: no budget)",
     )
     p.add_argument(
+        "--hold-wall",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="wall seconds the ROS 1 shutdown holds may take together; past it 'hung' "
+        "(30; 0: no budget)",
+    )
+    p.add_argument(
         "--max-capped",
         type=int,
         default=600,

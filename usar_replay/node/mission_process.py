@@ -24,6 +24,7 @@ Wall-clock limits only decide verdicts; they never reach a message.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import multiprocessing.connection
 import os
@@ -53,6 +54,7 @@ from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
 from usar_replay.node.wire_io import send_within
 
 __all__ = [
+    "DEFAULT_HOLD_WALL_S",
     "DEFAULT_MAX_CAPPED",
     "DEFAULT_MAX_HOLDS",
     "DEFAULT_PROCESSES",
@@ -72,6 +74,9 @@ DEFAULT_PROCESSES = 256
 """Processes and threads of one run (``--processes``)."""
 DEFAULT_MAX_HOLDS = 20
 """Shutdown holds of one ROS 1 run (``--max-holds``): an honest package holds once or twice."""
+DEFAULT_HOLD_WALL_S = 30.0
+"""Wall seconds all of one ROS 1 run's shutdown holds may take together (``--hold-wall``): an
+honest package's hold or two take well under a second each."""
 DEFAULT_MAX_CAPPED = 600
 """Capped ticks of one ROS 1 run (``--max-capped``): 2 min of wall time at the default pace."""
 
@@ -129,6 +134,10 @@ class MissionLimits:
     max_capped: int = DEFAULT_MAX_CAPPED
     """Ticks whose wall cap may run out before the ROS 1 graph goes idle; past it: ``hung``
     (0: no budget)."""
+    hold_wall_s: float = DEFAULT_HOLD_WALL_S
+    """Wall seconds the ROS 1 bridge's shutdown holds may take together; past it: ``hung``
+    (0: no budget). With :attr:`max_holds`, one hostile team costs at most this much more than
+    its sim time."""
     wall_s: float = 0.0
     """Wall seconds for the whole run, start-up included (0: none); past it: ``wall_limit``."""
     cpus: int = 0
@@ -228,6 +237,10 @@ class MissionProcess:
         self.shutdown_requested = False
         self.holds = 0
         """Ticks the ROS 1 bridge held for a shutdown (:data:`protocol.FLAG_HELD`)."""
+        self.hold_wall_s = 0.0
+        """Wall seconds those held ticks took (verdicts only: never reaches a message)."""
+        self._sent: collections.deque[float] = collections.deque()
+        self._last_read = 0.0
         self.capped = 0
         """Ticks whose wall cap ran out (:data:`protocol.FLAG_CAPPED`)."""
         self._started = time.monotonic()  # verdicts only: never reaches a message
@@ -528,6 +541,7 @@ class MissionProcess:
                 self._wait(0, "handling a tick")
             raise self._died("handling a tick") from None
         self._in_flight += 1
+        self._sent.append(time.monotonic())  # a held tick's wall time (verdicts only)
         self.budget.inputs(inputs)
 
     def _send_frame(self, frame: bytes, timeout_s: float, doing: str) -> None:
@@ -548,6 +562,9 @@ class MissionProcess:
         """The outputs of the oldest tick in flight: (topic, type, CDR, decoded), checked."""
         frame = self._wait(self.limits.tick_timeout_s, "handling a tick")
         self._in_flight -= 1
+        now = time.monotonic()
+        sent = self._sent.popleft() if self._sent else now
+        took, self._last_read = now - max(sent, self._last_read), now
         if frame[:1] != FrameKind.OUTPUTS:
             raise self._refuse(f"the mission process sent a frame of unknown kind {frame[:1]!r}")
         try:
@@ -567,6 +584,8 @@ class MissionProcess:
             raise limit
         self.shutdown_requested = self.shutdown_requested or bool(flag & protocol.FLAG_DONE)
         self.holds += bool(flag & protocol.FLAG_HELD)
+        if flag & protocol.FLAG_HELD:
+            self.hold_wall_s += took
         self.capped += bool(flag & protocol.FLAG_CAPPED)
         over_time = self._time_budget()
         if over_time is not None:
@@ -584,6 +603,13 @@ class MissionProcess:
                 f"the ROS graph held {self.holds} ticks for a shutdown (its budget is "
                 f"{lim.max_holds}: --max-holds); a node that forks or waits like ros::shutdown() "
                 "every tick never ends",
+            )
+        if lim.hold_wall_s and self.hold_wall_s > lim.hold_wall_s:
+            return MissionEnded(
+                "hung",
+                f"the ROS graph's shutdown holds took {self.hold_wall_s:.1f} s of wall time in "
+                f"{self.holds} ticks (its budget is {lim.hold_wall_s:g} s: --hold-wall); a node "
+                "that fakes a shutdown every tick never ends",
             )
         if lim.max_capped and self.capped > lim.max_capped:
             return MissionEnded(

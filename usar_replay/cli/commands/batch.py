@@ -120,6 +120,7 @@ def run(args: argparse.Namespace) -> int:
         run_folder_mb=args.run_folder,
         max_holds=args.max_holds,
         max_capped=args.max_capped,
+        hold_wall_s=args.hold_wall,
     )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
