@@ -318,3 +318,57 @@ def test_batch_files_are_never_written_or_read_through_links(tmp_path: Path) -> 
     write_text(grade, '{"points": 1}\n', overwrite=True)
     assert victim.read_text(encoding="utf-8") == '{"points": 60}\n'
     assert not grade.is_symlink() and read_json(grade) == {"points": 1}
+
+
+PLANTED = """import os as _os, sys as _sys
+if any("usar_replay" in str(a) for a in _sys.argv):  # in a process of usar's: say so, end it
+    _os.write(2, b"PLANTED %s RAN IN USAR'S PROCESS\\n" % __name__.encode())
+    _os._exit(66)
+__path__ = ["/usr/lib/python3/dist-packages/" + __name__]  # else: Debian's, as the red team's
+__file__ = __path__[0] + "/__init__.py"
+exec(compile(open(__file__).read(), __file__, "exec"))
+"""
+BUSY_ON_CLOCK = """
+import time
+import rospy
+from rosgraph_msgs.msg import Clock
+
+rospy.init_node("n")
+
+
+def busy(_msg):
+    end = time.monotonic() + 0.5
+    while time.monotonic() < end:
+        pass
+
+
+rospy.Subscriber("/clock", Clock, busy)
+rospy.spin()
+"""
+PLANT = """
+foreach(m rospy genpy roslib rosgraph std_msgs)
+  file(WRITE "${CATKIN_DEVEL_PREFIX}/lib/python3/dist-packages/${m}/__init__.py" [=[%s]=])
+endforeach()
+"""
+
+
+def test_a_teams_python_never_runs_in_usars_processes(tmp_path: Path) -> None:
+    """The team's CMake plants rospy, genpy, roslib, rosgraph and std_msgs in its devel space
+    (issue 44): a planted module that runs in a process of usar's (the bridge, usar's roslaunch
+    wrapper) ends it with its mark. None runs there; the team's own graph never idles, and the
+    capped-tick budget still ends the run."""
+    pkg = package(
+        tmp_path / "planter",
+        "planter",
+        configure=PLANT % PLANTED,
+        # a node (through the planted rospy: the team's own process) busy half a second of
+        # wall time on every /clock: every tick reaches its wall cap
+        script=BUSY_ON_CLOCK,
+    )
+    out = tmp_path / "planted.mcap"
+    limits = MissionLimits(kernel_sandbox="required", max_capped=3, tick_timeout_s=20.0)
+    settings = RunSettings(record=dataclasses.replace(RunSettings().record, max_sim_time_s=3.0))
+    result = record_ros1(one_room(), out, pkg, settings, options=Ros1Options(), limits=limits)
+    assert "PLANTED" not in result.outcome_reason, result.outcome_reason
+    assert result.outcome == "hung", result.outcome_reason
+    assert "--max-capped" in result.outcome_reason

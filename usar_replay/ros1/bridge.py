@@ -134,7 +134,6 @@ class Bridge:
         self.parameters: dict[str, Any] = setup["parameters"]
         self.rtf = float(config.get("rtf", 0.5))
         self.settle_s = float(config.get("settle_ms", 3.0)) / 1000.0
-        ws = Path(config["workspace"])
         run = Path(config["run_dir"])
         self.port = _free_port()
         self.uri = f"http://127.0.0.1:{self.port}/"
@@ -153,7 +152,10 @@ class Bridge:
         os.environ.update(
             {k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")}
         )
-        for space in (ws, *map(Path, config.get("underlays", ()))):  # usar's fiducial_msgs
+        # usar's underlays only (its fiducial_msgs): never the team's workspace, whose devel
+        # space its CMake writes (a planted rospy/__init__.py there ran inside this process and
+        # rewrote what it reports: issue 44); the team's processes get it from its setup.bash
+        for space in map(Path, config.get("underlays", ())):
             sys.path.insert(0, str(space / "devel" / "lib" / "python3" / "dist-packages"))
         if str(DIST_PACKAGES) not in sys.path:
             sys.path.append(str(DIST_PACKAGES))  # after usar's own numpy and OpenCV

@@ -142,6 +142,10 @@ def _sibling(name: str) -> ModuleType:
 def main(argv: list[str]) -> None:
     """``python3 launch_output.py OUTPUT_DIR NODES_FILE PLAN ROSLAUNCH_ARGS...`` (``-`` for
     OUTPUT_DIR and NODES_FILE with ``--nodes``, for PLAN when there is none)."""
+    # roslaunch is Debian's and this module usar's: neither imports a module of a workspace's
+    # devel space (the team's CMake writes it: a planted roslib or rosgraph would run here);
+    # the nodes still get the team's PYTHONPATH, which roslaunch passes on in their environment
+    sys.path[:] = [p for p in sys.path if "/devel/lib/python3/dist-packages" not in p]
     import roslaunch
     import roslaunch.config
     import roslaunch.node_args

@@ -207,7 +207,10 @@ class Ros1Process(MissionProcess):
         the graph it starts is one process group). In the kernel sandbox it already has a
         network namespace of its own; without one it gets just that
         (:func:`usar_replay.ros1.netns.isolated_command`)."""
-        cmd = [sys.executable, "-m", "usar_replay.ros1.bridge", str(fd), str(self._config_path)]
+        # -P: the working directory (the run's folder, which the team's processes write) is not
+        # put on sys.path: a module planted there is never imported by the bridge
+        bridge = ["-P", "-m", "usar_replay.ros1.bridge"]
+        cmd = [sys.executable, *bridge, str(fd), str(self._config_path)]
         if self.kernel_sandbox is not None:
             return cmd
         return isolated_command(cmd, isolate=self.options.isolate)
