@@ -218,6 +218,69 @@ def test_slow_holds_end_at_their_wall_budget(tmp_path: Path) -> None:
     assert int(result.outcome_reason.split(" ticks (")[0].rsplit(" ", 1)[1]) <= 6
 
 
+TCP_FLOOD = """
+import socket
+
+from usar_replay.api import Node
+
+held = []
+
+
+def main() -> None:
+    node = Node("flood")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(128)
+
+    def flood() -> None:  # loopback connections nobody reads: their buffers stay in the kernel
+        for _ in range(16):
+            client = socket.create_connection(server.getsockname())
+            peer, _ = server.accept()
+            client.setblocking(False)
+            held.extend([client, peer])
+            try:
+                while True:
+                    client.send(b"x" * 65536)
+            except OSError:
+                pass
+        node.get_logger().info(f"ATTACK {len(held)} sockets")
+
+    node.create_timer(0.1, flood)
+"""
+
+
+def test_tcp_buffers_are_charged_to_the_run(tmp_path: Path) -> None:
+    """Loopback TCP buffers nobody reads (issue 44: 1.2 GiB under --run-memory 700, charged to
+    no one in cgroup v1): past the run's TCP limit the run is out_of_memory."""
+    _out, result = _record(tmp_path, TCP_FLOOD, run_memory_mb=256)
+    assert result.outcome == "out_of_memory", result.outcome_reason
+    assert "TCP socket buffers" in result.outcome_reason and "64 MiB" in result.outcome_reason
+
+
+MQUEUE = """
+import ctypes, os, resource
+
+from usar_replay.api import Node
+
+
+def main() -> None:
+    node = Node("mq")
+    rt = ctypes.CDLL("librt.so.1", use_errno=True)
+    rt.mq_open.restype = ctypes.c_int
+    fd = rt.mq_open(b"/usar_attack", os.O_CREAT | os.O_RDWR, 0o600, None)
+    soft, hard = resource.getrlimit(resource.RLIMIT_MSGQUEUE)
+    node.get_logger().info(f"ATTACK mq_open {fd} errno {ctypes.get_errno()} limit {soft} {hard}")
+"""
+
+
+def test_no_message_queue_for_a_run(tmp_path: Path) -> None:
+    """POSIX message queues are charged to the host user every run shares (issue 44): a run
+    may create none."""
+    out, _ = _record(tmp_path, MQUEUE)
+    said = [line for line in _said(out) if line.startswith("ATTACK")]
+    assert said and said[0].startswith("ATTACK mq_open -1") and said[0].endswith("limit 0 0"), said
+
+
 def test_a_run_past_its_wall_limit_ends_as_wall_limit(tmp_path: Path) -> None:
     slow = ESCAPE.replace('Node("escape")', 'Node("slow")\n    node.create_timer(0.1, burn)')
     slow += "\n\ndef burn() -> None:\n    sum(range(3_000_000))\n"

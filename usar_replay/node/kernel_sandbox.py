@@ -274,7 +274,7 @@ def apply_rlimits(limits: Mapping[str, int]) -> None:
     """Set :meth:`KernelSandbox.rlimits` on this process (0: leave that one as it is, except CORE).
     CPU gets a hard limit 5 s above the soft one: SIGXCPU first (a verdict), then SIGKILL."""
     for name, value in limits.items():
-        if value <= 0 and name != "CORE":
+        if value <= 0 and name not in ("CORE", "MSGQUEUE"):
             continue
         hard = value + 5 if name == "CPU" else value
         with contextlib.suppress(ValueError, OSError, AttributeError):
@@ -402,6 +402,25 @@ class KernelSandbox:
             > 0
         )
 
+    def tcp_refused(self) -> bool:
+        """Whether the run's TCP socket buffers reached their cgroup v1 limit (their peak,
+        :data:`TCP_PEAK_FILE`, at :func:`tcp_limit_mb`). Read it before :meth:`close`."""
+        if not self.memory_cgroup:
+            return False
+        fd = self._counters.get((self.memory_cgroup, b"tcp"))
+        if fd is None:
+            try:
+                path = os.path.join(self.memory_cgroup, TCP_PEAK_FILE)
+                fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+            except OSError:
+                return False
+            self._counters[(self.memory_cgroup, b"tcp")] = fd
+        try:
+            peak = int(os.pread(fd, 64, 0).strip() or b"0")
+        except (OSError, ValueError):
+            return False
+        return peak >= tcp_limit_mb(self.limits.run_memory_mb) * 1024 * 1024
+
     def processes_refused(self) -> bool:
         """Whether the run's pids cgroup refused a fork or a thread (``pids.events``: the
         ``max`` count): the run reached its process limit. Read it before :meth:`close`."""
@@ -443,6 +462,9 @@ class KernelSandbox:
             "NOFILE": lim.open_files,
             "NPROC": 0 if self.cgroup else lim.processes,
             "CORE": 0,
+            # POSIX message queues are charged to the host user all runs share (root's
+            # RLIMIT_MSGQUEUE quota), not to the run: none for a run (ROS uses none; issue 44)
+            "MSGQUEUE": 0,
         }
 
     def _close_info(self, write_end_only: bool = False) -> None:
@@ -538,7 +560,26 @@ def _make_memory_cgroup(pids_cgroup: str | None, limit_mb: int) -> str | None:
             value = str(limit_mb * 1024 * 1024) if "swap.max" not in name else "0"
             with contextlib.suppress(OSError):
                 Path(path, name).write_text(value)
+        if "memory.limit_in_bytes" in limits:  # v1: TCP buffers are charged only once capped
+            with contextlib.suppress(OSError):
+                Path(path, TCP_LIMIT_FILE).write_text(str(tcp_limit_mb(limit_mb) * 1024 * 1024))
     return path
+
+
+TCP_LIMIT_FILE = "memory.kmem.tcp.limit_in_bytes"
+TCP_PEAK_FILE = "memory.kmem.tcp.max_usage_in_bytes"
+"""The peak of the run's TCP buffers: the kernel lets TCP go past its limit (it charges by
+force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so the peak
+reaching the limit is the verdict."""
+
+
+def tcp_limit_mb(run_memory_mb: int) -> int:
+    """The run's TCP socket buffers, MiB, where cgroup v1 counts them apart from its memory
+    (``memory.kmem.tcp``, and not at all until a limit is set: a red team held 1.2 GiB of
+    loopback buffers under ``--run-memory 700``, in the host's TCP pool every other run's ROS
+    graph shares, issue 44): a quarter of the run's memory, at least 64 MiB (a ROS graph's
+    loopback traffic holds a few MiB). cgroup v2 counts socket memory in the run's own."""
+    return max(64, run_memory_mb // 4)
 
 
 def _make_pids_cgroup(limit: int) -> str | None:

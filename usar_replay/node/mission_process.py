@@ -507,6 +507,13 @@ class MissionProcess:
                 "and the files they write to /tmp, /dev/shm and its folder): the kernel's "
                 "out-of-memory killer ended one of its processes",
             )
+        if box.tcp_refused():
+            return MissionEnded(
+                "out_of_memory",
+                f"the run's TCP socket buffers reached their limit "
+                f"({kernel_sandbox.tcp_limit_mb(lim.run_memory_mb)} MiB, a quarter of its "
+                "--run-memory: cgroup v1 counts them apart from the run's memory)",
+            )
         if box.processes_refused():
             return MissionEnded(
                 "refused",
