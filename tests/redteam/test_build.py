@@ -273,6 +273,38 @@ def test_a_big_allocation_at_build_time_is_refused(tmp_path: Path) -> None:
     assert said == "the build of hog exceeded its memory limit (4096 MiB per process)", said
 
 
+def test_the_build_runs_in_the_runs_memory_and_cpu_set(tmp_path: Path) -> None:
+    """Three configure-time children of 200 MiB each under a 256 MiB run (issue 44: 3 x 900
+    MiB under --run-memory 512 exited 0): the run's memory cgroup ends the build. And the build
+    runs on the CPUs of a set of its own, not on every CPU of the machine."""
+    if not os.path.isdir("/sys/fs/cgroup/memory") or os.geteuid() != 0:
+        pytest.skip("needs root and a cgroup v1 memory hierarchy")
+    cmake = """
+    set(HOG "import time; b = bytearray(200 << 20); b[::4096] = bytes(51200); time.sleep(3)")
+    execute_process(COMMAND sh -c "for i in 1 2 3; do /usr/bin/python3 -c '${HOG}' & done; wait"
+                    RESULT_VARIABLE r)
+    message(FATAL_ERROR "three children: ${r}")
+    """
+    said = _fails(tmp_path, "spread", cmake, BuildLimits(run_memory_mb=256))
+    assert said == (
+        "the build of spread exceeded its memory limit for all its processes "
+        "(256 MiB: --run-memory)"
+    ), said
+    from usar_replay.node import cpu_sets
+
+    if len(cpu_sets.usable_cpus()) < 2:
+        return
+    cmake = """
+    execute_process(COMMAND /usr/bin/python3 -c "import os; print(len(os.sched_getaffinity(0)))"
+                    OUTPUT_VARIABLE n)
+    message(FATAL_ERROR "cpus ${n}")
+    """
+    pkg = find_package(package(tmp_path / "affinity", "affinity", cmake))
+    with pytest.raises(MissionEnded) as ended:
+        cached_build(pkg, limits=BuildLimits(cpus=1))
+    assert "cpus 1" in ended.value.detail, ended.value.detail
+
+
 def test_a_big_file_at_build_time_is_cut(tmp_path: Path, cache: Path) -> None:
     cmake = """
     execute_process(COMMAND sh -c "head -c 67108864 /dev/zero > big" RESULT_VARIABLE r)

@@ -98,6 +98,8 @@ def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits
         wall_s=options.build_wall_s,
         memory_mb=limits.memory_mb,
         cpu_s=limits.cpu_s or base.cpu_s,
+        run_memory_mb=limits.run_memory_mb,
+        cpus=limits.cpus,
     )
 
 

@@ -23,7 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.node import kernel_sandbox
+from usar_replay.node import cpu_sets, kernel_sandbox
 
 __all__ = ["BUILD_WALL_S", "BuildLimits", "BuildOutcome", "run_jailed"]
 
@@ -49,6 +49,12 @@ class BuildLimits:
     """Processes and threads of the build together."""
     file_mb: int = 1024
     """Largest file the build may write, MiB."""
+    run_memory_mb: int = 0
+    """Memory of the whole build, MiB, every process of it together (the run's memory cgroup
+    limit, ``--run-memory``; 0: none); past it the kernel's OOM killer ends the build."""
+    cpus: int = 0
+    """CPUs of the build's own CPU set (the run's share, as a batch gives it; 0: as a run
+    claims them): the build never runs on CPUs another run holds (issue 44)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,13 +136,21 @@ def run_jailed(
     mission does then. In the sandbox, ``workspace`` appears at ``workspace_at`` (default: its
     own path) and each ``ro_mounts`` host folder read-only at its other path
     (:mod:`usar_replay.ros1.building.layout`)."""
+    # the run's CPU set and memory cgroup for the build too: its configure step is the
+    # team's code, and it ran on every CPU (others' held ones too) and past --run-memory
+    try:
+        cpus = cpu_sets.claim(limits.cpus) if sandbox else None
+    except TimeoutError as err:
+        return BuildOutcome(1, "", f"no free CPU for the build ({err})")
     box = kernel_sandbox.KernelSandbox(
         kernel_sandbox.SandboxLimits(
             memory_mb=limits.memory_mb,
             cpu_s=limits.cpu_s,
             processes=limits.processes,
             file_mb=limits.file_mb,
-        )
+            run_memory_mb=limits.run_memory_mb if sandbox else 0,
+        ),
+        cpus=cpus,
     )
     argv = [*_prlimit(box.rlimits()), *cmd]
     fds: tuple[int, ...] = ()
@@ -178,12 +192,15 @@ def run_jailed(
             code = proc.wait()
         reader.join(timeout=10.0)
         pids = _pids_hit(box.cgroup)
+        oom = box.oom_killed()
     finally:
         box.close()
     output = bytes(keep).decode("utf-8", errors="replace")
     limit = ""
     if timed_out:
         limit = f"its {limits.wall_s:g} s wall limit"
+    elif oom:
+        limit = f"its memory limit for all its processes ({limits.run_memory_mb} MiB: --run-memory)"
     elif pids:
         limit = _limit_words("processes", limits)
     elif code != 0:
