@@ -135,6 +135,12 @@ def run(args: argparse.Namespace) -> int:
         limits=limits,
         world_key=options.world_key(args),
     )
+    if plan.jobs and not args.no_sandbox:
+        from usar_replay.batch.machine import warning
+
+        said = warning()
+        if said:  # where isolation is partial: what it means, once (`usar doctor` says more)
+            print_wrapped(said, file=sys.stderr)
     engine = make_engine(args.engine, jobs, args.address) if plan.jobs else None
     slots = getattr(engine, "slots", jobs)
     if slots < jobs and not args.quiet:

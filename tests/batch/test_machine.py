@@ -1,0 +1,40 @@
+"""batch.machine: what this machine gives a run, from the runs' own lookups (issue 44)."""
+
+from __future__ import annotations
+
+import pytest
+
+from usar_replay.batch import machine
+from usar_replay.node import cpu_sets, kernel_sandbox
+
+
+def test_this_machine_as_ci_has_it() -> None:
+    """CI runs as root with bubblewrap, cgroup v1 and Debian's ROS 1: a whole isolation."""
+    found = {f.name: f for f in machine.check()}
+    assert list(found) == ["kernel sandbox", "cgroups", "CPU sets", "real-time priority", "ROS 1"]
+    assert found["ROS 1"].ok, found["ROS 1"].means
+    if machine.isolated(list(found.values())):
+        assert machine.warning(list(found.values())) == ""
+
+
+def test_no_cpu_sets_is_said_with_what_it_means(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(cpu_sets, "usable_cpus", lambda: [])
+    real = kernel_sandbox._controller_root
+    monkeypatch.setattr(
+        kernel_sandbox, "_controller_root", lambda c: None if c == "cpuset" else real(c)
+    )
+    findings = machine.check()
+    assert not machine.isolated(findings)
+    cgroups = next(f for f in findings if f.name == "cgroups")
+    assert not cgroups.ok and "not cpuset" in cgroups.said
+    assert "a neighbour can change a ROS 1 run's log" in cgroups.means
+    line = machine.warning(findings)
+    assert line.startswith("usar: warning: isolation is partial here (cgroups, CPU sets")
+    assert "usar doctor" in line and "\n" not in line
+
+
+def test_no_bubblewrap_is_said(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, "no bwrap here"))
+    sandbox = machine.check()[0]
+    assert (sandbox.ok, sandbox.said) == (False, "no bwrap here")
+    assert "apt-get install bubblewrap" in sandbox.means

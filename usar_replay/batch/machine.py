@@ -1,0 +1,139 @@
+"""What this machine gives a run, and what that means for grades (``usar doctor``, issue 44).
+
+Why: usar's isolation is made of the kernel's parts (bubblewrap's namespaces, cgroups, CPU
+sets, real-time priority), and a machine may lack some of them: a container without cgroup
+delegation, a laptop without root, a cluster node without ROS 1. A run goes on with what there
+is, but what is missing changes what a grade can be trusted for (a neighbour on the same CPUs
+can change a ROS 1 run's log). This module asks the same functions the runs use, so what it
+says is what a run gets; :func:`warning` is the one line ``usar batch`` prints at its start
+where isolation is partial.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+from dataclasses import dataclass
+from pathlib import Path
+
+from usar_replay.node import cpu_sets, kernel_sandbox
+from usar_replay.ros1.building import debian
+
+__all__ = ["Finding", "check", "isolated", "warning"]
+
+
+@dataclass(frozen=True, slots=True)
+class Finding:
+    """One part of the machine: whether a run gets it, and what that means."""
+
+    name: str
+    ok: bool
+    said: str
+    """What there is (``cgroup v1: memory, pids, cpuset writable``)."""
+    means: str = ""
+    """Where not ok: what it means for a run and its grade, and what to do."""
+
+
+def _cgroup() -> Finding:
+    v2 = Path("/sys/fs/cgroup/cgroup.controllers").exists()
+    writable = []
+    for controller in ("memory", "pids", "cpuset"):
+        root = kernel_sandbox._controller_root(controller)  # the runs' own lookup
+        if root is not None and os.access(root, os.W_OK):
+            writable.append(controller)
+    version = "v2" if v2 else "v1"
+    if len(writable) == 3:
+        return Finding("cgroups", True, f"cgroup {version}: memory, pids, cpuset writable")
+    missing = [c for c in ("memory", "pids", "cpuset") if c not in writable]
+    shown = ", ".join(writable) or "none"
+    return Finding(
+        "cgroups",
+        False,
+        f"cgroup {version}: writable {shown}; not {', '.join(missing)}",
+        "without delegation (run as root, or delegate the controllers): "
+        + "; ".join(
+            {
+                "memory": "no memory limit for a run as a whole (each process keeps its own)",
+                "pids": "no process limit for a run as a whole (RLIMIT_NPROC instead)",
+                "cpuset": "no CPU set per run: a neighbour can change a ROS 1 run's log, so "
+                "run one at a time (--jobs 1)",
+            }[c]
+            for c in missing
+        ),
+    )
+
+
+def _cpus() -> Finding:
+    usable = cpu_sets.usable_cpus()
+    if usable:
+        return Finding("CPU sets", True, f"{len(usable)} CPUs to share out, one set per run")
+    return Finding(
+        "CPU sets",
+        False,
+        "no cpuset hierarchy usar can write",
+        "runs share every CPU: a ROS 1 run's log may depend on what else runs; run one at a "
+        "time",
+    )
+
+
+def _realtime() -> Finding:
+    soft, _hard = resource.getrlimit(resource.RLIMIT_RTPRIO)
+    if os.geteuid() == 0 or soft > 0:
+        return Finding("real-time priority", True, "SCHED_RR for a ROS 1 graph's threads")
+    return Finding(
+        "real-time priority",
+        False,
+        "not root and RLIMIT_RTPRIO is 0",
+        "a ROS 1 graph is paced without SCHED_RR: on a busy machine more ticks reach their "
+        "wall cap (a repeatability warning in the log)",
+    )
+
+
+def _sandbox() -> Finding:
+    ok, why = kernel_sandbox.bwrap_available()
+    if ok:
+        return Finding(
+            "kernel sandbox", True, "bubblewrap: user, PID, IPC, mount and network namespaces"
+        )
+    return Finding(
+        "kernel sandbox",
+        False,
+        why or "bubblewrap cannot make its sandbox here",
+        "missions would run outside a sandbox: usar batch refuses to (apt-get install "
+        "bubblewrap; allow user namespaces)",
+    )
+
+
+def _ros1() -> Finding:
+    missing = debian.missing()
+    if not missing:
+        return Finding("ROS 1", True, "Debian 12's ROS 1 packages for --ros1")
+    return Finding(
+        "ROS 1",
+        False,
+        f"{len(missing)} Debian packages missing",
+        f"--ros1 and ROS 1 teams cannot run: apt-get update && {debian.install_line(missing)}",
+    )
+
+
+def check() -> list[Finding]:
+    """Every part, in the order ``usar doctor`` prints them."""
+    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _ros1()]
+
+
+def isolated(findings: list[Finding]) -> bool:
+    """Whether a run gets all of its isolation here (ROS 1 aside: its check is its own)."""
+    return all(f.ok for f in findings if f.name != "ROS 1")
+
+
+def warning(findings: list[Finding] | None = None) -> str:
+    """One line for ``usar batch`` where isolation is partial ('' where it is whole)."""
+    findings = check() if findings is None else findings
+    partial = [f for f in findings if not f.ok and f.name != "ROS 1"]
+    if not partial:
+        return ""
+    first = partial[0]
+    return (
+        f"usar: warning: isolation is partial here ({', '.join(f.name for f in partial)}): "
+        f"{first.means}; `usar doctor` says more"
+    )
