@@ -9,17 +9,22 @@ EXITS = "import sys\nsys.exit(0)\n"
 """A node script that exits at once (a package that only needs to build and start)."""
 
 
+def package_xml(folder: Path, name: str) -> None:
+    """``folder`` (made) with the ``package.xml`` of a catkin package ``name``."""
+    folder.mkdir(parents=True)
+    (folder / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.0.1</version>'
+        "<description>a test's</description><maintainer email='r@t.invalid'>r</maintainer>"
+        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
+        encoding="utf-8",
+    )
+
+
 def package(folder: Path, name: str, configure: str = "", script: str = "") -> Path:
     """A catkin package ``name`` in ``folder`` with no C++ (its build only configures), whose
     CMakeLists.txt runs ``configure`` (CMake code: the team's code) at configure time, with a
     launch file starting ``scripts/node.py``, which holds ``script`` when one is given."""
-    folder.mkdir(parents=True)
-    (folder / "package.xml").write_text(
-        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.0.1</version>'
-        "<description>red team</description><maintainer email='r@t.invalid'>r</maintainer>"
-        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
-        encoding="utf-8",
-    )
+    package_xml(folder, name)
     (folder / "CMakeLists.txt").write_text(
         f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\nfind_package(catkin REQUIRED)\n"
         f"catkin_package()\n{textwrap.dedent(configure)}\n",

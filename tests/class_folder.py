@@ -17,7 +17,10 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
+from catkintools import package_xml
+
 TEMPLATE_LAUNCH = (
+    "multiple_robots.launch",
     "single_robot.launch",
     "robot_amcl.launch",
     "robot_move_base.launch",
@@ -30,7 +33,7 @@ TEMPLATE_LAUNCH = (
     "spawn.launch",
     "go.launch",
 )
-"""With ``multiple_robots.launch``: the template's twelve."""
+"""The course template's twelve launch files (``multiple_robots.launch``: the world)."""
 
 SPIN = """
 import rospy
@@ -66,13 +69,7 @@ WORLD = """<launch>
 def package(folder: Path, name: str, scripts: dict[str, str], launch: dict[str, str]) -> Path:
     """A catkin package ``name`` at ``folder``: ``scripts`` (file -> Python body, installed with
     ``catkin_install_python``: what ``rosrun`` finds) and ``launch`` files (name -> XML)."""
-    folder.mkdir(parents=True)
-    (folder / "package.xml").write_text(
-        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name><version>0.1.0</version>'
-        "<description>a team</description><maintainer email='t@t.invalid'>t</maintainer>"
-        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n",
-        encoding="utf-8",
-    )
+    package_xml(folder, name)
     programs = " ".join(f"scripts/{s}" for s in scripts)
     (folder / "CMakeLists.txt").write_text(
         f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\nfind_package(catkin REQUIRED)\n"

@@ -11,24 +11,10 @@ import os
 from pathlib import Path
 
 import pytest
+from class_folder import TEMPLATE_LAUNCH
 
 from usar_replay.core.errors import UnclearStart, UsageError
 from usar_replay.ros1.start import decide, executables, parse_commands
-
-TEMPLATE_LAUNCH = (
-    "multiple_robots.launch",
-    "single_robot.launch",
-    "robot_amcl.launch",
-    "robot_move_base.launch",
-    "amcl_explorer.launch",
-    "amcl_follower.launch",
-    "move_base_explorer.launch",
-    "move_base_follower.launch",
-    "gmapping.launch",
-    "rviz.launch",
-    "spawn.launch",
-    "go.launch",
-)
 
 
 def template(root: Path, name: str = "final_project", nodes: tuple[str, ...] = ("main",)) -> Path:
