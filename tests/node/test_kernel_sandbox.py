@@ -50,6 +50,7 @@ def test_limits_become_rlimits() -> None:
             "NOFILE": 64,
             "NPROC": 0,  # 0: leave it: with no pids cgroup and processes=0 there is no limit
             "CORE": 0,
+            "MSGQUEUE": 0,  # applied as 0: no POSIX message queue for a run
         }
 
 

@@ -290,8 +290,9 @@ for pid in os.listdir("/proc"):
         argv = open(f"/proc/{pid}/cmdline", "rb").read().split(b"\\0")
     except OSError:
         continue
-    if argv[1:3] == [b"-m", b"usar_replay.ros1.bridge"]:  # the bridge, not bwrap
-        fd_number = int(argv[3])
+    at = argv.index(b"usar_replay.ros1.bridge") if b"usar_replay.ros1.bridge" in argv else 0
+    if at >= 2 and argv[at - 1] == b"-m" and b"bwrap" not in argv[0]:  # the bridge, not bwrap
+        fd_number = int(argv[at + 1])
         pidfd = os.pidfd_open(int(pid))
         libc = ctypes.CDLL(None, use_errno=True)
         sock = libc.syscall(438, pidfd, fd_number, 0)  # pidfd_getfd
