@@ -62,18 +62,18 @@ class Graph:
         self.log_path = run / "graph.log"
         self.setup = f'source "{ws}/devel/setup.bash"'
         script = f"{self.setup} && exec {cmd}"
+        # the pacing shim in the package's processes only (:mod:`.shim`), the third commands'
+        self._env = shim.preloaded(env, config.get("underlays", ()))
         with self.log_path.open("wb") as log:
             self.proc = subprocess.Popen(
                 ["bash", "-c", script],
                 cwd=run,
-                # the pacing shim in the package's processes only (:mod:`.shim`)
-                env=shim.preloaded(env, config.get("underlays", ())),
+                env=self._env,
                 stdin=subprocess.DEVNULL,
                 stdout=log,
                 stderr=subprocess.STDOUT,
             )
         self.watch = ProcWatch(self.proc.pid, launcher_is_package=not config.get("launch"))
-        self._env = shim.preloaded(env, config.get("underlays", ()))
         self._run = run
         self.after: list[subprocess.Popen[bytes]] = []
         """The TA's third commands (``rosservice call /start ...``), once started."""

@@ -29,7 +29,7 @@ from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
 from usar_replay.node.run_folder import RunFolder
-from usar_replay.ros1 import run_files
+from usar_replay.ros1 import run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.building.jail import BUILD_WALL_S
 from usar_replay.ros1.building.workspace import BuildLimits, Built, Package, package_sha256
@@ -118,21 +118,6 @@ def ros1_target(pkg: Package, options: Ros1Options, *, hashed: bool = True) -> M
     )
 
 
-def _launch_rel(package: Package, launch: str) -> str:
-    """The launch file's path inside the package (what ``roslaunch PKG FILE`` finds), for a
-    launch file of usar's that includes it (:func:`.graph.launch_target`)."""
-    if not launch:
-        return ""
-    found = sorted(
-        p
-        for p in package.path.rglob(Path(launch).name)
-        if p.is_file()
-        and not p.is_symlink()
-        and not {"build", "devel", "install"} & set(p.relative_to(package.path).parts)
-    )
-    return found[0].relative_to(package.path).as_posix() if found else launch
-
-
 def _text(value: Any) -> str:
     """A parameter's value as ``usar info`` shows it (``[1.0, 2.0]``, ``0.1``, ``true``)."""
     if isinstance(value, bool):
@@ -177,7 +162,8 @@ class Ros1Process(MissionProcess):
                 "run_dir": str(self.run_dir),
             }
             config.update({k: v for k, v in asdict(options).items()})
-            config["launch_rel"] = _launch_rel(package, options.launch)
+            # where the launch file lies in the package, for usar's start file (.graph)
+            config["launch_rel"] = start.launch_path(package.path, options.launch)
             self._config_path = self.run_dir / "bridge.json"
             self._config_path.write_text(json.dumps(config), encoding="utf-8")
             # the graph needs time to start: the master, roslaunch, the node's waitForServer

@@ -51,6 +51,7 @@ __all__ = [
     "UnclearStart",
     "decide",
     "executables",
+    "launch_path",
     "parse_commands",
 ]
 
@@ -125,6 +126,14 @@ def _files(pkg_dir: Path, names: tuple[str, ...]) -> list[Path]:
 def launch_files(pkg_dir: Path) -> list[str]:
     """The package's launch files by name, sorted."""
     return sorted({p.name for p in _files(pkg_dir, (".launch",))})
+
+
+def launch_path(pkg_dir: Path, name: str) -> str:
+    """Where the package's launch file ``name`` lies in it (the first by path, as
+    ``roslaunch PKG FILE`` finds it; catkin's outputs, hidden folders and links left out),
+    relative to the package; ``name`` itself where it has none."""
+    found = sorted(p for p in _files(pkg_dir, (".launch",)) if p.name == Path(name).name)
+    return found[0].relative_to(pkg_dir).as_posix() if found else name
 
 
 def executables(pkg_dir: Path, package: str) -> list[str]:
@@ -273,7 +282,7 @@ def _texts(pkg_dir: Path, team_dir: Path | None) -> list[tuple[str, Path]]:
     seen: set[Path] = set()
     out: list[tuple[str, Path]] = []
 
-    def add(label_root: Path, path: Path) -> None:
+    def add(path: Path) -> None:
         key = path.resolve() if not path.is_symlink() else path
         if key in seen:
             return
@@ -285,7 +294,7 @@ def _texts(pkg_dir: Path, team_dir: Path | None) -> list[tuple[str, Path]]:
     for root in roots:
         for name in (INSTRUCTIONS, "instructions.txt", "doc/instructions.md"):
             if (root / name).is_file():
-                add(root, root / name)
+                add(root / name)
     for root in roots:
         try:
             names = sorted(os.listdir(root))
@@ -293,7 +302,7 @@ def _texts(pkg_dir: Path, team_dir: Path | None) -> list[tuple[str, Path]]:
             continue
         for name in names:
             if _README.match(name) and (root / name).is_file():
-                add(root, root / name)
+                add(root / name)
     return out
 
 

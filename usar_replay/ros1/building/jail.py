@@ -141,7 +141,7 @@ def run_jailed(
     try:
         cpus = cpu_sets.claim(limits.cpus) if sandbox else None
     except TimeoutError as err:
-        return BuildOutcome(1, "", f"no free CPU for the build ({err})")
+        return BuildOutcome(1, "", f"its wait for a free CPU ({err})")
     box = kernel_sandbox.KernelSandbox(
         kernel_sandbox.SandboxLimits(
             memory_mb=limits.memory_mb,
