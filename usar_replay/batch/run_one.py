@@ -301,6 +301,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
     start = time.perf_counter()  # wall time is for people and the wall-limit verdict only
     graded = None
     build = ""  # a ROS 1 package's build: "cached", "catkin_make 12.3 s" (not the log's)
+    pacing = ""  # a ROS 1 run's holds and capped ticks (the capped ones are not the log's)
     try:
         if job.target.startswith(ROS1_TARGET_PREFIX):
             try:
@@ -322,7 +323,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
         if result is not None:
             outcome, reason = result.outcome, result.outcome_reason
             sim_s = result.sim_duration_s
-            build = result.build
+            build, pacing = result.build, result.pacing
     except WallLimit:
         wall = float(job.limits["wall_s"])
         outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"
@@ -341,6 +342,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
         "outcome_reason": reason,
         "sim_duration_s": round(sim_s, 3),
         "build": build,
+        "pacing": pacing,
         "wall_s": round(wall_s, 3),
     }
     return rec, graded

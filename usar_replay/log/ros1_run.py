@@ -72,12 +72,17 @@ class Ros1Run:
     holds: int = 0
     """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
     capped: int = 0
-    """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
+    """Ticks whose wall cap ran out before the graph went idle (a repeatability warning), as
+    logs before issue 46 recorded it; a newer log leaves it out (0): which tick runs out of its
+    wall cap is the machine's load, and the same run must give the same bytes. The recorder's
+    summary and a batch's ``run.json`` say it."""
 
     @property
     def pacing(self) -> str:
-        """The holds and capped ticks as ``usar info`` and the end summary say them."""
-        return f"{self.holds} shutdown holds, {self.capped} capped ticks"
+        """The holds (and an older log's capped ticks) as ``usar info`` says them."""
+        if self.capped:
+            return f"{self.holds} shutdown holds, {self.capped} capped ticks"
+        return f"{self.holds} shutdown holds"
 
     @property
     def started_with(self) -> str:
@@ -118,7 +123,7 @@ class Ros1Run:
             **({"build_cached": True} if self.build_cached else {}),
             "applied_settings": list(self.applied_settings),
             "holds": self.holds,
-            "capped": self.capped,
+            **({"capped": self.capped} if self.capped else {}),
             "nodes": [{"name": n.name, "package": n.package, "type": n.type} for n in self.nodes],
             "replaced": [
                 {"name": n.name, "package": n.package, "type": n.type} for n in self.replaced

@@ -275,6 +275,9 @@ class Bridge:
         """The bridge's node: ``/clock``, the subscribers, each robot's move_base."""
         import rospy
 
+        from usar_replay.ros1.latched import one_connection_per_publisher
+
+        one_connection_per_publisher()  # rospy's racing connects: one run's bytes (:mod:`.latched`)
         rospy.init_node(NODE.lstrip("/"), disable_signals=True)
         self.out.advertise_clock()
         self.inbox.subscribe(self.robots)

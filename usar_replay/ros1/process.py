@@ -278,7 +278,8 @@ class Ros1Process(MissionProcess):
             parameters=tuple(read),
             applied_settings=run_files.APPLIED_SETTINGS,
             holds=self.holds,
-            capped=self.capped,
+            # no capped ticks either: which tick ran out of its wall cap is the machine's load
+            # (the recorder's summary says them)
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
         prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from usar_replay.core import contract, msgs
+from usar_replay.ros1.latched import Redelivery
 
 __all__ = ["Inbox", "caller"]
 
@@ -34,6 +35,9 @@ class Inbox:
         self.own_node = own_node
         self._lock = threading.Lock()
         self._items: list[tuple[str, str, msgs.Message]] = []
+        self.latched = Redelivery()
+        """Drops a latched message a second connection to its publisher sent again
+        (:mod:`.latched`)."""
 
     def subscribe(self, robots: list[str]) -> None:
         """rospy's subscribers, in the bridge's start-up order (rospy must be initialised)."""
@@ -59,6 +63,8 @@ class Inbox:
         return bool(header.get("callerid") == self.own_node)
 
     def _put(self, topic: str, msg: Any, value: msgs.Message) -> None:
+        if not self.latched.fresh(topic, getattr(msg, "_connection_header", None), value):
+            return
         with self._lock:
             self._items.append((topic, caller(msg), value))
 

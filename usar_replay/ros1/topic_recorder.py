@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.core import cdr, msgs, ros1msg
+from usar_replay.ros1.latched import Redelivery
 
 __all__ = ["TopicRecorder", "wire_item"]
 
@@ -55,6 +56,7 @@ class TopicRecorder:
         """The master's call log (None: ask the master every time)."""
         self._log_seen: tuple[int, int] | None = None
         self._lock = threading.Lock()
+        self._latched = Redelivery()
         self._subs: dict[str, Any] = {}
         self._arrived: list[tuple[str, str, int, msgs.Message]] = []
         self._count = 0
@@ -133,7 +135,7 @@ class TopicRecorder:
         if header.get("callerid") == self.node:
             return
         value = _value(str(header.get("type", "")), header, bytes(raw._buff))
-        if value is None:
+        if value is None or not self._latched.fresh(topic, header, value):
             return
         with self._lock:
             self._count += 1
