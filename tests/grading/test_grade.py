@@ -24,7 +24,7 @@ from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissingTopic, UsageError
 from usar_replay.grading.grade import GradeReport, Thresholds, grade_file, load_thresholds
-from usar_replay.grading.rubric_usar import DETECTION_MEMORY_NS, MAX_VISITS, NO_DETECTOR, Grader
+from usar_replay.grading.rubric_usar import MAX_VISITS, NO_DETECTOR, Grader
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult
@@ -143,7 +143,7 @@ def test_the_real_log_passes_every_line(room_log: tuple[Path, RecordResult]) -> 
     assert len(report.checks) == ROOM_LINES
     assert report.failed_ids() == [] and report.points == 60
     broadcast = report.check("marker_0.broadcast")
-    assert "worst error" in broadcast.measured and broadcast.evidence_ns is not None
+    assert "cm from the marker" in broadcast.measured and broadcast.evidence_ns is not None
 
 
 def test_marker_frame_never_broadcast(room_log: tuple[Path, RecordResult], tmp_path: Path) -> None:
@@ -192,11 +192,25 @@ def test_a_log_without_the_detector_is_graded_not_refused(
 def test_a_broadcast_20_cm_off_fails_the_broadcast_line(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
+    """Every broadcast of marker_frame 20 cm off along the image's x: the frame a TA sees is
+    off, the line fails with its worst broadcast as evidence. One wild broadcast among right
+    ones does not move the frame's median (the line passes)."""
+    assert _moved(room_log[0], tmp_path / "one.mcap", every=False).failed_ids() == []
     path = tmp_path / "moved.mcap"
+    report = _moved(room_log[0], path, every=True)
+    assert report.failed_ids() == ["marker_0.broadcast"]
+    line = report.check("marker_0.broadcast")
+    worst_cm = float(line.measured.split(", ")[1].split(" cm")[0])
+    assert 15.0 < worst_cm < 25.0
+    assert line.evidence.startswith("worst broadcast: marker_frame stamped")
+
+
+def _moved(src: Path, path: Path, *, every: bool) -> GradeReport:
+    """``src`` with the first (or every) marker_frame broadcast 0.2 m off, graded."""
     moved_at: list[int] = []
 
     def edit(m: bag.BagMessage) -> msgs.Message | None:
-        if m.topic == "/tf" and isinstance(m.msg, msgs.TFMessage) and not moved_at:
+        if m.topic == "/tf" and isinstance(m.msg, msgs.TFMessage) and (every or not moved_at):
             tf = m.msg.transforms[0]
             if tf.child_frame_id == "marker_frame":
                 moved_at.append(m.log_time_ns)
@@ -205,20 +219,17 @@ def test_a_broadcast_20_cm_off_fails_the_broadcast_line(
                 return msgs.TFMessage(transforms=(replace(tf, transform=shifted),))
         return None
 
-    rewrite(room_log[0], path, edit)
-    report = grade_file(path)
-    assert report.failed_ids() == ["marker_0.broadcast"]
-    line = report.check("marker_0.broadcast")
-    assert line.evidence_ns == moved_at[0]  # the evidence is the bad broadcast
-    worst_cm = float(line.measured.split("worst error ")[1].split(" cm")[0])
-    assert 15.0 < worst_cm < 25.0
+    rewrite(src, path, edit)
+    assert moved_at
+    return grade_file(path)
 
 
 def test_a_broadcast_on_a_frame_without_detection(
     room_log: tuple[Path, RecordResult], tmp_path: Path
 ) -> None:
     """Empty the detections of the last broadcast's frame and of the frame before it (one
-    camera period, 0.1 s, earlier): that broadcast had no detection in its window."""
+    camera period, 0.1 s, earlier): each broadcast of those frames came right after an empty
+    detection, and is no copy of a recent one (the camera turned since)."""
     path = tmp_path / "undetected.mcap"
     stamps = [
         t.header.stamp.ns
@@ -241,8 +252,9 @@ def test_a_broadcast_on_a_frame_without_detection(
     report = grade_file(path)
     assert report.failed_ids() == ["marker_frame.only_on_detection"]
     line = report.check("marker_frame.only_on_detection")
-    assert "1 without a detection within 0.1 s" in line.measured
-    assert line.evidence_ns == stamps[-1]
+    emptied = [s for s in stamps if 0 <= stamps[-1] - s <= 100_000_000]
+    assert f", {len(emptied)} without a detection within 2 s" in line.measured, line.measured
+    assert line.evidence_ns == emptied[0]
 
 
 def test_a_run_longer_than_10_minutes_fails_the_time_limit(
@@ -276,7 +288,8 @@ def test_thresholds_from_toml_change_the_verdict(
     th = load_thresholds(toml)
     assert th == Thresholds(time_limit_s=30.0, follower_visit_m=0.1)
     report = grade_file(room_log[0], th)
-    assert report.failed_ids() == ["follower.marker_0", "follower.home", "time_limit"]
+    # the visit's radius shrinks below the follower's stop; home stands on its own (v3)
+    assert report.failed_ids() == ["follower.marker_0", "time_limit"]
     assert report.check("time_limit").threshold == "<= 30 s"
 
 
@@ -311,7 +324,7 @@ def test_a_truncated_log_is_graded_as_far_as_it_goes(
 
 
 def test_grader_memory_does_not_grow_with_the_log() -> None:
-    """Detections are remembered for DETECTION_MEMORY_NS only; visits are capped."""
+    """Detections are remembered for ``detection_recent_s`` only; visits are capped."""
     g = Grader(course_world())
     tx, ty = course_world().targets[0]
     t = 1_000_000_000
@@ -329,7 +342,7 @@ def test_grader_memory_does_not_grow_with_the_log() -> None:
         off = 0.0 if i % 2 else 1.0
         pose = msgs.Pose(position=msgs.Point(x=tx + off, y=ty))
         g.feed("/ground_truth/explorer/pose", msgs.PoseStamped(pose=pose), t)
-    assert len(g._recent) <= DETECTION_MEMORY_NS // 100_000_000 + 1
+    assert len(g._detections) <= g.recent_ns // 100_000_000 + 1
     assert len(g.target_discs[0].entries) == MAX_VISITS
     assert g.target_discs[0].entries[-1] == t  # the newest arrival is kept
 

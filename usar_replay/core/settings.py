@@ -180,7 +180,33 @@ class Thresholds:
     follower_moved_m: float = setting(0.05, unit="m", lo=0.0, lo_open=True, hi=100.0)
     """The follower has moved once its true position is this far from where it started."""
     follower_visit_m: float = setting(0.4, unit="m", lo=0.0, lo_open=True, hi=100.0)
-    """The follower visits a marker when its true position comes this close (course: 0.4 m)."""
+    """The handout's stand-off (section 6: "reach those markers within a tolerance (0.4m seems
+    to be good)"): a package's follower goal may be this far out from the marker in x and in
+    y, so a visit is a stop within ``sqrt(2) * follower_visit_m`` plus the package's move_base
+    goal tolerance plus ``goal_slack_m`` of the marker (rubric v3; 0.72 m by default)."""
+    goal_slack_m: float = setting(0.10, unit="m", lo=0.0, hi=100.0)
+    """What a stop may miss its goal by beyond move_base's goal tolerance (the controller's
+    overshoot): 0.15 m, v2's target radius, less the template's 0.05 m tolerance."""
+    explorer_goal_tolerance_m: float | None = setting(None, unit="m", lo=0.0, hi=100.0)
+    """The explorer's move_base ``xy_goal_tolerance``. Unset: the log's (the package's own
+    move_base parameters, or the mission's ``mission.xy_tolerance``), else the course
+    template's 0.05 m. A target is reached within ``max(target_reached_m, tolerance +
+    goal_slack_m)``."""
+    follower_goal_tolerance_m: float | None = setting(None, unit="m", lo=0.0, hi=100.0)
+    """The follower's move_base ``xy_goal_tolerance``, as the explorer's."""
+    stopped_m: float = setting(0.03, unit="m", lo=0.0, lo_open=True, hi=10.0)
+    """A robot has stopped when its true position stayed within this of where it is for
+    ``stopped_s`` (a turn in place is a stop; a drive-by is not)."""
+    stopped_s: float = setting(0.5, unit="s", lo=0.0, lo_open=True, hi=60.0)
+    """How long a stop lasts at least (a goal reached, then the next goal's turn)."""
+    detection_recent_s: float = setting(2.0, unit="s", lo=0.0, lo_open=True, hi=60.0)
+    """A broadcast is made on a detection when a non-empty ``/fiducial_transforms`` came at
+    most this long before it (a queue of detections drained by a slow loop: the handout's rule
+    is "broadcast only when the marker is detected", not "within 100 ms")."""
+    reliable_range_m: float = setting(3.0, unit="m", lo=0.0, lo_open=True, hi=100.0)
+    """Broadcasts of detections farther than this from the camera do not decide a marker's
+    broadcast line while nearer ones exist: usar's 640x480 camera's raw error passes 0.1 m at
+    4 m (issue 43's measure: 0.11-0.43 m at 4-6 m)."""
     reentry_m: float = setting(0.05, unit="m", lo=0.0, lo_open=True, hi=100.0)
     """A robot inside a disc must get this much farther than its radius before a later arrival
     counts as a new visit (jitter on the edge is one visit, not many)."""

@@ -37,6 +37,7 @@ __all__ = [
     "load_thresholds",
     "never_ran",
     "observe_run",
+    "with_goal_tolerances",
 ]
 
 FAILED_OUTCOMES = {
@@ -55,13 +56,46 @@ def load_thresholds(path: str | os.PathLike[str]) -> Thresholds:
     return load(Thresholds, Path(path), table="thresholds")
 
 
+def with_goal_tolerances(
+    thresholds: Thresholds | None, run: Run | None = None, settings: Any = None
+) -> Thresholds:
+    """``thresholds`` with each robot's move_base goal tolerance filled in where unset (rubric
+    v3 widens a target's and a marker's radius by it): a ROS 1 log's, as the package's own
+    move_base parameters gave it; else the run's ``mission.xy_tolerance`` (``settings``, or
+    the log's recorded settings); else the course template's (the rubric's default)."""
+    th = thresholds or Thresholds()
+    ros1 = None
+    if run is not None:
+        from usar_replay.log import ros1_run
+
+        ros1 = ros1_run.of(run)
+        if settings is None and run.settings_recorded:
+            settings = run.settings
+    mission = getattr(settings, "mission", None)
+    fallback = getattr(mission, "xy_tolerance", None) if ros1 is None else None
+    found: dict[str, float | None] = {}
+    for robot in ("explorer", "follower"):
+        own = getattr(ros1, "xy_goal_tolerance", None)
+        value = own(robot) if callable(own) else None
+        found[robot] = value if value is not None else fallback
+    return replace(
+        th,
+        explorer_goal_tolerance_m=th.explorer_goal_tolerance_m
+        if th.explorer_goal_tolerance_m is not None
+        else found["explorer"],
+        follower_goal_tolerance_m=th.follower_goal_tolerance_m
+        if th.follower_goal_tolerance_m is not None
+        else found["follower"],
+    )
+
+
 def observe_run(run: Run, thresholds: Thresholds | None = None) -> RubricGrader:
     """The run's rubric grader, fed every message of the log it reads: the rubric's own
     observations (``usar record``'s summary counts markers with them). Nothing is required: a
     log without a topic gives a grader that saw none of it."""
     scenario = run.require_scenario()
     rubric = rubric_for(scenario)
-    grader = rubric.grader(scenario, thresholds)
+    grader = rubric.grader(scenario, with_goal_tolerances(thresholds, run))
     grader.start_ns = run.start_ns  # the run's clock starts with the log, whatever topic
     feed = grader.feed
     # the course's detections count as the world published them ("sim"), never a mission's
@@ -88,9 +122,15 @@ class LiveGrade:
     the same messages in the same order as :func:`grade_run` reads from the finished file, so
     :meth:`report` is the grade ``usar grade`` gives the file, without reading it again."""
 
-    def __init__(self, scenario: Scenario, thresholds: Thresholds | None = None) -> None:
+    def __init__(
+        self, scenario: Scenario, thresholds: Thresholds | None = None, settings: Any = None
+    ) -> None:
         self.rubric = rubric_for(scenario)
-        self.grader = self.rubric.grader(scenario, thresholds)
+        self.given = thresholds
+        self.thresholds = with_goal_tolerances(thresholds, settings=settings)
+        """Judged by: a ROS 1 package's own goal tolerances are known only once its log is
+        written, so :meth:`report` grades the file again where they differ."""
+        self.grader = self.rubric.grader(scenario, self.thresholds)
         self._writer: BagWriter | None = None
         self._last_ns = 0
         """The latest log time fed (ground truth comes every tick): did sim time pass?"""
@@ -123,6 +163,11 @@ class LiveGrade:
         :class:`MissingTopic` when a topic the rubric requires was never written)."""
         written = self._writer.topics if self._writer is not None else frozenset()
         _check_required(path, self.rubric.required_topics, written)
+        if self._writer is not None:
+            run = open_run(path)
+            if with_goal_tolerances(self.given, run) != self.thresholds:
+                # the package's move_base said other tolerances than the live grader knew
+                return grade_run(run, self.given)
         report = self.grader.report(str(path), log_complete=True, log_problem="")
         if self._writer is None:
             return report

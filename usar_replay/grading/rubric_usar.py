@@ -66,6 +66,8 @@ from __future__ import annotations
 
 import bisect
 import math
+import statistics
+from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -124,11 +126,29 @@ NO_DETECTOR = (
 )
 """What the detection lines measure when the detector never published (a mission without
 ``ArucoDetect()`` in its ``main()``)."""
-RUBRIC_VERSION = 2
+RUBRIC_VERSION = 3
 """1: only ``marker_frame`` was a broadcast, stamped exactly with a detected image's stamp.
 2 (issue #32): a frame of any name on ``/tf`` (not the simulator's), stamped within one camera
 period after a detected image (or zero: when it was sent), placed in ``map`` through its parent
-at that stamp; the broadcast line shows the frame a TA would look at."""
+at that stamp; the broadcast line shows the frame a TA would look at.
+3 (issue 43, the TA's rules): a follower visit is a *stop* within the handout's stand-off plus
+the package's move_base goal tolerance; home and time stand on their own; a marker's broadcast
+is the median place of its frames broadcast while the explorer was at a target, within the
+camera's reliable range (a stand-off frame earns half, the worst frame decides); a broadcast is
+"on a detection" when a non-empty detection came within ``detection_recent_s`` before it (and it
+is not a stored pose sent again after an empty one); a detection counts when the explorer was
+at a target."""
+TEMPLATE_GOAL_TOLERANCE_M = 0.05
+"""The course template's move_base ``xy_goal_tolerance`` (``dwa_local_planner_params.yaml``):
+a robot's goal tolerance where neither the thresholds nor the log say another."""
+SCAN_TURN_RAD_S = 0.5
+"""Faster than this the explorer is not scanning but turning to a goal: the course's scans
+spin at 0.1-0.3 rad/s, move_base turns at up to about 2 rad/s (issue 43's packages)."""
+STEADY = 0.5
+"""A frame is on the marker when its median place is, and at least this share of its deciding
+broadcasts are (a frame that flickers between the marker and elsewhere is not)."""
+MAX_SAMPLES = 1024
+"""Broadcast places kept per frame for its median (the latest; a ring, so memory stays flat)."""
 MAX_VISITS = 256
 MAX_FRAMES = 16
 """Broadcast frame names kept apart; past this, a new name counts as :data:`OTHER_FRAMES` (the
@@ -166,14 +186,16 @@ class Disc:
     last_m: float = math.inf
     """Distance at the latest sample (where the robot ended, at the end of the log)."""
 
-    def update(self, xy: tuple[float, float], t_ns: int) -> None:
+    def update(self, xy: tuple[float, float], t_ns: int, *, counts: bool = True) -> None:
+        """One sample; ``counts`` False: inside the disc is not an arrival now (the robot is
+        moving, and only a stop is a visit)."""
         d = math.dist(xy, self.centre)
         self.last_m = d
         if self.first_ns is None:
             self.first_ns = t_ns
         if d < self.closest_m:
             self.closest_m, self.closest_ns = d, t_ns
-        if d <= self.radius:
+        if d <= self.radius and (counts or self.inside):
             if self.inside is False or (self.inside is None and self.count_start):
                 if len(self.entries) < MAX_VISITS:
                     self.entries.append(t_ns)
@@ -213,6 +235,64 @@ class FrameBroadcasts:
     first_ns: int | None = None
     first_stamp: tuple[int, int] = (0, 0)
     failed_lookups: int = 0
+    at_target: list[tuple[tuple[float, float, float], tuple[float, float]]] = field(
+        default_factory=list
+    )
+    """(place in ``map``, the explorer's position) of the broadcasts made while the explorer
+    was at a target, of a detection within the reliable range: what a TA sees in RViz (the
+    latest :data:`MAX_SAMPLES`)."""
+    at_target_count: int = 0
+    elsewhere: list[tuple[tuple[float, float, float], tuple[float, float]]] = field(
+        default_factory=list
+    )
+    """The same of every other broadcast (driving, or from far away): judged only when no
+    frame of the marker was broadcast at a target."""
+    elsewhere_count: int = 0
+    _last: tuple[int, bool, int] | None = None
+    """(stamp, deciding, index) of the latest sample kept."""
+
+    def keep(
+        self,
+        place: tuple[float, float, float],
+        explorer: tuple[float, float],
+        deciding: bool,
+        stamp: int,
+    ) -> None:
+        """One finite broadcast's place, stamped ``stamp``, in the ring it belongs to. A second
+        broadcast of the frame at the stamp of the one before replaces it: tf keeps the last
+        one inserted at a stamp, and that is what RViz shows (team 001's identity broadcast
+        right after the right one)."""
+        ring = self.at_target if deciding else self.elsewhere
+        if self._last is not None and self._last[:2] == (stamp, deciding):
+            ring[self._last[2]] = (place, explorer)
+            return
+        n = self.at_target_count if deciding else self.elsewhere_count
+        if len(ring) < MAX_SAMPLES:
+            ring.append((place, explorer))
+            index = len(ring) - 1
+        else:
+            index = n % MAX_SAMPLES
+            ring[index] = (place, explorer)
+        self._last = (stamp, deciding, index)
+        if deciding:
+            self.at_target_count += 1
+        else:
+            self.elsewhere_count += 1
+
+
+@dataclass(frozen=True, slots=True)
+class FramePlace:
+    """One frame's place as a TA judges it: the median of its deciding broadcasts."""
+
+    frame: FrameBroadcasts
+    place: tuple[float, float, float]
+    error_m: float
+    kind: str
+    """``on`` (within the threshold of the marker), ``stand-off`` (in front of the marker's
+    face, within the follower's stand-off: a goal frame, half the points) or ``off``."""
+    broadcasts: int
+    where: str
+    """``at a target`` or ``anywhere`` (no frame of the marker was broadcast at a target)."""
 
 
 @dataclass(slots=True)
@@ -227,16 +307,6 @@ class Broadcasts:
     def count(self) -> int:
         return sum(f.count for f in self.frames.values())
 
-    def shown(self, limit_m: float) -> FrameBroadcasts | None:
-        """The frame a TA would point at: one whose every broadcast is within ``limit_m`` (the
-        most broadcast such frame), else the one closest to passing; None without any."""
-        if not self.frames:
-            return None
-        return min(
-            self.frames.values(),
-            key=lambda f: (0.0, -f.count) if f.worst_m <= limit_m else (1.0, f.worst_m),
-        )
-
 
 class Grader:
     """Observes a log's messages in log order; :meth:`report` gives the rubric."""
@@ -246,6 +316,8 @@ class Grader:
         self.th = th = thresholds or Thresholds()
         self.targets = [(float(t[0]), float(t[1])) for t in scenario.targets]
         self.markers = {m.id: (m.x, m.y, m.z) for m in sorted(scenario.markers, key=lambda m: m.id)}
+        self.marker_yaw = {m.id: m.yaw for m in scenario.markers}
+        """Which way each marker's face points (its +x): a stand-off frame is in front of it."""
         self.explorer_home = (scenario.explorer.x, scenario.explorer.y)
         self.follower_home = (scenario.follower.x, scenario.follower.y)
         self.buffer = BufferCore(cache_time=DETECTION_MEMORY_NS / 1e9)
@@ -254,29 +326,60 @@ class Grader:
         def disc(c: tuple[float, float], r: float, count_start: bool) -> Disc:
             return Disc(c, r, r + th.reentry_m, count_start)
 
-        self.target_discs = [disc(t, th.target_reached_m, True) for t in self.targets]
+        def tolerance(value: float | None) -> float:
+            return TEMPLATE_GOAL_TOLERANCE_M if value is None else value
+
+        self.explorer_tolerance = tolerance(th.explorer_goal_tolerance_m)
+        self.follower_tolerance = tolerance(th.follower_goal_tolerance_m)
+        own = self.explorer_tolerance + th.goal_slack_m
+        self.target_radius = own if own > th.target_reached_m + 1e-9 else th.target_reached_m
+        """How near a target the explorer must come: v2's 0.15 m, or the package's own goal
+        tolerance plus the controller's overshoot where that is more."""
+        self.visit_radius = (
+            math.sqrt(2.0) * th.follower_visit_m + self.follower_tolerance + th.goal_slack_m
+        )
+        """How near a marker the follower must stop: the handout's 0.4 m stand-off in x and
+        in y, the package's goal tolerance, the overshoot (0.72 m with the template's)."""
+        self.target_discs = [disc(t, self.target_radius, True) for t in self.targets]
         self.explorer_home_disc = disc(self.explorer_home, th.home_m, False)
         self.marker_discs = {
-            k: disc(v[:2], th.follower_visit_m, True) for k, v in self.markers.items()
+            k: disc(v[:2], self.visit_radius, True) for k, v in self.markers.items()
         }
+        self.explorer_xy: tuple[float, float] | None = None
+        self._explorer_yaw: tuple[int, float] | None = None
+        self.explorer_turning_fast = False
+        """Turning faster than :data:`SCAN_TURN_RAD_S` (move_base turning to its next goal,
+        not the scan's slow spin): a frame stamped "now" then is off by the turn since its
+        image, and a TA looks at the frame while the explorer scans."""
+        self.explorer_at_target = False
+        """The explorer's true position is within :attr:`target_radius` of a target (stopped
+        there or turning there: where it looks for a marker)."""
+        self._trail: deque[tuple[int, tuple[float, float]]] = deque()
+        """The follower's recent true positions, for whether it has stopped."""
+        self.follower_stops = 0
         self.follower_home_disc = disc(self.follower_home, th.home_m, False)
         self.follower_start: tuple[float, float] | None = None
         self.follower_moved_ns: int | None = None
         self.detected_ns: dict[int, int] = {}
         self.detected_frames: dict[int, int] = {}
+        """Frames in which the detector saw a marker while the explorer was at a target."""
+        self.glimpsed_ns: dict[int, int] = {}
+        self.glimpsed_frames: dict[int, int] = {}
+        """The same anywhere else (driving past): not a detection the mission could use."""
+        self.recent_ns = int(th.detection_recent_s * 1e9)
+        self._detections: deque[tuple[int, int, tuple[msgs.FiducialTransform, ...]]] = deque()
+        """(arrival, image stamp, transforms) of the non-empty detections of the last
+        :attr:`recent_ns`."""
+        self.last_fiducials_empty = False
+        """The latest ``/fiducial_transforms`` held nothing (the marker out of view)."""
+        self._sent: dict[str, set[tuple[int, int]]] = {}
+        self._frame_marker: dict[str, int] = {}
+        """The marker each frame name was last broadcast as (a detection's)."""
+        """Per frame, the detections (image stamp, ID) it was broadcast as, the recent ones."""
         self.fiducial_messages = 0
         """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
-        self._recent: dict[int, tuple[msgs.FiducialTransform, ...]] = {}
-        """Detections by image stamp, the last :data:`DETECTION_MEMORY_NS` only."""
-        self._stamps: list[int] = []
-        """The keys of :attr:`_recent`, sorted (for the window of a broadcast's stamp)."""
         self.period_ns = math.ceil(1e9 / scenario.camera.rate_hz)
-        """One camera period: how long after an image's detection its broadcast may be
-        stamped."""
-        self._arrived: dict[int, int] = {}
-        """When each image's detections came (by image stamp): with the image, or up to one
-        camera period later (``record.detection_latency_ticks``: a tick later, as a real
-        ``aruco_detect`` answers)."""
+        """One camera period (the reports say the camera's rate)."""
         self._not_candidates = frozenset((contract.MAP, *contract.sim_frames()))
         self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
         self.broadcast_count = 0
@@ -311,6 +414,11 @@ class Grader:
             for d in self.target_discs:
                 d.update(xy, t_ns)
             self.explorer_home_disc.update(xy, t_ns)
+            self.explorer_xy = xy
+            self._explorer_turn(msg.pose.orientation, t_ns)
+            self.explorer_at_target = any(
+                math.dist(xy, c) <= self.target_radius for c in self.targets
+            )
         elif topic == FOLLOWER_TRUTH and isinstance(msg, msgs.PoseStamped):
             self._on_follower((msg.pose.position.x, msg.pose.position.y), t_ns)
         elif topic == contract.FIDUCIALS and isinstance(msg, msgs.FiducialTransformArray):
@@ -353,22 +461,19 @@ class Grader:
                 header=msg.header,
                 transforms=tuple(f for f in msg.transforms if not nonfinite_field(f)),
             )
+        seen_ns, frames = (
+            (self.detected_ns, self.detected_frames)
+            if self.explorer_at_target
+            else (self.glimpsed_ns, self.glimpsed_frames)
+        )
         for f in msg.transforms:
-            self.detected_ns.setdefault(f.fiducial_id, t_ns)
-            self.detected_frames[f.fiducial_id] = self.detected_frames.get(f.fiducial_id, 0) + 1
+            seen_ns.setdefault(f.fiducial_id, t_ns)
+            frames[f.fiducial_id] = frames.get(f.fiducial_id, 0) + 1
+        self.last_fiducials_empty = not msg.transforms
         if msg.transforms:
-            stamp = msg.header.stamp.ns
-            if stamp not in self._recent:
-                bisect.insort(self._stamps, stamp)
-                # a later answer than one period (a forged stamp of an old log's mission
-                # detector) counts as one period late
-                self._arrived[stamp] = stamp + min(max(t_ns - stamp, 0), self.period_ns)
-            self._recent[stamp] = self._recent.get(stamp, ()) + msg.transforms
-        # forget detections older than the tf cache
-        horizon = t_ns - DETECTION_MEMORY_NS
-        while self._stamps and self._stamps[0] < horizon:
-            old = self._stamps.pop(0)
-            del self._recent[old], self._arrived[old]
+            self._detections.append((t_ns, msg.header.stamp.ns, msg.transforms))
+        while self._detections and self._detections[0][0] < t_ns - self.recent_ns:
+            self._detections.popleft()
 
     def _on_follower(self, xy: tuple[float, float], t_ns: int) -> None:
         if self.follower_start is None:
@@ -378,9 +483,33 @@ class Grader:
             and math.dist(xy, self.follower_start) > self.th.follower_moved_m
         ):
             self.follower_moved_ns = t_ns
+        stopped = self._stopped(xy, t_ns)
         for d in self.marker_discs.values():
-            d.update(xy, t_ns)
+            d.update(xy, t_ns, counts=stopped)
         self.follower_home_disc.update(xy, t_ns)
+
+    def _explorer_turn(self, q: msgs.Quaternion, t_ns: int) -> None:
+        """The explorer's turn rate between its last two true poses."""
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        last = self._explorer_yaw
+        self._explorer_yaw = (t_ns, yaw)
+        if last is None or t_ns <= last[0]:
+            return
+        turn = math.remainder(yaw - last[1], math.tau)
+        self.explorer_turning_fast = abs(turn) / ((t_ns - last[0]) / 1e9) > SCAN_TURN_RAD_S
+
+    def _stopped(self, xy: tuple[float, float], t_ns: int) -> bool:
+        """Has the follower stayed within ``stopped_m`` of ``xy`` for ``stopped_s``? (a goal
+        reached and the turn to the next: a stop; a drive-by: not)."""
+        trail, window = self._trail, int(self.th.stopped_s * 1e9)
+        trail.append((t_ns, xy))
+        while len(trail) > 1 and (trail[1][0] <= t_ns - window or len(trail) > MAX_SAMPLES):
+            trail.popleft()
+        still = trail[0][0] <= t_ns - window and all(
+            math.dist(p, xy) <= self.th.stopped_m for _, p in trail
+        )
+        self.follower_stops += still
+        return still
 
     def _on_broadcasts(self, msg: msgs.TFMessage, t_ns: int) -> None:
         """The broadcasts of one ``/tf`` message: every transform whose child is not one of the
@@ -408,19 +537,15 @@ class Grader:
             where = None if parent is None else _compose(parent.transform, tf.transform)
             self._on_broadcast(tf, stamp, t_ns, times, where)
 
-    def _window(self, stamp: int) -> list[tuple[int, msgs.FiducialTransform]]:
-        """The detections a broadcast stamped ``stamp`` may be: those of images stamped at or
-        before it whose detections came at most one camera period before it (a callback that
-        ran a tick late and stamped "now"; where the detector answers a tick after the image,
-        the period counts from its answer, as a TA's course machine has it), newest image
-        first."""
-        lo = bisect.bisect_left(self._stamps, stamp - 2 * self.period_ns)
-        hi = bisect.bisect_right(self._stamps, stamp)
+    def _window(self, t_ns: int) -> list[tuple[int, msgs.FiducialTransform]]:
+        """The detections a broadcast sent at ``t_ns`` may be: (image stamp, detection) of
+        those that came within ``detection_recent_s`` before it, newest first (a package that
+        drains a queue of detections broadcasts each one late: still a detection's)."""
         return [
-            (s, f)
-            for s in reversed(self._stamps[lo:hi])
-            if stamp <= self._arrived[s] + self.period_ns
-            for f in self._recent[s]
+            (stamp, f)
+            for came, stamp, found in reversed(self._detections)
+            if t_ns - self.recent_ns <= came <= t_ns
+            for f in found
         ]
 
     def _on_broadcast(
@@ -445,19 +570,36 @@ class Grader:
             self.wrong_parent += times
             if self.wrong_parent_ns is None:
                 self.wrong_parent_ns, self.wrong_parent_what = t_ns, what
-        window = self._window(stamp)
-        if not window or (on_camera and self._stale_copy(tf, stamp, window)):
+        window = self._window(t_ns)
+        sent = self._sent.setdefault(frame, set())
+        copied, again = self._copied(tf, window, sent) if on_camera else (None, False)
+        if copied is not None:
+            if len(sent) >= MAX_SAMPLES:
+                sent.clear()  # memory stays flat; a later copy counts as new
+            sent.add(copied)
+        # no detection came recently, or the marker is out of view now and this is no
+        # detection's first broadcast (a stored pose sent again: the handout's "broadcast only
+        # when the marker is detected")
+        if not window or (self.last_fiducials_empty and (copied is None or again)):
             self.without_detection += times
             if self.without_detection_ns is None:
                 self.without_detection_ns, self.without_detection_what = t_ns, what
             self.bad_broadcasts += times
         elif not on_camera:
             self.bad_broadcasts += times
-        if not window:
-            return  # no detection to be the broadcast of: only only_on_detection judges it
-        image, mid = self._attribute(tf, window, where, on_camera)
+        if not window or (self.last_fiducials_empty and (copied is None or again)):
+            # no detection to be the broadcast of; a frame that was a marker's shows in RViz
+            # where the marker is not (a stored pose sent again "follows the robot around")
+            known = self._frame_marker.get(frame)
+            if known is not None and where is not None and all(map(math.isfinite, where)):
+                b = self.broadcasts[known].frames[frame]
+                b.keep(where, self.explorer_xy or self.explorer_home, True, stamp)
+            return
+        image, found = self._attribute(tf, window, where, on_camera)
+        mid = found.fiducial_id
         if mid not in self.markers:
             return
+        self._frame_marker[frame] = mid
         b = self.broadcasts[mid].frames.setdefault(frame, FrameBroadcasts(frame))
         b.count += times
         if b.first_ns is None:
@@ -468,6 +610,34 @@ class Grader:
             err = math.inf
         if err > b.worst_m:
             b.worst_m, b.worst_ns, b.worst_stamp = err, t_ns, (stamp, image)
+        if where is not None and math.isfinite(err):
+            v = found.transform.translation
+            near = math.sqrt(v.x * v.x + v.y * v.y + v.z * v.z) <= self.th.reliable_range_m
+            explorer = self.explorer_xy or self.explorer_home
+            scanning = self.explorer_at_target and not self.explorer_turning_fast
+            b.keep(where, explorer, scanning and near, stamp)
+
+    def _copied(
+        self,
+        tf: msgs.TransformStamped,
+        window: list[tuple[int, msgs.FiducialTransform]],
+        sent: set[tuple[int, int]],
+    ) -> tuple[tuple[int, int] | None, bool]:
+        """(image stamp, ID) of the recent detection this camera-parented broadcast copies
+        (within :data:`BROADCAST_MATCH_M`), and whether every such detection was broadcast by
+        this frame already (a stored pose sent again). A stopped camera sees the same pose in
+        frame after frame, so the copy is the oldest such detection not yet sent: a queue
+        drained late sends each once; a package resending its store sends more copies than
+        there were detections."""
+        near = sorted(
+            (s, f.fiducial_id)
+            for s, f in window
+            if _apart_m(tf.transform, f.transform) <= BROADCAST_MATCH_M
+        )
+        if not near:
+            return None, False
+        fresh = next((key for key in near if key not in sent), None)
+        return (fresh, False) if fresh is not None else (near[-1], True)
 
     def _attribute(
         self,
@@ -475,52 +645,31 @@ class Grader:
         window: list[tuple[int, msgs.FiducialTransform]],
         where: tuple[float, float, float] | None,
         on_camera: bool,
-    ) -> tuple[int, int]:
-        """(image stamp, marker ID) of the detection a broadcast is: on the camera, the one it
-        copies (identical, else nearest in the camera frame); elsewhere, the detected marker
-        nearest to where it puts its frame in ``map``."""
+    ) -> tuple[int, msgs.FiducialTransform]:
+        """(image stamp, detection) a broadcast is: on the camera, the one it copies
+        (identical, else nearest in the camera frame); elsewhere, the detected marker nearest
+        to where it puts its frame in ``map``."""
         if on_camera:
             exact = next(((s, f) for s, f in window if f.transform == tf.transform), None)
-            s, f = exact or min(window, key=lambda sf: _apart_m(tf.transform, sf[1].transform))
-            return s, f.fiducial_id
+            return exact or min(window, key=lambda sf: _apart_m(tf.transform, sf[1].transform))
         if where is None:
-            return window[0][0], window[0][1].fiducial_id
+            return window[0]
         known = [(s, f) for s, f in window if f.fiducial_id in self.markers]
         if not known:
-            return window[0][0], window[0][1].fiducial_id
-        s, f = min(known, key=lambda sf: math.dist(where, self.markers[sf[1].fiducial_id]))
-        return s, f.fiducial_id
-
-    def _stale_copy(
-        self,
-        tf: msgs.TransformStamped,
-        stamp: int,
-        window: list[tuple[int, msgs.FiducialTransform]],
-    ) -> bool:
-        """Is this broadcast an older frame's detection stamped anew, more than one camera
-        period later (the "stamped now" bug, beyond what a callback one tick late does)? Its
-        pose is not where the window's detections put a marker (:data:`BROADCAST_MATCH_M`) but
-        is exactly one of an earlier frame's. Any other pose (an identity, an offset) is
-        judged by the broadcast line, not here."""
-        if _near_a_detection(tf.transform, tuple(f for _, f in window), BROADCAST_MATCH_M):
-            return False
-        oldest = window[-1][0]
-        return any(
-            _near_a_detection(tf.transform, self._recent[s], 1e-9)
-            for s in self._stamps
-            if s < oldest
-        )
+            return window[0]
+        return min(known, key=lambda sf: math.dist(where, self.markers[sf[1].fiducial_id]))
 
     def found_markers(self) -> tuple[FoundMarker, ...]:
-        """The markers broadcast (attributed as :func:`marker_broadcast` does), with the worst
-        error of the broadcasts of the frame the line shows."""
+        """The markers broadcast, as :func:`marker_broadcast` judges them, with the error of
+        the frame the line shows."""
         out = []
-        for mid, b in self.broadcasts.items():
-            shown = b.shown(self.th.marker_map_error_m)
-            if shown is None:
+        for mid in self.broadcasts:
+            places = frame_places(self, mid)
+            if not places:
                 continue
-            worst = shown.worst_m if math.isfinite(shown.worst_m) else None
-            out.append(FoundMarker(mid, _broadcast_text(b, shown), worst))
+            shown = _shown_place(places)
+            worst = shown.error_m if math.isfinite(shown.error_m) else None
+            out.append(FoundMarker(mid, _place_text(places, shown), worst))
         return tuple(out)
 
     def resolved_thresholds(self) -> Thresholds:
@@ -701,7 +850,7 @@ def explorer_targets(g: Grader) -> list[Check]:
         ],
         names=[f"target_{k + 1}" for k in range(n)],
         discs=g.target_discs,
-        radius=g.th.target_reached_m,
+        radius=g.target_radius,
         points_total=12.0,
         verb="reached",
         order="order",
@@ -709,42 +858,122 @@ def explorer_targets(g: Grader) -> list[Check]:
 
 
 def marker_detected(g: Grader, mid: int) -> Check:
-    """``marker_k.detected``: the detector reported ID k at least once."""
+    """``marker_k.detected``: the detector reported ID k in a frame taken while the explorer
+    was at a target (stopped or turning there), a detection the mission could use; a marker
+    only glimpsed while driving past does not count."""
     t = g.detected_ns.get(mid)
     frames = g.detected_frames.get(mid, 0)
+    glimpsed = g.glimpsed_frames.get(mid, 0)
     each = 12.0 / max(len(g.markers), 1)
+    if not g.fiducial_messages:
+        measured = NO_DETECTOR
+    elif t is not None:
+        measured = f"in {_n(frames, 'frame')} at a target, first at {_s(t)}"
+    elif glimpsed:
+        first = g.glimpsed_ns[mid]
+        measured = f"only glimpsed away from the targets ({_n(glimpsed, 'frame')}, first at " \
+            f"{_s(first)})"
+    else:
+        measured = "never detected"
     return Check(
         id=f"marker_{mid}.detected",
-        description=f"explorer detected marker {mid}",
+        description=f"explorer detected marker {mid} at a target",
         passed=t is not None,
         points=each if t is not None else 0.0,
         max_points=each,
-        measured=(
-            NO_DETECTOR
-            if not g.fiducial_messages
-            else "never detected"
-            if t is None
-            else f"in {_n(frames, 'frame')}, first at {_s(t)}"
-        ),
-        threshold=f"at least 1 frame on {contract.FIDUCIALS}",
-        evidence_ns=t,
+        measured=measured,
+        threshold=f"at least 1 frame on {contract.FIDUCIALS} within {g.target_radius:g} m of "
+        "a target",
+        evidence_ns=t if t is not None else g.glimpsed_ns.get(mid),
         value=float(frames),
         unit="frames",
         limit=1.0,
         op=">=",
-        evidence="" if t is None else "first detection",
+        evidence="first detection" if t is not None else (
+            "first glimpse" if mid in g.glimpsed_ns else ""
+        ),
     )
 
 
-def _broadcast_text(b: Broadcasts, shown: FrameBroadcasts) -> str:
-    """What a marker's broadcasts measured, in words (the line's and the record summary's):
-    the frame a TA would look at, and how many other frames were broadcast for it."""
-    others = len(b.frames) - 1
-    also = f" (and {_n(others, 'other frame')})" if others else ""
-    head = f"{shown.frame}: {_n(shown.count, 'broadcast')}"
-    if shown.failed_lookups:
-        return f"{head}, {shown.failed_lookups} not found in {contract.MAP} or not finite{also}"
-    return f"{head}, worst error {shown.worst_m * 100:.1f} cm{also}"
+def _median(points: Sequence[tuple[float, ...]]) -> tuple[float, ...]:
+    """The component-wise median (a few wild broadcasts do not move it)."""
+    return tuple(statistics.median(p[i] for p in points) for i in range(len(points[0])))
+
+
+def frame_places(g: Grader, mid: int) -> list[FramePlace]:
+    """Each frame broadcast for marker ``mid``, placed as a TA sees it in RViz: the median of
+    its broadcasts while the explorer was at a target, of detections within the reliable range
+    (when no frame of the marker was broadcast so, the median of all its broadcasts); a frame
+    never found in ``map`` is ``off`` with an infinite error. By frame name."""
+    frames = sorted(g.broadcasts[mid].frames.values(), key=lambda f: f.frame)
+    at_target = any(f.at_target for f in frames)
+    marker = g.markers[mid]
+    out: list[FramePlace] = []
+    for f in frames:
+        ring = f.at_target if at_target else f.elsewhere
+        n = f.at_target_count if at_target else f.elsewhere_count
+        where = "at a target" if at_target else "anywhere"
+        if not ring:
+            if f.failed_lookups and not (at_target and f.elsewhere):
+                out.append(FramePlace(f, (math.inf,) * 3, math.inf, "off", f.count, where))
+            continue
+        place = _median([p for p, _ in ring])
+        seen_from = _median([e for _, e in ring])
+        err = math.dist(place, marker)
+        limit = g.th.marker_map_error_m
+        on = sum(math.dist(p, marker) <= limit for p, _ in ring) >= STEADY * len(ring)
+        steady = sum(math.dist(p, place) <= limit for p, _ in ring) >= STEADY * len(ring)
+        if err <= limit and on:
+            kind = "on"
+        elif steady and _stand_off(g, mid, place, seen_from):
+            kind = "stand-off"
+        else:
+            kind = "off"
+        out.append(FramePlace(f, (place[0], place[1], place[2]), err, kind, n, where))
+    return out
+
+
+def _stand_off(
+    g: Grader, mid: int, place: tuple[float, ...], seen_from: tuple[float, ...]
+) -> bool:
+    """A frame put deliberately in front of the marker: on its face's side, towards the camera,
+    no farther than the follower's stand-off (0.4 m in x and in y) plus the threshold."""
+    x, y, _z = g.markers[mid]
+    yaw = g.marker_yaw.get(mid, 0.0)
+    vx, vy = place[0] - x, place[1] - y
+    ahead = vx * math.cos(yaw) + vy * math.sin(yaw)
+    cx, cy = seen_from[0] - x, seen_from[1] - y
+    # between the marker and the camera: within 45 degrees of the way to the camera (an
+    # offset sideways, along the image's x, is a wrong frame, not a goal in front of it)
+    apart = math.hypot(vx, vy)
+    camera_side = cx * vx + cy * vy > math.cos(math.pi / 4) * math.hypot(cx, cy) * apart
+    within = apart <= math.sqrt(2.0) * g.th.follower_visit_m + g.th.marker_map_error_m
+    return ahead > 0.0 and camera_side and within
+
+
+def _shown_place(places: Sequence[FramePlace]) -> FramePlace:
+    """The frame the line shows: the worst ``off`` one (it decides), else the most broadcast
+    ``on`` one, else the most broadcast stand-off."""
+    off = [p for p in places if p.kind == "off"]
+    if off:
+        return max(off, key=lambda p: (p.error_m, p.frame.frame))
+    rank = {"on": 0, "stand-off": 1}
+    return min(places, key=lambda p: (rank[p.kind], -p.broadcasts, p.frame.frame))
+
+
+def _place_text(places: Sequence[FramePlace], shown: FramePlace) -> str:
+    """What a marker's broadcasts measured, in words (the line's and the record summary's)."""
+    others = len(places) - 1
+    also = f" (worst of {len(places)} frames)" if shown.kind == "off" and others else (
+        f" (and {_n(others, 'other frame')})" if others else ""
+    )
+    head = f"{shown.frame.frame}: median of {_n(shown.broadcasts, 'broadcast')} {shown.where}"
+    if not math.isfinite(shown.error_m):
+        return f"{shown.frame.frame}: not found in {contract.MAP} or not finite{also}"
+    text = f"{head}, {shown.error_m * 100:.1f} cm from the marker"
+    if shown.kind == "stand-off":
+        text += ": a stand-off frame in front of it (half the points)"
+    return text + also
 
 
 def _stamps_text(frame: str, stamps: tuple[int, int]) -> str:
@@ -753,41 +982,50 @@ def _stamps_text(frame: str, stamps: tuple[int, int]) -> str:
 
 
 def marker_broadcast(g: Grader, mid: int) -> Check:
-    """``marker_k.broadcast``: a frame broadcast on ``/tf`` (any name) within one camera period
-    after the detection of an image in which marker k was seen, every such broadcast of that
-    frame near the truth in ``map`` (as a TA sees it in RViz)."""
-    b = g.broadcasts[mid]
+    """``marker_k.broadcast``: the frames broadcast on ``/tf`` (any name) as detections of
+    marker k, each placed as a TA sees it in RViz (:func:`frame_places`): every frame on the
+    marker passes; a stand-off frame alone earns half; one frame off the marker fails the line
+    (several frames for one detection are judged by the worst: a shotgun earns nothing)."""
+    places = frame_places(g, mid)
     limit = g.th.marker_map_error_m
-    shown = b.shown(limit)
-    ok = shown is not None and shown.worst_m <= limit
-    period = f"{g.period_ns / 1e9:g} s"
-    if shown is None:
+    each = 8.0 / max(len(g.markers), 1)
+    recent = f"{g.th.detection_recent_s:g} s"
+    if not places:
         measured = (
             "nothing broadcast on /tf"
             if g.broadcast_count == 0
-            else f"no broadcast within {period} after a frame where marker {mid} was detected"
+            else f"no broadcast within {recent} after a detection of marker {mid}"
         )
-        evidence_ns, evidence = None, ""
+        shown = None
+        points = 0.0
     else:
-        measured = _broadcast_text(b, shown)
-        if ok:
-            evidence_ns = shown.first_ns
-            evidence = "first broadcast: " + _stamps_text(shown.frame, shown.first_stamp)
-        else:
-            evidence_ns = shown.worst_ns
-            evidence = "worst broadcast: " + _stamps_text(shown.frame, shown.worst_stamp)
-    each = 8.0 / max(len(g.markers), 1)
+        shown = _shown_place(places)
+        measured = _place_text(places, shown)
+        points = {"on": each, "stand-off": each / 2, "off": 0.0}[shown.kind]
+    ok = shown is not None and shown.kind == "on"
+    if shown is None:
+        evidence_ns, evidence = None, ""
+    elif shown.kind == "off":
+        f = shown.frame
+        evidence_ns, evidence = f.worst_ns, "worst broadcast: " + _stamps_text(
+            f.frame, f.worst_stamp
+        )
+    else:
+        f = shown.frame
+        evidence_ns, evidence = f.first_ns, "first broadcast: " + _stamps_text(
+            f.frame, f.first_stamp
+        )
     return Check(
         id=f"marker_{mid}.broadcast",
-        description=f"marker {mid} broadcast on /tf (any frame name), near the truth",
+        description=f"marker {mid} broadcast on /tf (any frame name), where it is",
         passed=ok,
-        points=each if ok else 0.0,
+        points=points,
         max_points=each,
         measured=measured,
-        threshold=f"stamped within {period} after a detection; every broadcast of the frame "
-        f"<= {limit * 100:g} cm",
+        threshold=f"median at a target within {limit * 100:g} cm, each frame (a stand-off "
+        "frame: half)",
         evidence_ns=evidence_ns,
-        value=shown.worst_m if shown is not None and math.isfinite(shown.worst_m) else None,
+        value=shown.error_m if shown is not None and math.isfinite(shown.error_m) else None,
         unit="m",
         limit=limit,
         op="<=",
@@ -798,9 +1036,11 @@ def marker_broadcast(g: Grader, mid: int) -> Check:
 def only_on_detection(g: Grader) -> Check:
     """``marker_frame.only_on_detection``: no broadcast without a detection or off the camera.
 
-    Every frame broadcast on ``/tf`` that is not the simulator's counts (whatever its name);
-    one without a detection that came within one camera period before its stamp, or an older
-    frame's detection stamped anew, is one broadcast without a detection. A line that judges
+    Every frame broadcast on ``/tf`` that is not the simulator's counts (whatever its name).
+    One is without a detection when no non-empty detection came within ``detection_recent_s``
+    before it, or when the latest ``/fiducial_transforms`` was empty (the marker out of view)
+    and it is not a detection's first broadcast (a stored pose sent again). A queued detection
+    drained late by a slow loop is a detection's. A line that judges
     broadcasts gives no credit when there were none: a mission that never broadcast (it
     crashed at its first target, or has no broadcaster yet) has shown nothing this line can
     judge, so it fails with "nothing broadcast" rather than passing by default."""
@@ -815,7 +1055,7 @@ def only_on_detection(g: Grader) -> Check:
     ]
     first_bad = min(firsts, default=None)
     ok = bad == 0 and g.broadcast_count > 0
-    period = f"{g.period_ns / 1e9:g} s"
+    period = f"{g.th.detection_recent_s:g} s"
     if g.broadcast_count == 0:
         measured = "nothing broadcast on /tf"
     else:
@@ -833,7 +1073,7 @@ def only_on_detection(g: Grader) -> Check:
         points=4.0 if ok else 0.0,
         max_points=4.0,
         measured=measured,
-        threshold=f"0 without a detection in the {period} before the stamp; parent "
+        threshold=f"0 without a detection in the {period} before; parent "
         f"{contract.OPTICAL_FRAME}",
         evidence_ns=None if first_bad is None else first_bad[0],
         value=float(bad) if g.broadcast_count else None,  # nothing broadcast: nothing measured
@@ -885,37 +1125,42 @@ def follower_markers(g: Grader) -> list[Check]:
     ids = list(g.marker_discs)
     return _visit_checks(
         ids=[f"follower.marker_{k}" for k in ids],
-        descriptions=[f"follower visited marker {k} in ID order" for k in ids],
+        descriptions=[f"follower stopped at marker {k} in ID order" for k in ids],
         names=[f"marker {k}" for k in ids],
         discs=list(g.marker_discs.values()),
-        radius=g.th.follower_visit_m,
+        radius=g.visit_radius,
         points_total=12.0,
-        verb="visited",
+        verb="stopped",
         order="ID order",
     )
 
 
-def follower_home(g: Grader, last_marker_ns: int, last_marker: str) -> Check:
-    """``follower.home``: the follower came home after its last in-order marker."""
+def follower_home(g: Grader) -> Check:
+    """``follower.home``: the follower left home and came back, after the explorer was home
+    (where the explorer never came home: after the follower moved). Judged on its own, never
+    through the visits: a follower whose visits failed may still come home."""
     d = g.follower_home_disc
-    fh = d.first_after(last_marker_ns) if last_marker else None
-    if not last_marker:
-        measured, value = "visited no marker", None
-    elif fh is None:
-        measured = f"never home after {last_marker} (ended {d.last_m:.2f} m away)"
-        value = d.last_m if math.isfinite(d.last_m) else None
+    explorer_home = g.explorer_home_disc.entries[0] if g.explorer_home_disc.entries else None
+    after = explorer_home if explorer_home is not None else -1
+    fh = d.first_after(after)
+    since = "" if explorer_home is None else f" after the explorer ({_s(explorer_home)})"
+    if fh is None:
+        left = g.follower_moved_ns is not None
+        measured = (
+            f"never home{since} (ended {d.last_m:.2f} m away)" if left else "never left home"
+        )
+        value = d.last_m if math.isfinite(d.last_m) and left else None
     else:
         value = d.stay_at(fh)
-        measured = f"home at {_s(fh)} (closest {value:.3f} m)"
+        measured = f"home at {_s(fh)} (closest {value:.3f} m){since}"
     return Check(
         id="follower.home",
-        description="follower returned home after the markers",
+        description="follower left and returned home, after the explorer",
         passed=fh is not None,
         points=4.0 if fh is not None else 0.0,
         max_points=4.0,
         measured=measured,
-        threshold=f"within {g.th.home_m:g} m of {_xy(g.follower_home)}"
-        + (f", after {last_marker}" if last_marker else ""),
+        threshold=f"within {g.th.home_m:g} m of {_xy(g.follower_home)}, after leaving it",
         evidence_ns=fh,
         value=value,
         unit="m",
@@ -926,7 +1171,8 @@ def follower_home(g: Grader, last_marker_ns: int, last_marker: str) -> Check:
 
 
 def time_limit(g: Grader, follower_home_ns: int | None) -> Check:
-    """``time_limit``: the follower was home within the limit, counted from the log start."""
+    """``time_limit``: the mission ended (the follower home, as :func:`follower_home` judges
+    it) within the limit, counted from the log start."""
     limit = g.resolved_thresholds().time_limit_s or 0.0
     t0 = g.start_ns or 0
     took = None if follower_home_ns is None else (follower_home_ns - t0) / 1e9
@@ -979,10 +1225,7 @@ def judge(g: Grader) -> tuple[Check, ...]:
         [f"target_{k + 1}" for k in range(len(g.targets))], in_order(g.target_discs)
     )
     markers = follower_markers(g)
-    last_marker = _last_reached(
-        [f"marker {k}" for k in g.marker_discs], in_order(list(g.marker_discs.values()))
-    )
-    home = follower_home(g, *last_marker)
+    home = follower_home(g)
     lines: list[Check] = [
         *targets,
         *(marker_detected(g, mid) for mid in g.markers),

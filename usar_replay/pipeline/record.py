@@ -294,7 +294,7 @@ def record(
     target = target or resolve_target(mission or asg.builtin_mission)
     wall_start = time.perf_counter()  # only for the real-time factor shown to people
     limit_s = rs.max_sim_time_s or scenario.time_limit_s * 1.5
-    live = LiveGrade(scenario, thresholds)
+    live = LiveGrade(scenario, thresholds, settings)
     with _simulator(scenario, settings, asg) as sim, bag.BagWriter(out) as writer:
         live.attach(writer, sim.now_ns)  # the first message (the true markers) is at now
         renderer = _write_header(writer, sim, scenario, settings, target)
