@@ -25,7 +25,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from usar_replay.grading.grade import grade_file
-from usar_replay.grading.rubric_usar import GRADE_TOPICS, REQUIRED_TOPICS, Grader
+from usar_replay.grading.usar import GRADE_TOPICS, REQUIRED_TOPICS, Grader
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.replay import ReplayReport, replay
 

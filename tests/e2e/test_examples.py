@@ -28,7 +28,7 @@ from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.core.settings import RecordSettings, RunSettings
 from usar_replay.grading.grade import GradeReport, grade_file
-from usar_replay.grading.rubric_usar import GRADE_TOPICS, Grader
+from usar_replay.grading.usar import GRADE_TOPICS, Grader
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import ReplayReport, replay

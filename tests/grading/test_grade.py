@@ -24,7 +24,7 @@ from usar_replay.cli.main import main
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissingTopic, UsageError
 from usar_replay.grading.grade import GradeReport, Thresholds, grade_file, load_thresholds
-from usar_replay.grading.rubric_usar import MAX_VISITS, NO_DETECTOR, Grader
+from usar_replay.grading.usar import MAX_VISITS, NO_DETECTOR, Grader
 from usar_replay.log import bag
 from usar_replay.log.run import open_run
 from usar_replay.pipeline.record import RecordResult

@@ -20,7 +20,7 @@ from usar_replay.grading.reports import (
     to_junit,
     to_table,
 )
-from usar_replay.grading.rubric_usar import RUBRIC_VERSION
+from usar_replay.grading.usar import RUBRIC_VERSION
 
 T0 = 1_000_000_000
 
@@ -126,7 +126,7 @@ def test_a_grade_says_which_rubric_version_judged_it() -> None:
     """The version changes whenever a line's meaning does (docs/reports.md lists them): the
     usar rubric is at 2 since issue #32 (broadcasts of any frame name, a camera period late)."""
     from usar_replay.grading.rubric_ros2 import RUBRIC as ROS2
-    from usar_replay.grading.rubric_usar import RUBRIC as USAR
+    from usar_replay.grading.usar import RUBRIC as USAR
 
     assert RUBRIC_VERSION == USAR.version == 3 and ROS2.version == 1
     docs = (Path(__file__).resolve().parents[2] / "docs" / "reports.md").read_text()

@@ -8,15 +8,15 @@ import pytest
 
 from usar_replay.core import contract
 from usar_replay.core.errors import InvalidScenario
-from usar_replay.grading import rubric_ros2, rubric_usar, rubrics
+from usar_replay.grading import rubric_ros2, rubrics, usar
 from usar_replay.grading.verdict import Rubric
 from usar_replay.world.scenario import course_world
 
 
 def test_the_built_in_assignments_have_their_rubrics() -> None:
-    assert rubrics.rubric_of("usar") is rubric_usar.RUBRIC
+    assert rubrics.rubric_of("usar") is usar.RUBRIC
     assert rubrics.rubric_of("ros2-final") is rubric_ros2.RUBRIC
-    assert rubrics.rubric_for(course_world()) is rubric_usar.RUBRIC
+    assert rubrics.rubric_for(course_world()) is usar.RUBRIC
 
 
 def test_an_unknown_assignment_cannot_be_graded() -> None:
@@ -25,7 +25,7 @@ def test_an_unknown_assignment_cannot_be_graded() -> None:
 
 
 def test_a_registered_rubric_is_found_and_a_second_one_refused() -> None:
-    toy = dataclasses.replace(rubric_usar.RUBRIC, required_topics=(contract.ROSOUT,))
+    toy = dataclasses.replace(usar.RUBRIC, required_topics=(contract.ROSOUT,))
 
     def factory() -> Rubric:
         return toy
@@ -41,4 +41,4 @@ def test_a_registered_rubric_is_found_and_a_second_one_refused() -> None:
             rubrics.register_rubric("usar", factory)
     finally:
         rubrics._RUBRICS.pop(name, None)
-    assert rubrics.rubric_of("usar") is rubric_usar.RUBRIC
+    assert rubrics.rubric_of("usar") is usar.RUBRIC

@@ -20,7 +20,7 @@ from conftest import one_room
 
 from usar_replay.core import contract, msgs
 from usar_replay.grading.grade import grade_file
-from usar_replay.grading.rubric_usar import Grader, judge
+from usar_replay.grading.usar import Grader, judge
 from usar_replay.log.run import open_run
 from usar_replay.world.scenario import RobotStart, course_world
 from usar_replay.world.scenario_toml import to_toml

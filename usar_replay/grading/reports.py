@@ -161,6 +161,7 @@ def _check_dict(c: Check) -> dict[str, object]:
         "evidence": None
         if c.evidence_ns is None
         else {"sim_time_s": round(c.evidence_ns / 1e9, 3), "what": c.evidence},
+        "rule": c.rule,
     }
 
 

@@ -24,9 +24,9 @@ RubricFactory = Callable[[], Rubric]
 
 
 def _usar() -> Rubric:
-    from usar_replay.grading import rubric_usar
+    from usar_replay.grading import usar
 
-    return rubric_usar.RUBRIC
+    return usar.RUBRIC
 
 
 def _ros2_final() -> Rubric:

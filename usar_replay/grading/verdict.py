@@ -41,6 +41,9 @@ class Check:
     limit: float | None = None
     op: str = ""
     evidence: str = ""
+    rule: str = ""
+    """Which rule the line applied and its source (the TA's rule, as a TA can check it;
+    '' where a rubric does not say)."""
 
 
 @dataclass(frozen=True, slots=True)

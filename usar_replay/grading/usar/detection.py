@@ -1,0 +1,50 @@
+"""Question 2, "markers detected": ``marker_k.detected``."""
+
+from __future__ import annotations
+
+from usar_replay.core import contract
+from usar_replay.grading.usar.observations import NO_DETECTOR, Observations
+from usar_replay.grading.usar.rules import RULES
+from usar_replay.grading.usar.words import plural, sim_s
+from usar_replay.grading.verdict import Check
+
+__all__ = ["marker_detected"]
+
+
+def marker_detected(g: Observations, mid: int) -> Check:
+    """``marker_k.detected``: the detector reported ID k in a frame taken while the explorer
+    was at a target (stopped or turning there), a detection the mission could use; a marker
+    only glimpsed while driving past does not count."""
+    t = g.detected_ns.get(mid)
+    frames = g.detected_frames.get(mid, 0)
+    glimpsed = g.glimpsed_frames.get(mid, 0)
+    each = 12.0 / max(len(g.markers), 1)
+    if not g.fiducial_messages:
+        measured = NO_DETECTOR
+    elif t is not None:
+        measured = f"in {plural(frames, 'frame')} at a target, first at {sim_s(t)}"
+    elif glimpsed:
+        first = g.glimpsed_ns[mid]
+        measured = f"only glimpsed away from the targets ({plural(glimpsed, 'frame')}, first at " \
+            f"{sim_s(first)})"
+    else:
+        measured = "never detected"
+    return Check(
+        id=f"marker_{mid}.detected",
+        rule=RULES["detected"].text,
+        description=f"explorer detected marker {mid} at a target",
+        passed=t is not None,
+        points=each if t is not None else 0.0,
+        max_points=each,
+        measured=measured,
+        threshold=f"at least 1 frame on {contract.FIDUCIALS} within {g.target_radius:g} m of "
+        "a target",
+        evidence_ns=t if t is not None else g.glimpsed_ns.get(mid),
+        value=float(frames),
+        unit="frames",
+        limit=1.0,
+        op=">=",
+        evidence="first detection" if t is not None else (
+            "first glimpse" if mid in g.glimpsed_ns else ""
+        ),
+    )
