@@ -1,6 +1,7 @@
 """A class's ROS 1 packages on the course world, at a glance (printed, never asserted).
 
-    python bench/bench_class.py [FOLDER] [--world course|room] [--max-sim-time S] [--rtf 0.5]
+    python bench/bench_class.py [FOLDER] [--world course|room] [--max-sim-time S] [--keep DIR]
+    python bench/bench_class.py --logs DIR        # grade kept logs again: rubric v2 against v3
 
 Each sub-folder of FOLDER (default: examples/ros1) that holds one catkin package is built and
 recorded as ``usar record --ros1 PKG`` does it (catkin_make into the build cache, the package's
@@ -18,22 +19,33 @@ folder of files; this is the one-screen view of a folder of packages on one worl
 docs/ros1.md and for an instructor trying a class before the real batch. The logs go to a
 temporary folder (``--keep DIR`` keeps them). The date, the machine's load average before and
 after, and the CPU count are printed with the table: wall times depend on them.
+
+Then the rubric's versions side by side (issue 43): each log graded by rubric usar v2 (its
+module as it was at :data:`V2_COMMIT`, read with ``git show`` from this checkout's history, as
+pure as v3) and by v3, one row per package with both totals and every line whose points
+changed (``follower.marker_1 0->3``). ``--logs DIR`` does only this, on the ``.mcap`` files of a
+folder (a ``--keep`` folder, or a batch's OUT_DIR: every ``*.mcap`` below it).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import subprocess
 import sys
 import tempfile
 import textwrap
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from usar_replay.core.errors import UsageError
 from usar_replay.core.settings import RecordSettings, RunSettings
-from usar_replay.grading.grade import grade_file
+from usar_replay.grading.grade import GradeReport, grade_file, with_goal_tolerances
+from usar_replay.log.run import open_run
 from usar_replay.ros1.building import find_package
 from usar_replay.ros1.record import record_ros1
 from usar_replay.world.scenario import Scenario, course_world
@@ -54,6 +66,8 @@ COLUMNS = (
 """(header, width) of each fixed column, one space apart; ``failed lines`` takes the rest of
 100 columns (32, enough for the longest rubric line id, ``marker_frame.only_on_detection``)."""
 WIDTH = 100
+V2_COMMIT = "11d80cc"
+"""The last commit with rubric usar v2 (``usar_replay/grading/rubric_usar.py``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,13 +149,76 @@ def table(rows: list[Row]) -> list[str]:
     return lines
 
 
+def rubric_v2() -> ModuleType:
+    """Rubric usar v2 as it was at :data:`V2_COMMIT` (a module of its own, imported from the
+    text ``git show`` gives: it imports only core, world and grading.verdict, which v3 kept)."""
+    try:
+        text = subprocess.run(
+            ["git", "-C", str(ROOT), "show", f"{V2_COMMIT}:usar_replay/grading/rubric_usar.py"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    except (OSError, subprocess.CalledProcessError) as err:
+        sys.exit(f"usar: error: rubric v2 is read from git history ({V2_COMMIT}): {err}")
+    scratch = Path(tempfile.mkdtemp(prefix="usar-rubric-v2-")) / "rubric_usar_v2.py"
+    scratch.write_text(text, encoding="utf-8")
+    spec = importlib.util.spec_from_file_location("rubric_usar_v2", scratch)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["rubric_usar_v2"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def grade_v2(v2: ModuleType, log: Path) -> GradeReport:
+    """``log`` graded by rubric v2, fed as :func:`usar_replay.grading.grade.observe_run` feeds
+    a rubric (the course's detections only as the world published them)."""
+    run = open_run(log)
+    grader: Any = v2.Grader(run.require_scenario(), with_goal_tolerances(None, run))
+    grader.start_ns = run.start_ns
+    trusted = {topic: ("sim",) for topic in v2.RUBRIC.trusted_topics}
+    for topic, msg, t in run.reader.decoded(v2.GRADE_TOPICS, only_from=trusted):
+        grader.feed(topic, msg, t)
+    report: GradeReport = grader.report(str(log))
+    return report
+
+
+def compare(logs: list[Path]) -> list[str]:
+    """One row per log: v2's and v3's totals and the lines whose points changed."""
+    v2 = rubric_v2()
+    lines = [f"{'package':<40} {'v2':>6} {'v3':>6}  lines that changed (v2 -> v3 points)"]
+    lines.append("-" * WIDTH)
+    for log in logs:
+        old, new = grade_v2(v2, log), grade_file(log)
+        before = {c.id: c.points for c in old.checks}
+        changed = [
+            f"{c.id} {before.get(c.id, 0):.3g}->{c.points:.3g}"
+            for c in new.checks
+            if abs(before.get(c.id, 0.0) - c.points) > 1e-9
+        ]
+        name = log.stem if log.parent.name in ("", ".") else f"{log.parent.name}/{log.stem}"
+        left = f"{name[:40]:<40} {old.points:>6.4g} {new.points:>6.4g}  "
+        wrapped = textwrap.wrap(", ".join(changed) or "-", WIDTH - len(left)) or ["-"]
+        lines.append(left + wrapped[0])
+        lines += [" " * len(left) + more for more in wrapped[1:]]
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default=str(ROOT / "examples" / "ros1"))
+    ap.add_argument("--logs", type=Path, help="only grade the .mcap files below DIR, v2 and v3")
     ap.add_argument("--world", choices=("course", "room"), default="course")
     ap.add_argument("--max-sim-time", type=float, help="stop each run at this sim time (s)")
     ap.add_argument("--keep", type=Path, help="write the logs into this folder and keep them")
     args = ap.parse_args()
+    if args.logs is not None:
+        found = sorted(args.logs.rglob("*.mcap"))
+        if not found:
+            sys.exit(f"usar: error: {args.logs}: no .mcap file below it")
+        print("\n".join(compare(found)))
+        return
     pkgs = packages(Path(args.folder))
     if not pkgs:
         sys.exit(f"usar: error: {args.folder}: no catkin package in it or in its sub-folders")
@@ -155,9 +232,11 @@ def main() -> None:
         for pkg in pkgs:
             print(f"{pkg.name}: building and recording on the {args.world} world ...", flush=True)
             rows.append(run_one(scenario, pkg, logs / f"{pkg.name}.mcap", settings))
-    load1 = os.getloadavg()
-    print()
-    print("\n".join(table(rows)))
+        load1 = os.getloadavg()
+        print()
+        print("\n".join(table(rows)))
+        print()
+        print("\n".join(compare([logs / f"{pkg.name}.mcap" for pkg in pkgs])))
     print(
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {args.world} world, "
         f"{os.cpu_count()} CPUs, load average {load0[0]:.1f} before, {load1[0]:.1f} after"
