@@ -11,7 +11,15 @@ from usar_replay.node import cpu_sets, kernel_sandbox
 def test_this_machine_as_ci_has_it() -> None:
     """CI runs as root with bubblewrap, cgroup v1 and Debian's ROS 1: a whole isolation."""
     found = {f.name: f for f in machine.check()}
-    assert list(found) == ["kernel sandbox", "cgroups", "CPU sets", "real-time priority", "ROS 1"]
+    assert list(found) == [
+        "kernel sandbox",
+        "cgroups",
+        "CPU sets",
+        "real-time priority",
+        "size-limited folders",
+        "ROS 1",
+    ]
+    assert found["size-limited folders"].ok  # root: each run's and build's tmpfs
     assert found["ROS 1"].ok, found["ROS 1"].means
     if machine.isolated(list(found.values())):
         assert machine.warning(list(found.values())) == ""
@@ -38,3 +46,11 @@ def test_no_bubblewrap_is_said(monkeypatch: pytest.MonkeyPatch) -> None:
     sandbox = machine.check()[0]
     assert (sandbox.ok, sandbox.said) == (False, "no bwrap here")
     assert "apt-get install bubblewrap" in sandbox.means
+
+
+def test_without_root_no_folder_is_size_limited(monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)
+    folders = next(f for f in machine.check() if f.name == "size-limited folders")
+    assert not folders.ok and "can fill the disk" in folders.means

@@ -317,6 +317,42 @@ def test_a_big_file_at_build_time_is_cut(tmp_path: Path, cache: Path) -> None:
     assert _entries(cache, "filler") == []
 
 
+def test_a_build_that_fills_its_folder_is_failed_and_not_kept(tmp_path: Path, cache: Path) -> None:
+    """Issue 44: a build wrote 2 x 1000 MiB and 150,000 files into its workspace, was called a
+    success and stayed in the cache. Within a 16 MiB, 100,000-file build folder: 3 x 8 MiB
+    (each under the per-file limit) exits 0 and still fails, so does a flood of small files;
+    neither is kept. A build within the caps is."""
+    if os.geteuid() != 0:
+        pytest.skip("a tmpfs build folder needs root")
+    cmake = """
+    execute_process(COMMAND sh -c "for i in 1 2 3; do head -c 8388608 /dev/zero > f$i; done")
+    """
+    said = _fails(tmp_path, "bigtotal", cmake, BuildLimits(folder_mb=16))
+    assert said == (
+        "the build of bigtotal exceeded its build folder (16 MiB and 100,000 files: "
+        "--build-folder)"
+    ), said
+    assert _entries(cache, "bigtotal") == []
+    cmake = """
+    execute_process(COMMAND /usr/bin/python3 -c "
+    import os
+    os.makedirs('many', exist_ok=True)
+    for i in range(120000):
+        try:
+            open(f'many/{i}', 'w').close()
+        except OSError:
+            break
+    ")
+    """
+    said = _fails(tmp_path, "manyfiles", cmake, BuildLimits(folder_mb=64))
+    assert said.startswith("the build of manyfiles exceeded its build folder"), said
+    assert _entries(cache, "manyfiles") == []
+    pkg = find_package(package(tmp_path / "small", "small", "# nothing to build"))
+    built = cached_build(pkg, limits=BuildLimits(folder_mb=16))
+    assert (built.workspace / "devel" / "setup.bash").is_file()  # copied out, on disk
+    assert not os.path.ismount(built.workspace)
+
+
 def test_a_spinning_build_process_is_stopped_by_its_cpu_limit(tmp_path: Path) -> None:
     cmake = """
     execute_process(COMMAND sh -c "while :; do :; done" RESULT_VARIABLE r)

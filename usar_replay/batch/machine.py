@@ -116,9 +116,25 @@ def _ros1() -> Finding:
     )
 
 
+def _folders() -> Finding:
+    if os.geteuid() == 0:  # what RunFolder and BuildFolder need to mount their tmpfs
+        return Finding(
+            "size-limited folders",
+            True,
+            "tmpfs for each run's folder (--run-folder) and each build (--build-folder)",
+        )
+    return Finding(
+        "size-limited folders",
+        False,
+        "not root: no tmpfs can be mounted",
+        "a run's and a build's files have a per-file limit only: a team can fill the disk "
+        "(run as root)",
+    )
+
+
 def check() -> list[Finding]:
     """Every part, in the order ``usar doctor`` prints them."""
-    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _ros1()]
+    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _folders(), _ros1()]
 
 
 def isolated(findings: list[Finding]) -> bool:

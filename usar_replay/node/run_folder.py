@@ -20,7 +20,7 @@ import os
 import shutil
 import tempfile
 
-__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder", "unmount_under"]
+__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder", "mount_tmpfs", "unmount", "unmount_under"]
 
 DEFAULT_RUN_FOLDER_MB = 512
 """The run folder's default size in MiB (``--run-folder-mb``)."""
@@ -37,6 +37,24 @@ def _libc() -> ctypes.CDLL | None:
     return ctypes.CDLL(name, use_errno=True) if name else None
 
 
+def mount_tmpfs(path: str, size_bytes: int, *, inodes: int = 0) -> bool:
+    """A tmpfs of ``size_bytes`` (and ``inodes`` files, 0: tmpfs's default) on the folder at
+    ``path``, nosuid and nodev, mode 0700; False where nothing can be mounted (not root)."""
+    libc = _libc()
+    if libc is None or os.geteuid() != 0:
+        return False
+    opts = f"size={size_bytes},mode=0700" + (f",nr_inodes={inodes}" if inodes else "")
+    done = libc.mount(b"tmpfs", path.encode(), b"tmpfs", _MS_NOSUID | _MS_NODEV, opts.encode())
+    return bool(done == 0)
+
+
+def unmount(path: str) -> None:
+    """Unmount ``path`` lazily (a process that still has a file open does not stop it)."""
+    libc = _libc()
+    if libc is not None:
+        libc.umount2(path.encode(), _MNT_DETACH)
+
+
 class RunFolder:
     """A fresh folder (``mkdtemp``), a tmpfs of ``size_mb`` MiB on it when one can be mounted
     (0: none); :meth:`close` unmounts and removes it."""
@@ -47,12 +65,7 @@ class RunFolder:
         self.limited = size_mb > 0 and self._mount()
 
     def _mount(self) -> bool:
-        libc = _libc()
-        if libc is None or os.geteuid() != 0:
-            return False
-        opts = f"size={self.size_mb * 1024 * 1024},mode=0700".encode()
-        done = libc.mount(b"tmpfs", self.path.encode(), b"tmpfs", _MS_NOSUID | _MS_NODEV, opts)
-        return bool(done == 0)
+        return mount_tmpfs(self.path, self.size_mb * 1024 * 1024)
 
     def full(self) -> bool:
         """Has the run filled its folder? (only a size-limited one can be full)"""
@@ -68,9 +81,7 @@ class RunFolder:
         """Unmount (lazily: a process that still has a file open does not stop it) and remove
         the folder; ``keep`` leaves a plain folder's files (a mounted one's go with it)."""
         if self.limited:
-            libc = _libc()
-            if libc is not None:
-                libc.umount2(self.path.encode(), _MNT_DETACH)
+            unmount(self.path)
             self.limited = False
         if not keep:
             shutil.rmtree(self.path, ignore_errors=True)

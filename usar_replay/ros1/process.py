@@ -31,6 +31,7 @@ from usar_replay.node.protocol import Wire
 from usar_replay.node.run_folder import RunFolder
 from usar_replay.ros1 import run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
+from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
 from usar_replay.ros1.building.jail import BUILD_WALL_S
 from usar_replay.ros1.building.workspace import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.launch_output import file_label
@@ -76,6 +77,10 @@ class Ros1Options:
     :attr:`BuildLimits.cpu_s`)."""
     one_cpu: bool = True
     """Run the graph's threads on one CPU under SCHED_RR (:mod:`.scheduling`; needs root)."""
+    build_folder_mb: int = DEFAULT_BUILD_FOLDER_MB
+    """The build's workspace while catkin runs: a tmpfs of this many MiB (and
+    :data:`~usar_replay.ros1.building.build_folder.BUILD_FOLDER_INODES` files; 0: a plain
+    folder), ``--build-folder``."""
 
 
 _ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
@@ -100,6 +105,7 @@ def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits
         cpu_s=limits.cpu_s or base.cpu_s,
         run_memory_mb=limits.run_memory_mb,
         cpus=limits.cpus,
+        folder_mb=options.build_folder_mb,
     )
 
 

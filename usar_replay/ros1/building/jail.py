@@ -55,6 +55,10 @@ class BuildLimits:
     cpus: int = 0
     """CPUs of the build's own CPU set (the run's share, as a batch gives it; 0: as a run
     claims them): the build never runs on CPUs another run holds (issue 44)."""
+    folder_mb: int = 2048
+    """The workspace's size while it builds, MiB (a tmpfs of
+    :data:`~usar_replay.ros1.building.build_folder.BUILD_FOLDER_INODES` files,
+    ``--build-folder``; 0: a plain folder): :mod:`.build_folder`."""
 
 
 @dataclass(frozen=True, slots=True)

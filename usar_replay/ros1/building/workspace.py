@@ -59,6 +59,7 @@ from usar_replay.core.errors import (
     UsageError,
 )
 from usar_replay.core.folder_walk import Entry, shown, stream, walk
+from usar_replay.ros1.building.build_folder import BuildFolder
 from usar_replay.ros1.building.jail import BuildLimits, run_jailed
 
 __all__ = [
@@ -387,12 +388,35 @@ def build(
     :class:`MissionEnded` ``build_failed`` with the compiler's errors."""
     entry.mkdir(mode=0o700)
     ws = entry / "ws"
-    src = ws / "src"
-    src.mkdir(parents=True)
-    _copy(pkg, src / pkg.name)
-    _toplevel(src)
-    start = time.perf_counter()  # for the build time shown to people only
-    _catkin_make(ws, pkg.name, pkg.path, underlays, limits or BuildLimits(), jobs, at)
+    ws.mkdir()
+    limits = limits or BuildLimits()
+    # a size- and inode-limited tmpfs while the team's build runs, copied to disk after
+    folder = BuildFolder(ws, limits.folder_mb if sandboxed() else 0)
+    try:
+        src = ws / "src"
+        src.mkdir()
+        _copy(pkg, src / pkg.name)
+        _toplevel(src)
+        start = time.perf_counter()  # for the build time shown to people only
+        try:
+            _catkin_make(ws, pkg.name, pkg.path, underlays, limits, jobs, at)
+        except MissionEnded as err:
+            if folder.full():
+                raise MissionEnded(
+                    "build_failed", f"the build of {pkg.name} exceeded {folder.limit_words()}"
+                ) from err
+            raise
+        if folder.full():  # a build that filled its folder and still said success
+            raise MissionEnded(
+                "build_failed", f"the build of {pkg.name} exceeded {folder.limit_words()}"
+            )
+        try:
+            tree.check(ws)  # before copying: a link out of the workspace is never followed
+        except tree.TreeRefused as err:
+            raise MissionEnded("build_failed", str(err)) from err
+        folder.keep()
+    finally:
+        folder.close()
     seconds = time.perf_counter() - start
     _seal(ws, entry, seconds)
     return Built(ws, pkg, seconds, underlays=underlays, at=at)
