@@ -161,6 +161,7 @@ def _record_ros1(
         after_launch=tuple(args.after_launch),
         rtf=args.rtf,
         build_wall_s=args.build_timeout,
+        given_settings=options.given_settings(args),
     )
     return record_ros1(
         scenario, out, args.ros1, settings, progress, options=opts, limits=_limits(args, out)
