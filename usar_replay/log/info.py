@@ -118,8 +118,9 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
         lines += _field("Build", ros1.build)
     lines += _field("Pacing", ros1.pacing)
     for tol in ros1.goal_tolerances:
-        text = f"{tol.robot}: xy {tol.xy:g} m, yaw {tol.yaw:g} rad, from {tol.source}"
-        lines += _field("Goal tolerance", text)
+        text = f"{tol.robot}: goal tolerances xy {tol.xy:g} m, yaw {tol.yaw:g} rad"
+        text += f", from {tol.source}"
+        lines += _field("move_base", text)
     if ros1.targets_replaced:
         lines.append("Targets replaced by the world's (the launch file set the course's):")
         for t in ros1.targets_replaced:

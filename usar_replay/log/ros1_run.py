@@ -256,7 +256,7 @@ def of(run: Run) -> Ros1Run | None:
         return None
     try:
         return Ros1Run.from_toml(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError):
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError, TypeError):
         run.problems.append(f"the attached {contract.ROS1_ATTACHMENT} is invalid")
         return None
 

@@ -98,7 +98,13 @@ def rows(nodes: Iterable[Any]) -> list[str]:
 
 
 def _numbers(value: Any) -> list[Any] | None:
-    """``value`` as a list when it starts with two numbers (x, y), else None."""
+    """``value`` as a list when it starts with two numbers (x, y), else None (a ``<param>``'s
+    ``value="[x, y]"`` is the text of one)."""
+    if isinstance(value, str) and value.strip().startswith("[") and len(value) <= 200:
+        try:
+            value = json.loads(value)
+        except ValueError:
+            return None
     if not (isinstance(value, list | tuple) and len(value) >= 2):
         return None
     if all(isinstance(v, int | float) and not isinstance(v, bool) for v in value[:2]):
@@ -168,6 +174,8 @@ def replace_targets(config: Any, the_plan: dict[str, Any]) -> list[tuple[str, in
             else:
                 xy = _numbers(value)
                 new = world[k] + (xy[2:] if xy else [])
+                if isinstance(value, str):  # as the launch file wrote it: a text
+                    new = json.dumps(new)
         found[key] = (k, how, new)
     scalars = [k for k in mine if isinstance(getattr(config.params[k], "value", None), int | float)]
     for x_key, y_key in _xy_pairs(k for k in scalars if k not in found):
