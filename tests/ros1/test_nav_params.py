@@ -67,6 +67,9 @@ def test_the_users_explicit_setting_wins_over_the_package() -> None:
             "xy: usar's setting mission.xy_tolerance; yaw: param/dwa.yaml (launch/mb.launch)",
         )
     ]
+    assert nav_params.given_in([got[0][3], "the course template's default"]) == (
+        "mission.xy_tolerance",
+    )
     params = {"mission.xy_tolerance": 0.3, "mission.yaw_tolerance": 0.17}
     assert nav_params.given_tolerances(params, ["mission.xy_tolerance"]) == {"xy": 0.3}
     assert nav_params.given_tolerances(params, []) == {}

@@ -37,6 +37,7 @@ __all__ = [
     "TEMPLATE_YAW",
     "amcl_thresholds",
     "facts",
+    "given_in",
     "given_tolerances",
     "goal_tolerances",
     "robot_of",
@@ -49,6 +50,8 @@ TEMPLATE_YAW = 0.17
 TEMPLATE_SOURCE = "the course template's default"
 AMCL_DEFAULTS = {"update_min_d": 0.25, "update_min_a": 0.2}
 """amcl's own defaults, which the template's ``explorer_amcl.launch`` also sets."""
+_SETTING = "usar's setting mission.{}_tolerance"
+"""The source of a tolerance the user set explicitly."""
 _DEFAULT_PLANNER = "base_local_planner/TrajectoryPlannerROS"
 _RANGES = {
     "xy_goal_tolerance": 10.0,
@@ -175,7 +178,7 @@ def goal_tolerances(
             ("yaw", "yaw_goal_tolerance", TEMPLATE_YAW),
         ):
             if short in given:
-                picked.append((float(given[short]), f"usar's setting mission.{short}_tolerance"))
+                picked.append((float(given[short]), _SETTING.format(short)))
                 continue
             value, where = _number(entry, name)
             if value is not None:
@@ -212,3 +215,14 @@ def given_tolerances(parameters: Mapping[str, Any], given: Iterable[str]) -> dic
         if key in given and isinstance(parameters.get(key), int | float):
             out[short] = float(parameters[key])
     return out
+
+
+def given_in(sources: Iterable[str]) -> tuple[str, ...]:
+    """The settings a log's goal tolerances say the user gave (``ros1.toml``'s sources), for a
+    replay that decides as the recording did."""
+    names = set()
+    for source in sources:
+        for short in ("xy", "yaw"):
+            if _SETTING.format(short) in source:
+                names.add(f"mission.{short}_tolerance")
+    return tuple(sorted(names))
