@@ -63,8 +63,8 @@ PACKAGES: dict[str, str] = {
 
 REPLACED: dict[str, str] = {
     "gazebo_ros": "Gazebo (usar's world)",
-    "amcl": "localization (usar's /tf)",
-    "move_base": "navigation (usar's move_base)",
+    "amcl": "localization (usar's /tf and /<robot>/amcl_pose, with the node's update_min_d/a)",
+    "move_base": "navigation (usar's move_base, with the node's goal tolerances)",
     "map_server": "the map (usar's /map)",
     "aruco_detect": "marker detection (usar's detector)",
     "robot_state_publisher": "the robots' frames (usar's /tf)",
