@@ -200,7 +200,10 @@ def main(argv: list[str]) -> None:
         targets: list[tuple[str, int, str]] = []
         dropped = launch_filter.apply(config, plan, targets)
         if output_dir == "-" and plan.get("facts_file"):
-            _write_facts(plan, facts, dropped, dict(sources), targets)
+            try:
+                _write_facts(plan, facts, dropped, dict(sources), targets)
+            except Exception as err:  # noqa: BLE001 - the listing goes on: the template's then
+                print(f"usar: the launch file's facts not written: {err!r}", file=sys.stderr)
         if output_dir != "-":
             if dropped and not config.nodes:  # roslaunch would wait for nothing, for good
                 kinds = sorted({str(n.package) for n in dropped})

@@ -77,7 +77,8 @@ _MASTER_LOG_CAP = 32 * 1024 * 1024
 APPLIED_SETTINGS = ("record", "detector", "mission.xy_tolerance", "mission.yaw_tolerance")
 """The settings a ROS 1 run applies on usar's side (``usar info`` lists only these): the
 recording's clock, rates and limits, usar's detector (aruco_detect's role) and usar's move_base
-goal tolerances. The other ``mission.*`` settings are the Python mission's; a package is only
+goal tolerances (those two only where the user gave them: :mod:`.nav_params`). The other
+``mission.*`` settings are the Python mission's; a package is only
 offered them as ``/mission/*`` parameters, and ``usar info`` lists those its nodes read."""
 
 _LABEL = re.compile(r"[A-Za-z0-9_.+-]{1,200}")
