@@ -100,3 +100,34 @@ def test_amcl_pose_arrives_at_start_and_after_motion(recorded: Path) -> None:
     said = usar("log", str(recorded), "--node", "mission").stdout
     assert "mission: 1 amcl poses at start" in said  # latched: the node got it
     assert f"mission: explorer ended 3, {len(poses)} amcl poses" in said, said
+
+
+def test_the_users_explicit_tolerance_wins_over_the_packages(tmp_path: Path) -> None:
+    """``--set mission.xy_tolerance=0.15``: the instructor's word over the package's 0.4."""
+    pkg = nav_package.write(tmp_path / "src" / nav_package.NAME)
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "set.mcap"
+    done = usar(
+        "record", "--scenario", str(world), "--ros1", str(pkg), "--launch", "go.launch",
+        "--out", str(out), "--quiet", "--set", "xy_tolerance=0.15",
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    run = open_run(out)
+    facts = ros1_run.of(run)
+    assert facts is not None
+    [follower] = [t for t in facts.goal_tolerances if t.robot == "follower"]
+    assert (follower.xy, follower.yaw) == (0.15, 0.17)
+    assert follower.source.startswith("xy: usar's setting mission.xy_tolerance; yaw: param/dwa")
+    assert facts.applies("mission.xy_tolerance") and not facts.applies("mission.yaw_tolerance")
+    [reached] = [
+        m.log_time_ns
+        for m in run.messages([contract.goal_status("follower")])
+        if isinstance(m.msg, msgs.DiagnosticStatus) and m.msg.message == "succeeded"
+    ]
+    last = [
+        m.msg.pose.position
+        for m in run.messages([contract.truth_pose("follower")], reached)
+        if isinstance(m.msg, msgs.PoseStamped)
+    ][-1]
+    assert math.hypot(last.x - 0.8, last.y + 0.9) <= 0.17

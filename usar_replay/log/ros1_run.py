@@ -103,22 +103,15 @@ class Ros1Run:
     parameters: tuple[ParameterRead, ...] = ()
     applied_settings: tuple[str, ...] = ()
     """Prefixes of the settings that applied (``record``, ``mission.xy_tolerance``, ...)."""
-    holds: int = 0
-    """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
-    capped: int = 0
-    """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
     goal_tolerances: tuple[GoalTolerance, ...] = ()
     """Per robot, usar's move_base goal tolerances and their source (empty: a log before)."""
     targets_replaced: tuple[TargetReplaced, ...] = ()
     """The launch file's parameters that held the course's targets (empty: none, or a log
     before usar said)."""
-
-    def xy_goal_tolerance(self, robot: str) -> float | None:
-        """The xy goal tolerance usar's move_base used for ``robot`` (None: not recorded)."""
-        for tol in self.goal_tolerances:
-            if tol.robot == robot:
-                return tol.xy
-        return None
+    holds: int = 0
+    """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
+    capped: int = 0
+    """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
 
     @property
     def pacing(self) -> str:
@@ -148,6 +141,13 @@ class Ros1Run:
     def applies(self, setting: str) -> bool:
         """Whether ``setting`` (``mission.spin_speed``) applied to this run."""
         return any(setting == p or setting.startswith(p + ".") for p in self.applied_settings)
+
+    def xy_goal_tolerance(self, robot: str) -> float | None:
+        """The xy goal tolerance usar's move_base used for ``robot`` (None: not recorded)."""
+        for tol in self.goal_tolerances:
+            if tol.robot == robot:
+                return tol.xy
+        return None
 
     def to_toml(self) -> str:
         import tomli_w  # deferred: reading a log never writes TOML

@@ -304,14 +304,18 @@ class Ros1Process(MissionProcess):
             nodes=tuple(Ros1Node(*row) for row in nodes),
             replaced=tuple(Ros1Node(*row) for row in run_files.replaced_nodes(self.run_dir)),
             parameters=tuple(read),
+            applied_settings=run_files.APPLIED_SETTINGS,
+            holds=self.holds,
+            capped=self.capped,
+        )
+        info = dataclasses.replace(
+            info,
             # a move_base tolerance setting applied only where the user gave it (nav_params)
             applied_settings=tuple(
                 s
-                for s in run_files.APPLIED_SETTINGS
+                for s in info.applied_settings
                 if not s.startswith("mission.") or s in self.options.given_settings
             ),
-            holds=self.holds,
-            capped=self.capped,
             goal_tolerances=tuple(GoalTolerance(*row) for row in tolerances),
             targets_replaced=_targets(facts),
         )
