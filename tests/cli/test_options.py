@@ -89,6 +89,19 @@ def test_run_settings_file_then_set(tmp_path: Path) -> None:
         options.run_settings(argparse.Namespace(settings=None, set=["nope=1"]), RunSettings())
 
 
+def test_the_settings_given_explicitly(tmp_path: Path) -> None:
+    """What a ROS 1 run lets win over the package's own files (move_base's tolerances)."""
+    path = tmp_path / "s.toml"
+    path.write_text("[mission]\nyaw_tolerance = 0.3\n", encoding="utf-8")
+    args = argparse.Namespace(settings=str(path), set=["xy_tolerance=0.2", "record.control_hz=10"])
+    assert options.given_settings(args) == (
+        "mission.xy_tolerance",
+        "mission.yaw_tolerance",
+        "record.control_hz",
+    )
+    assert options.given_settings(argparse.Namespace(settings=None, set=None)) == ()
+
+
 def _limit_args(**kw: object) -> argparse.Namespace:
     base: dict[str, object] = {
         "tick_timeout": 5.0,

@@ -93,3 +93,57 @@ def test_node_outputs_are_shown_without_control_sequences(tmp_path: Path) -> Non
     assert [len(line) for line in follower[1:]] == [100, 54]
     with pytest.raises(UsageError, match=r"no output of node /camera kept; the nodes': /explorer"):
         list(ros1_run.node_output_lines(run, ("camera",)))
+
+
+NAV = ros1_run.Ros1Run(
+    package="p",
+    launch="go.launch",
+    goal_tolerances=(
+        ros1_run.GoalTolerance("explorer", 0.05, 0.17, "the course template's default"),
+        ros1_run.GoalTolerance(
+            "follower", 0.4, 0.17, "param/dwa_local_planner_params.yaml (launch/move_base.launch)"
+        ),
+    ),
+    targets_replaced=(
+        ros1_run.TargetReplaced(
+            "/mission/aruco_lookup_locations/target_1", 1, "param/t.yaml (launch/go.launch)"
+        ),
+        ros1_run.TargetReplaced("/mission/copy", 2, "a <param> in launch/go.launch", "value"),
+    ),
+)
+
+
+def test_goal_tolerances_and_replaced_targets_round_trip() -> None:
+    back = ros1_run.Ros1Run.from_toml(NAV.to_toml())
+    assert back == NAV
+    assert back.xy_goal_tolerance("follower") == 0.4
+    assert back.xy_goal_tolerance("explorer") == 0.05
+    assert back.xy_goal_tolerance("robot1") is None
+    old = ros1_run.Ros1Run.from_toml('package = "p"')  # a log from before issue 43
+    assert old.goal_tolerances == () and old.targets_replaced == ()
+    assert old.xy_goal_tolerance("follower") is None
+
+
+def test_info_shows_the_tolerances_used_and_the_targets_replaced(tmp_path: Path) -> None:
+    from usar_replay.log.info import describe
+
+    run = open_run(_log(tmp_path / "a.mcap", {contract.ROS1_ATTACHMENT: NAV.to_toml().encode()}))
+    text = describe(run)
+    flat = " ".join(text.split())
+    assert (
+        "move_base: follower: goal tolerances xy 0.4 m, yaw 0.17 rad, from "
+        "param/dwa_local_planner_params.yaml (launch/move_base.launch)"
+    ) in flat
+    assert (
+        "move_base: explorer: goal tolerances xy 0.05 m, yaw 0.17 rad, from the course "
+        "template's default"
+    ) in flat
+    assert "Targets replaced by the world's (the launch file set the course's):" in text
+    assert (
+        "  /mission/aruco_lookup_locations/target_1 = target 1  (param/t.yaml (launch/go.launch))"
+    ) in text
+    assert "  /mission/copy = target 2, known by its value  (a <param> in launch/go.launch)" in text
+    bad = open_run(
+        _log(tmp_path / "b.mcap", {contract.ROS1_ATTACHMENT: b'goal_tolerances = [{xy = "a"}]'})
+    )
+    assert ros1_run.of(bad) is None and "the attached ros1.toml is invalid" in bad.problems

@@ -166,3 +166,99 @@ def test_a_launch_file_of_stand_ins_only_stops_with_one_line(tmp_path: Path) -> 
         "nodes in it"
     )
     assert not (tmp_path / "nodes.tsv").exists()
+
+
+def test_the_courses_targets_are_the_worlds_wherever_the_launch_file_puts_them(
+    tmp_path: Path,
+) -> None:
+    """Issue 43: the course's targets as a node's private parameters (the template's YAML
+    under a file name of the team's), under another namespace, by value under a name of the
+    team's (a list, an x/y pair) become the graded world's; a target the world lacks is gone;
+    other numbers stay as they are."""
+    (tmp_path / "targets.yaml").write_text(
+        "aruco_lookup_locations:\n  target_1: [-1.752882, 3.246192]\n"
+        "  target_2: [-2.510293, 1.125585]\n  target_3: [-0.289296, -1.28268]\n",
+        encoding="utf-8",
+    )
+    launch = tmp_path / "team.launch"
+    launch.write_text(
+        "<launch>\n"
+        '  <node pkg="final_project" type="final_project_node" name="explorer">\n'
+        f'    <rosparam file="{tmp_path / "targets.yaml"}" command="load"/>\n'
+        '    <param name="goal_2" value="[-2.510293, 1.125585, 0.5]"/>\n'
+        '    <param name="spot/x" value="-1.752882"/><param name="spot/y" value="3.246192"/>\n'
+        '    <param name="speed" value="-1.752882"/>\n'
+        "  </node>\n"
+        f'  <rosparam file="{tmp_path / "targets.yaml"}" command="load" ns="follower"/>\n'
+        '  <param name="/team/t1_x" value="-1.752882"/>\n'
+        '  <param name="/team/t1_y" value="3.246192"/>\n'
+        '  <param name="/team/elsewhere" value="[-1.0, 3.0]"/>\n'
+        "</launch>\n",
+        encoding="utf-8",
+    )
+    world = {
+        "/aruco_lookup_locations/target_1": [1.1, 0.3],
+        "/aruco_lookup_locations/target_2": [0.5, -0.5],
+    }
+    plan = launch_filter.plan(
+        standins.REPLACED, standins.WORLD_NAMESPACES, world,
+        course_targets=standins.COURSE_TARGETS,
+    )
+    (tmp_path / "plan.json").write_text(json.dumps(plan), encoding="utf-8")
+    here = str(Path(launch_filter.__file__).parent)
+    done = subprocess.run(
+        ["/usr/bin/python3", "-P", "-c", _LOAD, here, str(launch), str(tmp_path / "plan.json")],
+        env=_env(tmp_path),
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    params = json.loads(done.stdout.splitlines()[-1])["params"]
+    for ns in ("/explorer", "/follower"):
+        assert params[f"{ns}/aruco_lookup_locations/target_1"] == [1.1, 0.3]
+        assert params[f"{ns}/aruco_lookup_locations/target_2"] == [0.5, -0.5]
+        assert f"{ns}/aruco_lookup_locations/target_3" not in params  # the world has 2
+    assert params["/explorer/goal_2"] == "[0.5, -0.5, 0.5]"  # a <param>'s text, as written
+    assert (params["/explorer/spot/x"], params["/explorer/spot/y"]) == (1.1, 0.3)
+    assert (params["/team/t1_x"], params["/team/t1_y"]) == (1.1, 0.3)
+    assert params["/explorer/speed"] == -1.752882  # a number alone is not a target
+    assert params["/team/elsewhere"] == "[-1.0, 3.0]"
+    assert params["/aruco_lookup_locations/target_1"] == [1.1, 0.3]
+
+
+def test_replace_targets_says_what_it_replaced() -> None:
+    class _Param:
+        def __init__(self, key: str, value: Any) -> None:
+            self.key, self.value = key, value
+
+    import sys
+    import types
+
+    core = types.ModuleType("roslaunch.core")
+    core.Param = _Param  # type: ignore[attr-defined]
+    sys.modules.setdefault("roslaunch", types.ModuleType("roslaunch"))
+    saved = sys.modules.get("roslaunch.core")
+    sys.modules["roslaunch.core"] = core
+    try:
+        config = types.SimpleNamespace(
+            params={
+                "/n/aruco_lookup_locations/target_1": _Param("k", [-1.752882, 3.246192]),
+                "/n/mine": _Param("k", [7.710214, -1.716889]),
+                "/aruco_lookup_locations/target_1": _Param("k", [0.0, 0.0]),
+            }
+        )
+        plan = launch_filter.plan(
+            {}, standins.WORLD_NAMESPACES, {"/aruco_lookup_locations/target_4": [2.0, 2.0]},
+            course_targets=standins.COURSE_TARGETS,
+        )
+        got = launch_filter.replace_targets(config, plan)
+    finally:
+        if saved is None:
+            del sys.modules["roslaunch.core"]
+        else:
+            sys.modules["roslaunch.core"] = saved
+    assert got == [("/n/aruco_lookup_locations/target_1", 1, "name"), ("/n/mine", 4, "value")]
+    assert "/n/aruco_lookup_locations/target_1" not in config.params  # the world has no 1
+    assert config.params["/n/mine"].value == [2.0, 2.0]
+    assert config.params["/aruco_lookup_locations/target_1"].value == [0.0, 0.0]  # apply's job

@@ -128,7 +128,12 @@ def test_info_names_the_package_its_nodes_and_the_build(recorded: tuple[Path, st
     settings = text.split("Settings (those that applied to the ROS 1 run):\n")[1]
     settings = settings.split("Parameters the package's nodes read:\n")[0]
     assert "  record.control_hz = 20 Hz" in settings
-    assert "  mission.xy_tolerance = 0.05 m" in settings
+    # move_base's tolerances: the template's (no move_base launch), not a setting nobody gave
+    assert "mission.xy_tolerance" not in settings
+    assert (
+        "move_base:     follower: goal tolerances xy 0.05 m, yaw 0.17 rad, from the course "
+        "template's default"
+    ) in text
     assert "settle_frames" not in settings and "mission.spin_speed" not in settings
     # what the nodes read: usar's values, a parameter usar did not set, no ROS internals
     assert "  /mission/settle_frames = 5  (/explorer)" in text  # the explorer reads it

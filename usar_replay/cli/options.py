@@ -28,6 +28,7 @@ __all__ = [
     "parse_camera",
     "world_key",
     "load_scenario",
+    "given_settings",
     "overrides",
     "run_settings",
     "limits",
@@ -133,6 +134,23 @@ def overrides(items: Sequence[str] | None) -> dict[str, str]:
             )
         overrides[k.strip()] = v.strip()
     return overrides
+
+
+def given_settings(args: argparse.Namespace) -> tuple[str, ...]:
+    """The dotted names of the settings the user gave explicitly (``--set``, bare names in
+    ``mission``, and ``--settings FILE``'s tables), sorted: a ROS 1 run lets them win over the
+    package's own files (move_base's goal tolerances)."""
+    names = set()
+    for key in overrides(getattr(args, "set", None)):
+        names.add(key if "." in key else f"mission.{key}")
+    if getattr(args, "settings", None):
+        import tomllib
+
+        given = tomllib.loads(Path(args.settings).read_text(encoding="utf-8"))
+        for table, values in given.items():
+            if isinstance(values, dict):
+                names.update(f"{table}.{k}" for k in values)
+    return tuple(sorted(names))
 
 
 def run_settings(args: argparse.Namespace, base: RunSettings) -> RunSettings:

@@ -67,6 +67,7 @@ __all__ = [
     "WAFFLE",
     "base_frame",
     "cmd_vel",
+    "amcl_pose",
     "goal",
     "goal_status",
     "is_ground_truth",
@@ -139,6 +140,11 @@ def cmd_vel(robot: str) -> str:
 
 def odom(robot: str) -> str:
     return f"/{robot}/odom"
+
+
+def amcl_pose(robot: str) -> str:
+    """``/explorer/amcl_pose``: amcl's estimate in ``map`` (usar's stand-in publishes it)."""
+    return f"/{robot}/amcl_pose"
 
 
 def goal(robot: str) -> str:

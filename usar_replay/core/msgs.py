@@ -38,6 +38,7 @@ __all__ = [
     "PoseStamped",
     "PoseArray",
     "PoseWithCovariance",
+    "PoseWithCovarianceStamped",
     "Transform",
     "TransformStamped",
     "Twist",
@@ -204,6 +205,16 @@ class PoseWithCovariance(Message):
     __msgdef__: ClassVar[str] = "geometry_msgs/Pose pose\nfloat64[36] covariance\n"
     pose: Pose = field(default_factory=Pose)
     covariance: tuple[float, ...] = (0.0,) * 36
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PoseWithCovarianceStamped(Message):
+    """geometry_msgs/msg/PoseWithCovarianceStamped (amcl's ``amcl_pose``)."""
+
+    __msgtype__: ClassVar[str] = "geometry_msgs/msg/PoseWithCovarianceStamped"
+    __msgdef__: ClassVar[str] = "std_msgs/Header header\ngeometry_msgs/PoseWithCovariance pose\n"
+    header: Header = field(default_factory=Header)
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -486,6 +497,7 @@ MESSAGE_TYPES: tuple[type[Message], ...] = (
     PoseStamped,
     PoseArray,
     PoseWithCovariance,
+    PoseWithCovarianceStamped,
     Transform,
     TransformStamped,
     Twist,

@@ -117,6 +117,15 @@ def _ros1_lines(run: Run, ros1: ros1_run.Ros1Run | None) -> list[str]:
     if ros1.build:  # a log recorded before the build's wall time left the log
         lines += _field("Build", ros1.build)
     lines += _field("Pacing", ros1.pacing)
+    for tol in ros1.goal_tolerances:
+        text = f"{tol.robot}: goal tolerances xy {tol.xy:g} m, yaw {tol.yaw:g} rad"
+        text += f", from {tol.source}"
+        lines += _field("move_base", text)
+    if ros1.targets_replaced:
+        lines.append("Targets replaced by the world's (the launch file set the course's):")
+        for t in ros1.targets_replaced:
+            by = "" if t.how == "name" else ", known by its value"
+            lines.append(f"  {t.param} = target {t.target}{by}  ({t.source})"[:WIDTH])
     kept = ros1_run.node_outputs(run)
     if kept:
         text = f"{', '.join(kept)}: `usar log {run.path} --output [--node NAME]`"

@@ -25,7 +25,16 @@ from usar_replay.core.msg_text import WIDTH
 from usar_replay.core.safe_text import safe, safe_line
 from usar_replay.log.run import Run
 
-__all__ = ["ParameterRead", "Ros1Node", "Ros1Run", "node_output_lines", "node_outputs", "of"]
+__all__ = [
+    "GoalTolerance",
+    "ParameterRead",
+    "Ros1Node",
+    "Ros1Run",
+    "TargetReplaced",
+    "node_output_lines",
+    "node_outputs",
+    "of",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +54,31 @@ class ParameterRead:
     value: str
     """What usar set it to, as text; empty when usar did not set it (the node's default)."""
     read_by: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class GoalTolerance:
+    """The goal tolerances usar's move_base used for one robot, and where they were read
+    (``param/dwa_local_planner_params.yaml (launch/move_base.launch)``, ``the course
+    template's default``, ``usar's setting mission.xy_tolerance``)."""
+
+    robot: str
+    xy: float
+    yaw: float
+    source: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class TargetReplaced:
+    """A parameter of the launch file that held one of the course's lookup targets, which the
+    graded world's target replaced (or dropped: the world has no such target)."""
+
+    param: str
+    target: int
+    source: str = ""
+    """Where the launch file set it (``param/aruco_lookup.yaml (launch/team.launch)``)."""
+    how: str = "name"
+    """How it was known: ``name`` (``.../aruco_lookup_locations/target_N``) or ``value``."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +103,11 @@ class Ros1Run:
     parameters: tuple[ParameterRead, ...] = ()
     applied_settings: tuple[str, ...] = ()
     """Prefixes of the settings that applied (``record``, ``mission.xy_tolerance``, ...)."""
+    goal_tolerances: tuple[GoalTolerance, ...] = ()
+    """Per robot, usar's move_base goal tolerances and their source (empty: a log before)."""
+    targets_replaced: tuple[TargetReplaced, ...] = ()
+    """The launch file's parameters that held the course's targets (empty: none, or a log
+    before usar said)."""
     holds: int = 0
     """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
     capped: int = 0
@@ -108,6 +147,13 @@ class Ros1Run:
         """Whether ``setting`` (``mission.spin_speed``) applied to this run."""
         return any(setting == p or setting.startswith(p + ".") for p in self.applied_settings)
 
+    def xy_goal_tolerance(self, robot: str) -> float | None:
+        """The xy goal tolerance usar's move_base used for ``robot`` (None: not recorded)."""
+        for tol in self.goal_tolerances:
+            if tol.robot == robot:
+                return tol.xy
+        return None
+
     def to_toml(self) -> str:
         import tomli_w  # deferred: reading a log never writes TOML
 
@@ -131,6 +177,14 @@ class Ros1Run:
             "parameters": [
                 {"name": p.name, "value": p.value, "read_by": list(p.read_by)}
                 for p in self.parameters
+            ],
+            "goal_tolerances": [
+                {"robot": g.robot, "xy": g.xy, "yaw": g.yaw, "source": g.source}
+                for g in self.goal_tolerances
+            ],
+            "targets_replaced": [
+                {"param": t.param, "target": t.target, "source": t.source, "how": t.how}
+                for t in self.targets_replaced
             ],
         }
         return tomli_w.dumps(data)
@@ -161,6 +215,24 @@ class Ros1Run:
                 )
                 for p in data.get("parameters", [])
             ),
+            goal_tolerances=tuple(
+                GoalTolerance(
+                    str(g.get("robot", "")),
+                    float(g.get("xy", 0.0)),
+                    float(g.get("yaw", 0.0)),
+                    str(g.get("source", "")),
+                )
+                for g in data.get("goal_tolerances", [])
+            ),
+            targets_replaced=tuple(
+                TargetReplaced(
+                    str(t.get("param", "")),
+                    int(t.get("target", 0)),
+                    str(t.get("source", "")),
+                    str(t.get("how", "name")),
+                )
+                for t in data.get("targets_replaced", [])
+            ),
         )
 
 
@@ -189,7 +261,7 @@ def of(run: Run) -> Ros1Run | None:
         return None
     try:
         return Ros1Run.from_toml(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError):
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError, TypeError):
         run.problems.append(f"the attached {contract.ROS1_ATTACHMENT} is invalid")
         return None
 

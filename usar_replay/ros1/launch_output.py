@@ -139,6 +139,44 @@ def _sibling(name: str) -> ModuleType:
     return module
 
 
+def _write_facts(
+    plan: dict[str, Any],
+    params: dict[str, Any],
+    dropped: list[Any],
+    sources: dict[str, tuple[str, str]],
+    targets: list[tuple[str, int, str]],
+) -> None:
+    """What the launch file configures for usar's stand-ins (:mod:`.nav_params`) and where the
+    course's targets were replaced (:mod:`.launch_filter`), as JSON at the plan's
+    ``facts_file``: the bridge and the log read it (bounded, as the team's)."""
+    import json
+
+    param_sources = _sibling("param_sources")
+    package_dir = ""
+    if plan.get("package"):
+        try:
+            import rospkg
+
+            package_dir = str(rospkg.RosPack().get_path(str(plan["package"])))
+        except Exception:  # noqa: BLE001 - a label only: the path itself then
+            package_dir = ""
+
+    def label(path: str) -> str:
+        return str(param_sources.label(path, package_dir))
+
+    nav = _sibling("nav_params").facts(params, dropped, sources, plan.get("robots", ()), label)
+    rows = []
+    for key, k, how in targets[:256]:
+        yaml_file, launch = sources.get(key, ("", ""))
+        where = label(yaml_file) + (f" ({label(launch)})" if launch else "") if yaml_file else (
+            f"a <param> in {label(launch)}" if launch else "the launch file"
+        )
+        rows.append({"param": key, "target": k, "how": how, "source": where})
+    nav["targets"] = rows
+    with open(plan["facts_file"], "w", encoding="utf-8") as f:
+        json.dump(nav, f, sort_keys=True)
+
+
 def main(argv: list[str]) -> None:
     """``python3 launch_output.py OUTPUT_DIR NODES_FILE PLAN ROSLAUNCH_ARGS...`` (``-`` for
     OUTPUT_DIR and NODES_FILE with ``--nodes``, for PLAN when there is none)."""
@@ -154,10 +192,18 @@ def main(argv: list[str]) -> None:
     launch_filter = _sibling("launch_filter")
     plan = launch_filter.load_plan(plan_file) if plan_file != "-" else {}
     load = roslaunch.config.load_config_default
+    sources = _sibling("param_sources").install()
 
     def load_planned(*args: Any, **kwargs: Any) -> Any:
         config = load(*args, **kwargs)
-        dropped = launch_filter.apply(config, plan)
+        facts = {k: p.value for k, p in config.params.items()}  # before the plan changes them
+        targets: list[tuple[str, int, str]] = []
+        dropped = launch_filter.apply(config, plan, targets)
+        if output_dir == "-" and plan.get("facts_file"):
+            try:
+                _write_facts(plan, facts, dropped, dict(sources), targets)
+            except Exception as err:  # noqa: BLE001 - the listing goes on: the template's then
+                print(f"usar: the launch file's facts not written: {err!r}", file=sys.stderr)
         if output_dir != "-":
             if dropped and not config.nodes:  # roslaunch would wait for nothing, for good
                 kinds = sorted({str(n.package) for n in dropped})

@@ -24,12 +24,18 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.core import contract, msgs
-from usar_replay.log.ros1_run import ParameterRead, Ros1Node, Ros1Run
+from usar_replay.log.ros1_run import (
+    GoalTolerance,
+    ParameterRead,
+    Ros1Node,
+    Ros1Run,
+    TargetReplaced,
+)
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
 from usar_replay.node.run_folder import RunFolder
-from usar_replay.ros1 import run_files, start
+from usar_replay.ros1 import nav_params, run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
 from usar_replay.ros1.building.jail import BUILD_WALL_S
@@ -81,6 +87,9 @@ class Ros1Options:
     """The build's workspace while catkin runs: a tmpfs of this many MiB (and
     :data:`~usar_replay.ros1.building.build_folder.BUILD_FOLDER_INODES` files; 0: a plain
     folder), ``--build-folder``."""
+    given_settings: tuple[str, ...] = ()
+    """The settings the user gave explicitly (``mission.xy_tolerance``: ``--set`` or
+    ``--settings``): such a move_base tolerance wins over the package's (:mod:`.nav_params`)."""
 
 
 _ROS_ETC = ("/etc/catkin", "/etc/ros", "/etc/debian_version", "/etc/hosts", "/etc/nsswitch.conf")
@@ -131,6 +140,21 @@ def _text(value: Any) -> str:
     return str(list(value)) if isinstance(value, tuple) else str(value)
 
 
+def _targets(facts: dict[str, Any] | None) -> tuple[TargetReplaced, ...]:
+    """The facts file's replaced targets (the team's file: each field checked and bounded)."""
+    rows = (facts or {}).get("targets", [])
+    out = []
+    for row in rows[:256] if isinstance(rows, list) else []:
+        if not isinstance(row, dict):
+            continue
+        param, target = row.get("param"), row.get("target")
+        if not isinstance(param, str) or not isinstance(target, int) or isinstance(target, bool):
+            continue
+        how = "value" if row.get("how") == "value" else "name"
+        out.append(TargetReplaced(param[:200], target, str(row.get("source", ""))[:300], how))
+    return tuple(out)
+
+
 class Ros1Process(MissionProcess):
     """Run the bridge as the mission process on ``built`` (see the module doc)."""
 
@@ -149,6 +173,7 @@ class Ros1Process(MissionProcess):
         self.options = options
         self.package = package
         self.parameters = dict(parameters)
+        self._robots = [r for r in contract.ROBOTS if contract.odom(r) in sim_topics]
         self._kept: list[tuple[str, str, bytes]] = []
         self._one_cpu: OneCpu | None = None
         limits = limits or MissionLimits()
@@ -268,6 +293,9 @@ class Ros1Process(MissionProcess):
             ParameterRead(name, _text(given[name]) if name in given else "", tuple(by))
             for name, by in run_files.parameters_read(self.run_dir).items()
         ]
+        facts = run_files.launch_facts(self.run_dir) if self.options.launch else None
+        given = nav_params.given_tolerances(self.parameters, self.options.given_settings)
+        tolerances = nav_params.goal_tolerances(facts, self._robots, given)
         info = Ros1Run(
             package=self.package.name,
             path=self.target.path,
@@ -286,6 +314,17 @@ class Ros1Process(MissionProcess):
             holds=self.holds,
             # no capped ticks either: which tick ran out of its wall cap is the machine's load
             # (the recorder's summary says them)
+        )
+        info = dataclasses.replace(
+            info,
+            # a move_base tolerance setting applied only where the user gave it (nav_params)
+            applied_settings=tuple(
+                s
+                for s in info.applied_settings
+                if not s.startswith("mission.") or s in self.options.given_settings
+            ),
+            goal_tolerances=tuple(GoalTolerance(*row) for row in tolerances),
+            targets_replaced=_targets(facts),
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
         prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX

@@ -22,8 +22,9 @@ from usar_replay.world.nav import grid_from_msg
 
 __all__ = ["LATCHED", "Publishing", "genpy_time"]
 
-LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC)
-"""Latched as Gazebo's and map_server's are: a late subscriber still gets the last one."""
+LATCHED = (contract.TF_STATIC, contract.MAP_TOPIC, *map(contract.amcl_pose, contract.ROBOTS))
+"""Latched as Gazebo's, map_server's and amcl's ``amcl_pose`` are: a late subscriber still
+gets the last one."""
 
 
 def genpy_time(t_ns: int) -> Any:
@@ -73,6 +74,8 @@ class Publishing:
                 self._publisher(topic, kinds[topic].__msgtype__)
         if contract.IMAGE in sim_topics:
             self._raw_publisher()
+        for robot in robots:  # amcl's, usar's stand-in's (:mod:`.amcl`)
+            self._publisher(contract.amcl_pose(robot), msgs.PoseWithCovarianceStamped.__msgtype__)
 
     def _publisher(self, topic: str, msgtype: str) -> Any:
         pub = self._pubs.get(topic)
@@ -139,6 +142,10 @@ class Publishing:
         return msgtype == msgs.CompressedImage.__msgtype__ and (
             self._raw_publisher().get_num_connections() > 0
         )
+
+    def publish_own(self, topic: str, value: msgs.Message) -> None:
+        """A message of usar's stand-ins (amcl's ``amcl_pose``), published as the simulator's."""
+        self._publish(topic, value)
 
     def publish_clock(self, t_ns: int) -> None:
         """``/clock`` at ``t_ns`` (the tick loop's call: when the pacing allows)."""

@@ -29,6 +29,7 @@ from usar_replay.log import ros1_run
 from usar_replay.log.run import Run
 from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
 from usar_replay.node.mission_target import MissionTarget
+from usar_replay.ros1 import nav_params
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import Package, cached_build, find_package, package_sha256
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
@@ -68,16 +69,23 @@ def ros1_process(
     path, rec_launch, rec_node = recorded_entry(run.mission.target)
     pkg = find_package(package) if package is not None else recorded_package(run, path)
     recorded = ros1_run.of(run)
+    # the move_base tolerances the user set when recording win again (:mod:`.nav_params`)
+    tolerances = recorded.goal_tolerances if recorded is not None else ()
+    given = nav_params.given_in(t.source for t in tolerances)
     if launch or node:
-        options = Ros1Options(launch=launch or "", node=node or "")
+        options = Ros1Options(launch=launch or "", node=node or "", given_settings=given)
     else:  # as recorded: the same start, the same third command
         after = recorded.after_launch if recorded is not None else ()
-        options = Ros1Options(launch=rec_launch, node=rec_node, after_launch=after)
+        options = Ros1Options(
+            launch=rec_launch, node=rec_node, after_launch=after, given_settings=given
+        )
     options = choose_entry(pkg, options)
     target = ros1_target(pkg, options)
-    given = limits or MissionLimits()
+    run_limits = limits or MissionLimits()
     built = cached_build(
-        pkg, limits=build_limits_for(given, options), fixed=uses_kernel_sandbox(given)
+        pkg,
+        limits=build_limits_for(run_limits, options),
+        fixed=uses_kernel_sandbox(run_limits),
     )
     factory: Any = functools.partial(Ros1Process, package=pkg, options=options, built=built)
     return dataclasses.replace(target), factory

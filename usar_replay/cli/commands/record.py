@@ -172,6 +172,7 @@ def _record_ros1(
         rtf=args.rtf,
         build_wall_s=args.build_timeout,
         build_folder_mb=args.build_folder,
+        given_settings=options.given_settings(args),
     )
     return record_ros1(
         scenario, out, args.ros1, settings, progress, options=opts, limits=_limits(args, out)

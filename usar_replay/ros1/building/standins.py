@@ -26,6 +26,7 @@ from pathlib import Path
 
 __all__ = [
     "COURSE_ENV",
+    "COURSE_TARGETS",
     "FIDUCIAL_MSGS",
     "PACING",
     "PACKAGES",
@@ -62,8 +63,8 @@ PACKAGES: dict[str, str] = {
 
 REPLACED: dict[str, str] = {
     "gazebo_ros": "Gazebo (usar's world)",
-    "amcl": "localization (usar's /tf)",
-    "move_base": "navigation (usar's move_base)",
+    "amcl": "localization (usar's /tf and /<robot>/amcl_pose, with the node's update_min_d/a)",
+    "move_base": "navigation (usar's move_base, with the node's goal tolerances)",
     "map_server": "the map (usar's /map)",
     "aruco_detect": "marker detection (usar's detector)",
     "robot_state_publisher": "the robots' frames (usar's /tf)",
@@ -76,6 +77,16 @@ WORLD_NAMESPACES = ("/aruco_lookup_locations",)
 """Parameters that are the world's facts: a launch file's values under them are dropped (the
 course's ``param/aruco_lookup.yaml`` names the course world's targets), so the world being
 graded is the only one the nodes see (usar sets its parameters last, :mod:`.launch_filter`)."""
+
+COURSE_TARGETS = (
+    (-1.752882, 3.246192),
+    (-2.510293, 1.125585),
+    (-0.289296, -1.282680),
+    (7.710214, -1.716889),
+)
+"""The course world's lookup targets as the template's ``param/aruco_lookup.yaml`` has them
+(``aruco_lookup_locations/target_1..4``): a launch file's parameter with one of these values
+is the course's target, whatever its name (:func:`.launch_filter.replace_targets`)."""
 
 COURSE_ENV = {"TURTLEBOT3_MODEL": "waffle"}
 """The environment a course machine's shell has (its ``.bashrc``): launch files read
