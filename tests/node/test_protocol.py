@@ -81,7 +81,15 @@ def test_pack_and_unpack_round_trip(
 
 def test_the_ready_frame_carries_the_version() -> None:
     assert protocol.ready_frame() == b"R" + struct.pack("<H", protocol.PROTOCOL_VERSION)
-    protocol.check_ready(protocol.ready_frame())  # no error
+    assert protocol.check_ready(protocol.ready_frame()) == ""  # no error, nothing said
+
+
+def test_the_ready_frame_may_say_what_the_process_configured() -> None:
+    """The ROS 1 bridge's goal tolerances reach the recorder this way, not through a file the
+    graph could rewrite."""
+    frame = protocol.ready_frame('{"goal_tolerances": []}')
+    assert frame.startswith(protocol.ready_frame() + b"I")
+    assert protocol.check_ready(frame) == '{"goal_tolerances": []}'
 
 
 @pytest.mark.parametrize(

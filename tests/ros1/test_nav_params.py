@@ -13,8 +13,9 @@ from typing import Any
 import nav_package
 import pytest
 
-from usar_replay.ros1 import launch_filter, launch_output, nav_params, run_files
+from usar_replay.ros1 import launch_filter, launch_output, nav_params
 from usar_replay.ros1.building import debian, standins
+from usar_replay.ros1.pacing import graph_start
 
 ROBOTS = ("explorer", "follower")
 WORLD = {"/aruco_lookup_locations/target_1": [1.1, 0.3]}
@@ -121,7 +122,7 @@ def test_the_node_listing_writes_what_the_launch_files_configure(tmp_path: Path)
         standins.WORLD_NAMESPACES,
         WORLD,
         course_targets=standins.COURSE_TARGETS,
-        facts_file=str(tmp_path / run_files.FACTS_FILE),
+        facts=True,
         package=nav_package.NAME,
         robots=ROBOTS,
     )
@@ -131,9 +132,12 @@ def test_the_node_listing_writes_what_the_launch_files_configure(tmp_path: Path)
         ["bash", "-c", cmd], env=env, capture_output=True, text=True, check=False
     )
     assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["/mission"]
-    facts = run_files.launch_facts(tmp_path)
-    assert facts is not None
+    lines = done.stdout.splitlines()
+    assert [n for n in lines if n.startswith("/")] == ["/mission"]
+    facts_lines = [n for n in lines if n.startswith(graph_start.FACTS_PREFIX)]
+    assert len(facts_lines) == 1 and launch_output.FACTS_PREFIX == graph_start.FACTS_PREFIX
+    facts = json.loads(facts_lines[0][len(graph_start.FACTS_PREFIX) :])
+    assert not (tmp_path / "launch_facts.json").exists()  # nothing the graph could rewrite
     follower = facts["move_base"]["follower"]
     assert follower["node"] == "/follower_move_base" and follower["planner"] == "DWAPlannerROS"
     assert follower["xy_goal_tolerance"] == {

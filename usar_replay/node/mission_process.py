@@ -242,6 +242,8 @@ class MissionProcess:
         self._sent: collections.deque[float] = collections.deque()
         self._last_read = 0.0
         self.capped = 0
+        self.ready_info = ""
+        """What the process said with its ready frame (:func:`.protocol.ready_frame`)."""
         """Ticks whose wall cap ran out (:data:`protocol.FLAG_CAPPED`)."""
         self._started = time.monotonic()  # verdicts only: never reaches a message
         self._work: str | None = None
@@ -376,7 +378,7 @@ class MissionProcess:
                 f"the mission process sent a frame of kind {frame[:1]!r} before it was ready"
             )
         try:
-            protocol.check_ready(frame)
+            self.ready_info = protocol.check_ready(frame)
         except ProtocolMismatch:
             self._proc.kill()  # what it sends is not read any more
             raise

@@ -168,16 +168,26 @@ def text_of(frame: bytes) -> str:
     return frame[1:].decode("utf-8", errors="replace")
 
 
-def ready_frame() -> bytes:
-    """What a mission process sends once it is ready: ``R`` and its protocol version."""
-    return FrameKind.READY + _VERSION.pack(PROTOCOL_VERSION)
+_INFO = b"I"
+"""Between a ready frame's version and its ``info``."""
 
 
-def check_ready(frame: bytes, peer: str = "the mission process") -> None:
-    """Raise :class:`ProtocolMismatch` unless ``frame`` is :func:`ready_frame` of this version
-    (a frame of another kind is the caller's to judge first)."""
-    if frame == ready_frame():
-        return
+def ready_frame(info: str = "") -> bytes:
+    """What a mission process sends once it is ready: ``R``, its protocol version and
+    ``info`` (UTF-8; the ROS 1 bridge's facts of the run as it configured it, '' for a
+    mission process): a channel the run's other processes cannot write, unlike its folder."""
+    head = FrameKind.READY + _VERSION.pack(PROTOCOL_VERSION)
+    return head + _INFO + info.encode("utf-8") if info else head
+
+
+def check_ready(frame: bytes, peer: str = "the mission process") -> str:
+    """The ``info`` of a :func:`ready_frame` of this version; raise :class:`ProtocolMismatch`
+    for another version (a frame of another kind is the caller's to judge first)."""
+    head = ready_frame()
+    if frame == head:
+        return ""
+    if frame[: len(head) + 1] == head + _INFO:
+        return frame[len(head) + 1 :].decode("utf-8", errors="replace")
     theirs = (
         f"protocol version {_VERSION.unpack(frame[1:])[0]}"
         if len(frame) == 1 + _VERSION.size

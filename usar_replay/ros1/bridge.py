@@ -83,7 +83,7 @@ from usar_replay.ros1.building.debian import DIST_PACKAGES
 from usar_replay.ros1.building.workspace import catkin_env
 from usar_replay.ros1.graph import Graph, launch_target, tail
 from usar_replay.ros1.pacing.graph_start import (
-    launch_nodes,
+    launch_listing,
     missing_connections,
     registered_nodes,
     wait_until_ready,
@@ -197,6 +197,9 @@ class Bridge:
         self._connected: frozenset[int] = frozenset()
         self._cap: float | None = None
         self.shutdown = ShutdownWatch(collected_by_launcher=bool(config.get("launch")))
+        self.ready_info = ""
+        """What the ready frame tells the recorder: the goal tolerances applied and the
+        targets replaced (JSON; :meth:`_configure_stand_ins`)."""
 
     # -- start-up -------------------------------------------------------------------------------
 
@@ -215,12 +218,12 @@ class Bridge:
         # the launch file's node names (roslaunch --nodes, half a second of parsing) are only
         # needed by the start-up gate: asked while the master and the bridge's node start
         names = concurrent.futures.ThreadPoolExecutor(max_workers=1)
-        expected: concurrent.futures.Future[list[str]] | None = None
+        expected: concurrent.futures.Future[tuple[list[str], dict[str, Any] | None]] | None = None
         if self.config.get("launch"):
             plan = self._write_launch_plan(ws)
             setup = f'source "{self.config["workspace"]}/devel/setup.bash"'
             pkg, launch = launch_target(self.config)
-            expected = names.submit(launch_nodes, setup, pkg, launch, self.env, plan)
+            expected = names.submit(launch_listing, setup, pkg, launch, self.env, plan)
         names.shutdown(wait=False)
         # every call logged (getParam included): ``usar info`` lists the parameters the
         # package's nodes read (:func:`.run_files.parameters_read`)
@@ -256,8 +259,8 @@ class Bridge:
         self._start_node()
         self.out.advertise(self.sim_topics, self.robots)
         self.quiet = Watcher(os.getpid())
-        wanted = [] if expected is None else expected.result()
-        self._configure_stand_ins(ws)
+        wanted, facts = ([], None) if expected is None else expected.result()
+        self._configure_stand_ins(facts)
         self._wait_for_graph(master, wanted, float(self.config.get("connect_timeout_s", 60.0)))
 
     def _write_launch_plan(self, run: Path) -> Path:
@@ -273,7 +276,7 @@ class Bridge:
             params,
             str(run / run_files.REPLACED_FILE),
             course_targets=standins.COURSE_TARGETS,
-            facts_file=str(run / run_files.FACTS_FILE),
+            facts=True,
             package=str(self.config["package"]),
             robots=self.robots,
         )
@@ -300,16 +303,24 @@ class Bridge:
             )
             self.amcl[robot] = AmclPose(robot)
 
-    def _configure_stand_ins(self, run: Path) -> None:
+    def _configure_stand_ins(self, facts: dict[str, Any] | None) -> None:
         """move_base's goal tolerances and amcl's thresholds as the package's launch files set
-        them (the node listing wrote them: :mod:`.nav_params`), before the first goal can
-        arrive; the log's ``ros1.toml`` says the same from the same file."""
-        facts = run_files.launch_facts(run) if self.config.get("launch") else None
+        them (the node listing printed them on its stdout: :mod:`.nav_params`), before the
+        first goal can arrive; the recorder's ``ros1.toml`` says what was applied, as the ready
+        frame tells it (:attr:`ready_info`), never from a file the graph could rewrite."""
         given = nav_params.given_tolerances(self.parameters, self.config.get("given_settings", ()))
-        for robot, xy, yaw, source in nav_params.goal_tolerances(facts, self.robots, given):
+        applied = nav_params.goal_tolerances(facts, self.robots, given)
+        for robot, xy, yaw, source in applied:
             mb = self.move_base[robot]
             mb.xy_tolerance, mb.yaw_tolerance = xy, yaw
             print(f"usar move_base {robot}: xy {xy:g} m, yaw {yaw:g} rad ({source})", flush=True)
+        self.ready_info = json.dumps(
+            {
+                "goal_tolerances": [list(row) for row in applied],
+                "targets": (facts or {}).get("targets", []),
+            },
+            sort_keys=True,
+        )
         for robot in self.robots:
             d, a = nav_params.amcl_thresholds(facts, robot)
             self.amcl[robot].update_min_d, self.amcl[robot].update_min_a = d, a
@@ -454,7 +465,7 @@ class Bridge:
     # -- the loop -------------------------------------------------------------------------------
 
     def serve(self) -> None:
-        if not send_within(self.conn, ready_frame(), self.write_timeout_s):
+        if not send_within(self.conn, ready_frame(self.ready_info), self.write_timeout_s):
             return
         while True:
             try:

@@ -55,21 +55,21 @@ def plan(
     params: dict[str, Any],
     replaced_file: str = "",
     course_targets: Iterable[Iterable[float]] = (),
-    facts_file: str = "",
+    facts: bool = False,
     package: str = "",
     robots: Iterable[str] = (),
 ) -> dict[str, Any]:
     """The plan :func:`apply` follows (JSON-ready): ``params`` as ROS names -> values;
     ``course_targets``: the course world's lookup targets (:func:`replace_targets`);
-    ``facts_file``: where the node listing writes what the launch file configures
-    (:mod:`.launch_output`), for ``package``'s ``robots``."""
+    ``facts``: the node listing prints what the launch file configures (:mod:`.launch_output`)
+    on its stdout, for ``package``'s ``robots``."""
     return {
         "replaced": dict(sorted(replaced.items())),
         "world_namespaces": sorted(world_namespaces),
         "params": {k: params[k] for k in sorted(params)},
         "replaced_file": replaced_file,
         "course_targets": [[float(v) for v in t] for t in course_targets],
-        "facts_file": facts_file,
+        "facts": facts,
         "package": package,
         "robots": list(robots),
     }

@@ -147,8 +147,8 @@ def _write_facts(
     targets: list[tuple[str, int, str]],
 ) -> None:
     """What the launch file configures for usar's stand-ins (:mod:`.nav_params`) and where the
-    course's targets were replaced (:mod:`.launch_filter`), as JSON at the plan's
-    ``facts_file``: the bridge and the log read it (bounded, as the team's)."""
+    course's targets were replaced (:mod:`.launch_filter`), as one JSON line on stdout (the
+    bridge reads it, bounded: :func:`usar_replay.ros1.pacing.graph_start.launch_listing`)."""
     import json
 
     param_sources = _sibling("param_sources")
@@ -173,8 +173,14 @@ def _write_facts(
         )
         rows.append({"param": key, "target": k, "how": how, "source": where})
     nav["targets"] = rows
-    with open(plan["facts_file"], "w", encoding="utf-8") as f:
-        json.dump(nav, f, sort_keys=True)
+    # on the listing's stdout, a pipe to the bridge: a file in the run folder was the team's
+    # to rewrite before the bridge or the recorder read it (a forged goal tolerance widens the
+    # rubric's radii)
+    print(FACTS_PREFIX + json.dumps(nav, sort_keys=True), flush=True)
+
+
+FACTS_PREFIX = "usar-facts "
+"""The listing's stdout line that carries the facts (node names start with ``/``)."""
 
 
 def main(argv: list[str]) -> None:
@@ -199,7 +205,7 @@ def main(argv: list[str]) -> None:
         facts = {k: p.value for k, p in config.params.items()}  # before the plan changes them
         targets: list[tuple[str, int, str]] = []
         dropped = launch_filter.apply(config, plan, targets)
-        if output_dir == "-" and plan.get("facts_file"):
+        if output_dir == "-" and plan.get("facts"):
             try:
                 _write_facts(plan, facts, dropped, dict(sources), targets)
             except Exception as err:  # noqa: BLE001 - the listing goes on: the template's then

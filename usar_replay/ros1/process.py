@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import os
 import signal
 import sys
@@ -35,7 +36,7 @@ from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses
 from usar_replay.node.mission_target import MissionTarget
 from usar_replay.node.protocol import Wire
 from usar_replay.node.run_folder import RunFolder
-from usar_replay.ros1 import nav_params, run_files, start
+from usar_replay.ros1 import run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
 from usar_replay.ros1.building.jail import BUILD_WALL_S
@@ -138,6 +139,29 @@ def _text(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return str(list(value)) if isinstance(value, tuple) else str(value)
+
+
+def _ready_facts(info: str) -> dict[str, Any]:
+    """The bridge's ready frame's JSON (:attr:`usar_replay.ros1.bridge.Bridge.ready_info`)."""
+    try:
+        got = json.loads(info) if info else {}
+    except (ValueError, RecursionError):
+        return {}
+    return got if isinstance(got, dict) else {}
+
+
+def _applied_tolerances(
+    facts: dict[str, Any], robots: Sequence[str]
+) -> list[tuple[str, float, float, str]]:
+    """(robot, xy, yaw, source) as the bridge applied them, of ``robots`` only, each checked."""
+    out = []
+    for row in facts.get("goal_tolerances", [])[: len(robots)]:
+        if not (isinstance(row, list) and len(row) == 4 and row[0] in robots):
+            continue
+        robot, xy, yaw, source = row
+        if all(isinstance(v, int | float) and math.isfinite(v) and v >= 0 for v in (xy, yaw)):
+            out.append((str(robot), float(xy), float(yaw), str(source)[:300]))
+    return out
 
 
 def _targets(facts: dict[str, Any] | None) -> tuple[TargetReplaced, ...]:
@@ -293,9 +317,11 @@ class Ros1Process(MissionProcess):
             ParameterRead(name, _text(given[name]) if name in given else "", tuple(by))
             for name, by in run_files.parameters_read(self.run_dir).items()
         ]
-        facts = run_files.launch_facts(self.run_dir) if self.options.launch else None
-        given = nav_params.given_tolerances(self.parameters, self.options.given_settings)
-        tolerances = nav_params.goal_tolerances(facts, self._robots, given)
+        # what the bridge applied, as its ready frame said it (a file in the run folder is the
+        # graph's to rewrite: a forged tolerance would widen the rubric's radii)
+        applied = _ready_facts(self.ready_info)
+        tolerances = _applied_tolerances(applied, self._robots)
+        facts = applied
         info = Ros1Run(
             package=self.package.name,
             path=self.target.path,

@@ -18,9 +18,6 @@ The files:
 * :data:`REPLACED_FILE`: the launch file's nodes usar did not start, its stand-ins doing their
   job (:mod:`.launch_filter`), in the same form; :data:`LAUNCH_PLAN` is the bridge's plan for
   them (written before the package runs, read by roslaunch's side only);
-* :data:`FACTS_FILE`: what the launch file configures for usar's stand-ins (move_base's and
-  amcl's parameters, the course's targets it set: :mod:`.nav_params`), written by the node
-  listing beside roslaunch, JSON;
 * :data:`MASTER_LOG`: the ROS master's log of every API call, from which the parameters each
   node read (``getParam``, ``hasParam``, ``searchParam``, ``subscribeParam``) and the nodes that
   registered (for ``rosrun``, which has no launch file to list them) are taken.
@@ -29,27 +26,23 @@ The files:
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import re
 import stat
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 from usar_replay.core.safe_text import team_lines
 from usar_replay.ros1.launch_output import OUTPUT_SUFFIX
 
 __all__ = [
     "APPLIED_SETTINGS",
-    "FACTS_FILE",
     "LAUNCH_PLAN",
     "MASTER_LOG",
     "NODES_FILE",
     "OUTPUT_DIR",
     "OUTPUT_HEAD",
     "OUTPUT_TAIL",
-    "launch_facts",
     "launch_nodes",
     "node_outputs",
     "node_tails",
@@ -63,8 +56,6 @@ OUTPUT_DIR = "output"
 NODES_FILE = "launch_nodes.tsv"
 REPLACED_FILE = "launch_replaced.tsv"
 LAUNCH_PLAN = "launch_plan.json"
-FACTS_FILE = "launch_facts.json"
-_FACTS_CAP = 256 * 1024
 MASTER_LOG = "master_api.log"
 OUTPUT_HEAD = 16 * 1024
 """Bytes kept from the start of a node's output (its start-up lines)."""
@@ -190,19 +181,6 @@ def launch_nodes(run_dir: Path, name: str = NODES_FILE) -> list[tuple[str, str, 
         if len(fields) == 3 and _NODE_NAME.fullmatch(fields[0]):
             rows.append((fields[0], fields[1][:200], fields[2][:200]))
     return rows[:MAX_NODES]
-
-
-def launch_facts(run_dir: Path) -> dict[str, Any] | None:
-    """:data:`FACTS_FILE` as a dict (None: none, too big, or not JSON)."""
-    with _dir(run_dir) as fd:
-        got = None if fd is None else _read(fd, FACTS_FILE, _FACTS_CAP, 0)
-    if got is None or got[2] > _FACTS_CAP:
-        return None
-    try:
-        data = json.loads(got[0].decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 def replaced_nodes(run_dir: Path) -> list[tuple[str, str, str]]:

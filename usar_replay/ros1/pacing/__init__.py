@@ -12,7 +12,12 @@ their exit statuses), ``scheduling`` (the graph's CPU set and real-time policy) 
 The bridge (``ros1.bridge``) sits above this and the build side; nothing here imports it.
 """
 
-from usar_replay.ros1.pacing.graph_start import launch_nodes, registered_nodes, wait_until_ready
+from usar_replay.ros1.pacing.graph_start import (
+    launch_listing,
+    launch_nodes,
+    registered_nodes,
+    wait_until_ready,
+)
 from usar_replay.ros1.pacing.proc_watch import ProcWatch
 from usar_replay.ros1.pacing.quiescence import Quiescence, descendants
 from usar_replay.ros1.pacing.scheduling import OneCpu
@@ -26,6 +31,7 @@ __all__ = [
     "ShutdownWatch",
     "SockDiag",
     "descendants",
+    "launch_listing",
     "launch_nodes",
     "registered_nodes",
     "wait_until_ready",
