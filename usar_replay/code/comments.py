@@ -38,7 +38,7 @@ def normal(text: str) -> str:
 def looks_like_code(text: str) -> bool:
     """Does one comment line (markers removed) read as C++?"""
     t = text.strip()
-    if len(t) < 2 or _PROSE_END.search(t) and not t.endswith("::"):
+    if len(t) < 2 or (_PROSE_END.search(t) and not t.endswith("::")):
         return False
     if _ENDS.search(t) and any(c in t for c in "();={}"):
         return True

@@ -112,8 +112,8 @@ def parse_xml(folder: Path) -> list[Symbol]:
                 found[mid] = Symbol(
                     "function",
                     _text(mem.find("qualifiedname")) or _text(mem.find("name")),
-                    _rel(loc.get("bodyfile") or loc.get("file", "")),
-                    int(loc.get("bodystart") if body else loc.get("line", "0") or 0),
+                    _rel(loc.get("bodyfile") or loc.get("file") or ""),
+                    start if body else int(loc.get("line") or 0),
                     _documented(mem),
                     body,
                 )

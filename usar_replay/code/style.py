@@ -93,7 +93,8 @@ def style(sources: Iterable[Source], limits: ToolLimits | None = None) -> Style:
         for indent, group in sorted(by_indent.items()):
             sub = work / f"i{indent}"
             write_copy([(s.rel, s.text) for s in group], sub)
-            argv = ["clang-format", "-i", f"--style={course_style(indent)}", *(s.rel for s in group)]
+            argv = ["clang-format", "-i", f"--style={course_style(indent)}"]
+            argv += [s.rel for s in group]
             ran = run_tool(argv, sub, limits)
             if ran.limit or ran.code != 0:
                 why = f"exceeded {ran.limit}" if ran.limit else f"failed (exit {ran.code})"

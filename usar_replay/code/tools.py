@@ -6,8 +6,8 @@ have had crashes and unbounded loops on crafted input, and a team's ``Doxyfile``
 any path. So a tool runs on a copy of the team's files in a fresh folder (the only folder it
 may write), in :mod:`usar_replay.node.kernel_sandbox`'s bubblewrap sandbox when it works here
 (no network, the system read-only, uid 65534, no capabilities; ``USAR_SANDBOX=off`` turns it
-off), always with a wall-clock limit and rlimits set by ``prlimit`` before it starts (address space, CPU
-seconds, file size, open files, no core files). Past a limit the run says which: a team's
+off), always with a wall-clock limit and rlimits set by ``prlimit`` before it starts (address
+space, CPU seconds, file size, open files, no core files). Past a limit the run says which: a team's
 finding, never a hang. Without the sandbox (no bubblewrap) the copy, the limits and the
 timeout still hold, but the tool could read the machine's files and reach the network: docs/
 code-rubric.md says so.
@@ -118,16 +118,20 @@ def run_tool(
     limits: ToolLimits | None = None,
     *,
     sandbox: bool | None = None,
+    ro_binds: Sequence[str] = (),
 ) -> Ran:
     """Run ``argv`` in ``work`` (a folder of usar's making holding the copy: the only one the
-    tool may write) under ``limits``; its stdout is read from a file outside ``work``."""
+    tool may write) under ``limits``; its stdout is read from a file outside ``work``;
+    ``ro_binds``: folders of usar's the sandbox shows read-only (usar's built messages)."""
     lim = limits or ToolLimits()
     box = sandboxed() if sandbox is None else sandbox
     cmd = [*_prlimit(lim), *argv]
     if box:
         from usar_replay.node import kernel_sandbox
 
-        cmd = kernel_sandbox.sandbox_argv(cmd, ro_binds=[], work_dir=str(work), env=_ENV)
+        cmd = kernel_sandbox.sandbox_argv(
+            cmd, ro_binds=list(ro_binds), work_dir=str(work), env=_ENV
+        )
     with tempfile.TemporaryDirectory(prefix="usar-tool-") as tmp:
         out_path, err_path = Path(tmp, "out"), Path(tmp, "err")
         timed_out = False
