@@ -28,6 +28,7 @@ _STARTS = re.compile(
 )
 _CALL = re.compile(r"^[A-Za-z_][\w:.<>\[\]\->]*\s*(\(.*\)|=\s*[^=].*)\s*;?$")
 _PROSE_END = re.compile(r"[.?!:]$")
+_BRACES = frozenset({"{", "}", "};", "});"})
 
 
 def normal(text: str) -> str:
@@ -38,6 +39,8 @@ def normal(text: str) -> str:
 def looks_like_code(text: str) -> bool:
     """Does one comment line (markers removed) read as C++?"""
     t = text.strip()
+    if t in _BRACES:
+        return True  # a lone brace: code only next to other code (commented_out checks)
     if len(t) < 2 or (_PROSE_END.search(t) and not t.endswith("::")):
         return False
     if _ENDS.search(t) and any(c in t for c in "();={}"):
@@ -70,6 +73,8 @@ def commented_out(
         for c in comments(src.text):
             if c.doc or not looks_like_code(c.text) or normal(c.text) in template_lines:
                 continue
+            if c.text.strip() in _BRACES and c.line != last + 1:
+                continue  # a brace alone is code when it closes (or opens) commented code
             total += 1
             if c.line == last + 1:
                 run_len += 1

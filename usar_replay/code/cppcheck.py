@@ -23,8 +23,9 @@ __all__ = ["UNREAD", "UNUSED", "Finding", "Findings", "findings", "parse_xml"]
 
 UNUSED = frozenset({"unusedFunction", "unusedPrivateFunction"})
 """cppcheck's ids of a function nobody calls."""
-UNREAD = frozenset({"unreadVariable", "unusedVariable", "unusedStructMember"})
-"""cppcheck's ids of a variable nobody reads."""
+UNREAD = frozenset({"unreadVariable", "unusedVariable"})
+"""cppcheck's ids of a variable nobody reads (``unusedStructMember`` is left out: on a test
+package it missed reads through ``pair.second.x``)."""
 _NOT_LINT = frozenset(
     {"missingInclude", "missingIncludeSystem", "checkersReport", "toomanyconfigs",
      "normalCheckLevelMaxBranches", "unmatchedSuppression", "noValidConfiguration",

@@ -56,9 +56,9 @@ def _scan(text: str) -> tuple[list[Comment], str]:
             blank(i, end)
             i = end
         elif text.startswith("/*", i):
-            end = text.find("*/", i + 2)
-            end = n if end < 0 else end + 2
-            body = text[i + 2 : max(i + 2, end - 2)]
+            close = text.find("*/", i + 2)
+            end = n if close < 0 else close + 2
+            body = text[i + 2 : n if close < 0 else close]
             doc = body.startswith(("*", "!")) and not body.startswith("*/")
             for k, part in enumerate(body.split("\n")):
                 part = part.strip()
