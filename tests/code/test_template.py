@@ -1,0 +1,26 @@
+"""code/template: the template's functions, commented-out lines and PDFs, read as a team's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import codetools
+
+from usar_replay.code.template import NO_TEMPLATE, function_names, read_template
+
+
+def test_the_templates_parts(tmp_path: Path) -> None:
+    root = codetools.template(tmp_path / "t")
+    (root / "doc").mkdir()
+    (root / "doc" / "handout.pdf").write_bytes(b"%PDF-1.4 handout\n")
+    t = read_template(root)
+    assert t.names == {"broadcast", "listen", "main"}
+    assert "explorer_client.waitForResult();" in t.comment_lines
+    assert len(t.comment_lines) == 4
+    assert len(t.pdf_sha256) == 1
+    assert NO_TEMPLATE.names == frozenset() and NO_TEMPLATE.sources == ()
+
+
+def test_function_names_skip_control_statements_and_comments() -> None:
+    text = "// void ghost() {}\nint f(int a) { if (a) { return 1; } while (a) {} }\n"
+    assert function_names(text) == {"f"}
