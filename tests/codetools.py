@@ -435,3 +435,41 @@ def borrowed(root: Path) -> Path:
         {"src/main.cpp": BORROWED_MAIN,
          **alpha_html(ALPHA_NAMES, ["robots.h", "robots.cpp", "main.cpp"])},
     )  # fmt: skip
+
+
+def pdf(path: Path, pages: list[str]) -> Path:
+    """A PDF of ``pages`` (text lines), made with matplotlib (a dependency of usar's), its
+    text extractable (TrueType fonts)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with matplotlib.rc_context({"pdf.fonttype": 42}), PdfPages(path, metadata={
+        "CreationDate": None, "Creator": None, "Producer": None
+    }) as out:  # fmt: skip
+        for page in pages:
+            fig = plt.figure(figsize=(8.5, 11))
+            for i, line in enumerate(page.split("\n")):
+                fig.text(0.08, 0.95 - 0.025 * i, line, fontsize=9)
+            out.savefig(fig)
+            plt.close(fig)
+    return path
+
+
+REPORT_PAGES = [
+    "1 Introduction\nTwo robots search a building for victims.\nWe solvd the problem wiht "
+    "ROS and rviz.",
+    "2 Approach\nThe explorer visits each target and broadcasts the marker frame.\n"
+    "#include <ros/ros.h>\nstd::vector<double> goals;\nros::spinOnce();\n"
+    "Explorer::step(goal);",
+    "3 Challenges\nThe follower could not reach the markers.\n4 Resources\nThe course slides.",
+]
+"""A report with a typo or two, three of the outline's sections and C++ code on page 2."""
+
+HANDOUT_PAGES = [
+    "Final Project\n7 Deliverables\nYour group's project submission",
+    "8 Getting Help\n9 Grading Rubric\nLive demonstration: 60 pts.",
+]

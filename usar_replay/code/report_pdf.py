@@ -44,7 +44,7 @@ _CPP = re.compile(
     r"\w+::\w+\([^)]*\)\s*;|;\s*$"
 )
 _STRONG = re.compile(r"#include\s*[<\"]|\bstd::\w|\bros::\w|::\w+\(.*\)\s*[;{]")
-_WORD = re.compile(r"(?<![\w@/.-])[A-Za-z][a-z]+(?:'[a-z]+)?(?![\w@/-])")
+_WORD = re.compile(r"(?<![\w@/.<:-])[A-Za-z][a-z]+(?:'[a-z]+)?(?![\w@/:>-])")
 _MAX_PDF = 64 * 1024 * 1024
 
 
@@ -118,8 +118,9 @@ def cpp_lines(pages: list[str]) -> tuple[int, str]:
 def words(page: str) -> list[str]:
     """The words of a page the spelling check looks at: lower-case letters after at most one
     capital (acronyms, camelCase identifiers, paths, e-mail addresses and words with digits
-    are left out: they are names, not prose)."""
-    return [w for w in _WORD.findall(page) if len(w) >= 3]
+    are left out: they are names, not prose; so are lines of C++ code)."""
+    prose = "\n".join(line for line in page.splitlines() if not _STRONG.search(line))
+    return [w for w in _WORD.findall(prose) if len(w) >= 3]
 
 
 def _is_handout(pages: list[str]) -> bool:
