@@ -376,7 +376,8 @@ def _reordered(cpp: str) -> str:
     head, body = cpp.split("namespace alpha {\n", 1)
     body, tail = body.rsplit("}  // namespace alpha", 1)
     defs = [d.strip() + "\n" for d in re.split(r"\n(?=\S[^\n]*::[^\n]*\{\n)", body) if d.strip()]
-    return head + "namespace alpha {\n\n" + "\n".join(reversed(defs)) + "\n}  // namespace alpha" + tail
+    body = "\n".join(reversed(defs))
+    return head + "namespace alpha {\n\n" + body + "\n}  // namespace alpha" + tail
 
 
 def copy_of_alpha(root: Path) -> Path:

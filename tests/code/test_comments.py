@@ -14,7 +14,7 @@ def test_code_lines_read_as_code_and_prose_does_not() -> None:
                  "if (x > 3) {", "#include <ros/ros.h>", "int x = 3;"):  # fmt: skip
         assert looks_like_code(code), code
     for prose in ("for broadcaster", "wait for the action server to come up",
-                  "Move the robot (slowly).", "TODO: fix this", "@brief Reads the targets"):  # fmt: skip
+                  "Move the robot (slowly).", "TODO: fix this", "@brief Reads the targets"):
         assert not looks_like_code(prose), prose
 
 
@@ -35,7 +35,8 @@ def test_the_templates_own_lines_do_not_count() -> None:
     tmpl = frozenset(
         "".join(line.split()) for line in (
             "explorer_client.waitForResult();", 'ROS_INFO("Sending goal");',
-            "follower_client.sendGoal(follower_goal);", "ros::spinOnce();//uncommentthisifyouhavesubscribersinyourcode",
+            "follower_client.sendGoal(follower_goal);",
+            "ros::spinOnce(); //uncomment this if you have subscribers in your code",
         )
     )  # fmt: skip
     src = Source("src/main.cpp", codetools.TEMPLATE_MAIN)

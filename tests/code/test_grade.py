@@ -24,7 +24,7 @@ METRICS = {"doc_coverage", "docs_own", "commented_out_lines", "largest_commented
 
 def test_a_good_package_gets_every_measured_point(tmp_path: Path) -> None:
     g = grade(read_submission(codetools.alpha(tmp_path / "a")), default_rubric())
-    assert METRICS <= set(g.metrics)
+    assert set(g.metrics) >= METRICS
     assert g.metrics["docs_own"] is True and g.metrics["classes"] == 2
     assert g.metrics["main_lines"] == 14 and g.metrics["doc_coverage"] == 1.0
     assert g.points == g.max_points == 57  # builds_clean not measured without --compile
@@ -38,9 +38,8 @@ def test_a_procedural_package_loses_the_oop_and_unused_code_lines(tmp_path: Path
     assert by["classes"].points == 0 and by["classes"].measured == 0
     assert by["unused_functions"].measured == 3
     assert by["unused_functions"].evidence.startswith("src/main.cpp:6 helper_two")
-    assert by["commented_block"].measured == 6 and by["commented_block"].evidence == (
-        "src/main.cpp:18"
-    )
+    assert by["commented_block"].measured == 6
+    assert by["commented_block"].evidence == "src/main.cpp:18"
     assert by["doc_coverage"].points == 0
 
 

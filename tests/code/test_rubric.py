@@ -18,8 +18,10 @@ def test_the_default_rubric_is_the_courses_60_points() -> None:
 
 
 def _one(kind: str, **extra: object) -> str:
-    more = "".join(f"{k} = {v!r}\n" if not isinstance(v, dict) else
-                   f"{k} = {{ doc = 1.0, elsewhere = 0.5 }}\n" for k, v in extra.items())  # fmt: skip
+    more = "".join(
+        f"{k} = {{ doc = 1.0, elsewhere = 0.5 }}\n" if isinstance(v, dict) else f"{k} = {v!r}\n"
+        for k, v in extra.items()
+    )
     return (f'format = "{FORMAT}"\n[[line]]\nid = "x"\npoints = 10\nmetric = "m"\n'
             f'kind = "{kind}"\n{more}')  # fmt: skip
 

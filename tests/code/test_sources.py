@@ -51,5 +51,5 @@ def test_a_fifo_or_a_link_out_is_the_teams_verdict(tmp_path: Path) -> None:
 
 def test_no_package_is_a_one_line_error(tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
-    with pytest.raises(UsarError, match="no package.xml"):
+    with pytest.raises(UsarError, match="no package\\.xml"):
         read_submission(tmp_path / "empty")

@@ -71,9 +71,9 @@ def _scan(text: str) -> tuple[list[Comment], str]:
             blank(i, end)
             i = end
         elif ch == "R" and (m := _RAW.match(text, i)):
-            close = ")" + m.group(1) + '"'
-            end = text.find(close, m.end())
-            end = n if end < 0 else end + len(close)
+            closing = ")" + m.group(1) + '"'
+            end = text.find(closing, m.end())
+            end = n if end < 0 else end + len(closing)
             line += text.count("\n", i, end)
             i = end
         elif ch in "\"'":

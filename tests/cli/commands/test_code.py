@@ -1,0 +1,100 @@
+"""`usar code` (cli/commands/code): the table, the JSON and CSV, exit codes, a missing tool
+said in one line with the lines that need it."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import codetools
+import pytest
+
+from usar_replay.cli.main import main
+
+TOOLS = ("doxygen", "cppcheck", "clang-format", "g++", "pdftotext", "hunspell")
+pytestmark = pytest.mark.skipif(
+    any(shutil.which(t) is None for t in TOOLS), reason="needs the code grade's tools"
+)
+
+
+def _class(root: Path) -> Path:
+    codetools.alpha(root / "alpha")
+    codetools.copy_of_alpha(root / "copy")
+    codetools.beta(root / "beta")
+    return root
+
+
+def test_a_class_graded_with_its_outputs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    root = _class(tmp_path / "class")
+    tmpl = codetools.template(tmp_path / "template")
+    out = tmp_path / "out"
+    code = main(["code", str(root), "--template", str(tmpl), "--json", f"{out}.json",
+                 "--csv", f"{out}.csv", "--html", f"{out}.html", "--jobs", "2"])  # fmt: skip
+    text = capsys.readouterr().out
+    assert code == 0
+    assert "alpha (final_project): 57/57 points" in text
+    assert all(len(line) <= 100 for line in text.splitlines())
+    doc = json.loads(Path(f"{out}.json").read_text())
+    assert doc["format"] == "usar-code/1" and doc["template"] == str(tmpl)
+    assert [(p["a"], p["b"]) for p in doc["similar"]] == [("alpha", "copy")]
+    assert Path(f"{out}.csv").read_text().startswith("format,team,package")
+    assert "alpha ~ copy" in Path(f"{out}.html").read_text()
+
+
+def test_a_missing_tool_is_one_line_and_its_lines_say_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for tool in TOOLS:
+        if tool != "doxygen":
+            os.symlink(shutil.which(tool) or "", bin_dir / tool)
+    monkeypatch.setenv("PATH", str(bin_dir))
+    pkg = codetools.alpha(tmp_path / "alpha")
+    assert main(["code", str(pkg), "--json", str(tmp_path / "g.json")]) == 1
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert err == [
+        "usar code: doxygen is not installed: apt-get install doxygen (not scored: classes, "
+        "doc_coverage, docs_html, main_driver)"
+    ]
+    doc = json.loads((tmp_path / "g.json").read_text())
+    lines = {x["id"]: x for x in doc["packages"][0]["lines"]}
+    assert lines["doc_coverage"]["points"] is None
+    assert lines["doc_coverage"]["note"] == "doxygen is not installed: apt-get install doxygen"
+    assert lines["unused_functions"]["points"] == 4  # cppcheck was there
+
+
+@pytest.mark.parametrize(
+    ("args", "said"),
+    [
+        (["--jobs", "0"], "--jobs 0: give 1 or more"),
+        (["--rubric", "/nonexistent.toml"], "--rubric /nonexistent.toml: cannot be read"),
+        (["--template", "/nonexistent"], "--template /nonexistent: "),
+    ],
+)
+def test_usage_errors_are_one_line_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], said: str
+) -> None:
+    pkg = codetools.beta(tmp_path / "b")
+    assert main(["code", str(pkg), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err and "Traceback" not in err
+
+
+def test_no_such_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["code", str(tmp_path / "none")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+
+
+def test_an_output_that_exists_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pkg = codetools.beta(tmp_path / "b")
+    (tmp_path / "g.json").write_text("{}")
+    assert main(["code", str(pkg), "--json", str(tmp_path / "g.json")]) == 2
+    assert "--overwrite" in capsys.readouterr().err
