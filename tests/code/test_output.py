@@ -33,7 +33,7 @@ def test_the_outputs(tmp_path: Path) -> None:
         done.grades, done.similar, rubric="r", template=None, threshold=done.threshold)
     rows = list(csv.DictReader(io.StringIO(to_csv(done.grades, done.similar))))
     assert [r["team"] for r in rows] == ["alpha", "copy", "proc"]
-    assert rows[0]["format"] == FORMAT and rows[0]["similar_to"] == "copy (0.92)"
+    assert rows[0]["format"] == FORMAT and rows[0]["similar_to"] == "copy (0.91)"
     text = to_text(done.grades, done.similar, done.threshold)
     assert all(len(line) <= 100 for line in text.splitlines())
-    assert "0.92  alpha ~ copy" in text
+    assert "0.91  alpha ~ copy" in text

@@ -55,3 +55,29 @@ def test_the_order_of_teams_changes_nothing() -> None:
     teams = [prints("z", _copy()), prints("alpha", _alpha()),
              prints("b", [Source("m.cpp", codetools.BETA_MAIN)])]  # fmt: skip
     assert similar(teams) == similar(list(reversed(teams)))
+
+
+def test_the_score_is_the_same_in_every_process() -> None:
+    """Python's ``hash()`` is salted per process; the fingerprints must not depend on it."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = (
+        "import codetools\n"
+        "from usar_replay.code.similarity import prints, similar\n"
+        "from usar_replay.code.sources import Source\n"
+        "a = [Source('m.cpp', codetools.ALPHA_CPP)]\n"
+        "b = [Source('m.cpp', codetools.renamed(codetools._reordered(codetools.ALPHA_CPP)))]\n"
+        "print(similar([prints('a', a), prints('b', b)], 0.0)[0].score)\n"
+    )
+    tests = Path(__file__).resolve().parents[1]
+    path = os.pathsep.join([str(tests), str(tests.parent), os.environ.get("PYTHONPATH", "")])
+    got = {
+        subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                       env={**os.environ, "PYTHONHASHSEED": seed, "PYTHONPATH": path},
+                       timeout=120).stdout.strip()
+        for seed in ("1", "2", "3")
+    }  # fmt: skip
+    assert len(got) == 1 and float(got.pop()) > 0.8

@@ -3,7 +3,8 @@ boilerplate.
 
 Why winnowing: fingerprints of the token stream are blind to what a copier changes first.
 copydetect's filter (PyPI, a MOSS-like winnower) turns every identifier into one letter
-before hashing, so renamed variables and functions do not hide a copy, and fingerprints are
+before hashing (its filter and winnowing are used; its k-gram hash is not, see
+:func:`_kgram_hashes`), so renamed variables and functions do not hide a copy, and fingerprints are
 a set, so reordered functions do not either. Every team starts from the course template, so
 its fingerprints are boilerplate and never count: measured on a class, near-copies scored
 1.0 and every honest pair at most .46 with the template as boilerplate (.65 without).
@@ -16,7 +17,6 @@ matching passages; a pair is never points.
 
 from __future__ import annotations
 
-import io
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -63,7 +63,7 @@ class Prints:
     text: str
     starts: tuple[tuple[int, str], ...]
     """Where each file starts in :attr:`text`: (offset, relative path)."""
-    fingerprint: Any
+    fingerprint: _Fingerprint
 
     @property
     def tokens(self) -> int:
@@ -82,11 +82,56 @@ def _joined(sources: Iterable[Source]) -> tuple[str, tuple[tuple[int, str], ...]
     return "".join(parts), tuple(starts)
 
 
-def _fingerprint(text: str, k: int, window: int, bp: Any = None) -> Any:
-    from copydetect import CodeFingerprint
+@dataclass(slots=True)
+class _Fingerprint:
+    """What copydetect's ``compare_files`` reads of a fingerprint (its ``CodeFingerprint``'s
+    attributes), made with a hash that is the same in every process."""
+
+    k: int
+    filtered_code: str
+    offsets: Any
+    hashes: set[int]
+    hash_idx: dict[int, list[int]]
+    token_coverage: int
+
+
+def _kgram_hashes(text: str, k: int) -> Any:
+    """A polynomial hash of every k-gram of ``text``, as int64 (numpy, wrapping arithmetic).
+
+    Why not copydetect's own: it hashes with Python's ``hash()``, which is salted per process
+    (``PYTHONHASHSEED``), so winnowing kept other fingerprints in each run and a pair scored
+    .89 in one run and .92 in the next. This one is the same everywhere."""
+    import numpy as np
+
+    codes = np.frombuffer(text.encode("utf-32-le"), dtype=np.uint32).astype(np.uint64)
+    n = len(codes) - k + 1
+    if n <= 0:
+        return np.array([], dtype=np.int64)
+    h = np.zeros(n, dtype=np.uint64)
+    base = np.uint64(1_000_003)
+    with np.errstate(over="ignore"):
+        for j in range(k):
+            h = h * base + codes[j : j + n]
+    return h.view(np.int64)
+
+
+def _fingerprint(text: str, k: int, window: int, bp: Any = None) -> _Fingerprint:
+    """copydetect's fingerprint of ``text`` (its filter: identifiers as one letter; its
+    winnowing; boilerplate removed), with :func:`_kgram_hashes`."""
+    import numpy as np
+    from copydetect.utils import filter_code, get_token_coverage, winnow
 
     logging.getLogger().setLevel(max(logging.getLogger().level, logging.ERROR))
-    return CodeFingerprint("code.cpp", k, window, boilerplate=bp, fp=io.StringIO(text))
+    filtered, offsets = filter_code(text, "code.cpp")
+    hashes, idx = winnow(_kgram_hashes(filtered, k), window, remove_duplicates=False)
+    if bp is not None and len(bp) > 0:
+        keep = ~np.isin(hashes, bp)
+        hashes, idx = hashes[keep], idx[keep]
+    by_hash: dict[int, list[int]] = {}
+    for value, i in zip(hashes.tolist(), idx.tolist(), strict=True):
+        by_hash.setdefault(int(value), []).append(int(i))
+    coverage = int(get_token_coverage(by_hash, k, len(filtered)))
+    return _Fingerprint(k, filtered, offsets, set(by_hash), by_hash, coverage)
 
 
 def boilerplate(template: Iterable[Source]) -> Any:
@@ -96,7 +141,7 @@ def boilerplate(template: Iterable[Source]) -> Any:
     text, _ = _joined(template)
     if not text.strip():
         return np.array([], dtype=np.int64)
-    return np.unique(np.array(sorted(_fingerprint(text, K, 1).hashes)))
+    return np.unique(np.array(sorted(_fingerprint(text, K, 1).hashes), dtype=np.int64))
 
 
 def prints(team: str, sources: Iterable[Source], bp: Any = None) -> Prints:
