@@ -25,7 +25,7 @@ from usar_replay.core.errors import NoPackage, SeveralPackages, UsageError, Usar
 from usar_replay.core.folder_walk import shown
 from usar_replay.ros1.building.workspace import find_package
 
-__all__ = ["ClassCode", "grade_class", "teams"]
+__all__ = ["ClassCode", "grade_class", "grade_teams", "teams"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,7 +90,19 @@ def grade_class(
 ) -> ClassCode:
     """Every team of ``paths`` graded (``jobs`` at a time), and the pairs of them whose own
     code scores ``threshold`` or more."""
-    found = teams(paths)
+    return grade_teams(teams(paths), rubric, template, options, jobs=jobs, threshold=threshold)
+
+
+def grade_teams(
+    found: Sequence[tuple[str, Path]],
+    rubric: Rubric,
+    template: Template = NO_TEMPLATE,
+    options: Options | None = None,
+    *,
+    jobs: int = 1,
+    threshold: float = similarity.THRESHOLD,
+) -> ClassCode:
+    """:func:`grade_class` of teams already named (``usar batch``'s, by its own names)."""
     opts = options or Options()
     with ThreadPoolExecutor(max(1, jobs)) as pool:
         done = list(pool.map(lambda t: _one(t[0], t[1], rubric, template, opts), found))
