@@ -61,3 +61,12 @@ def test_without_pdftotext_it_says_what_to_install(
     monkeypatch.setenv("PATH", "/nonexistent")
     got = report(read_submission(pkg))
     assert got.problems == ("pdftotext is not installed: apt-get install poppler-utils",)
+
+
+def test_a_pdf_over_the_size_read_is_said(tmp_path: Path) -> None:
+    pkg = codetools.beta(tmp_path / "t")
+    with open(pkg / "huge.pdf", "wb") as f:  # sparse: no disk used
+        f.truncate(65 * 1024 * 1024)
+    got = report(read_submission(pkg))
+    assert got.file is None
+    assert got.problems == (f"huge.pdf: {65 * 1024 * 1024} bytes, over the 67108864 read",)

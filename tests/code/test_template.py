@@ -24,3 +24,9 @@ def test_the_templates_parts(tmp_path: Path) -> None:
 def test_function_names_skip_control_statements_and_comments() -> None:
     text = "// void ghost() {}\nint f(int a) { if (a) { return 1; } while (a) {} }\n"
     assert function_names(text) == {"f"}
+
+
+def test_a_template_without_package_xml_is_read_as_its_folder(tmp_path: Path) -> None:
+    root = codetools.write(tmp_path / "final_project", {"src/main.cpp": codetools.TEMPLATE_MAIN})
+    t = read_template(root)
+    assert t.names == {"broadcast", "listen", "main"} and len(t.sources) == 1

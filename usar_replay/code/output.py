@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import textwrap
 from collections.abc import Sequence
 from dataclasses import asdict
 from typing import Any
@@ -137,8 +138,9 @@ def to_text(grades: Sequence[PackageGrade], similar: Sequence[Pair], threshold: 
         for f in g.findings:
             out.append(_cut(f"  finding: {f}"))
         out.append(_cut("  " + _report_line(g)))
-    if grades:
-        out.append(_cut("for the grader (not scored): " + "; ".join(grades[0].grader)))
+    if grades and grades[0].grader:
+        said = "for the grader (not scored): " + "; ".join(grades[0].grader)
+        out += textwrap.wrap(safe_line(said), WIDTH, subsequent_indent="  ")
     if similar:
         out.append(_cut(f"similar pairs (score >= {threshold:g}, for a person to review):"))
         for p in similar:

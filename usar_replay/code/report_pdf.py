@@ -71,9 +71,11 @@ def allowed_words() -> frozenset[str]:
     )
 
 
-def find_reports(sub: Submission, template_pdfs: frozenset[str] = frozenset()) -> list[Entry]:
+def find_reports(
+    sub: Submission, template_pdfs: frozenset[str] = frozenset(), said: list[str] | None = None
+) -> list[Entry]:
     """The submission's PDFs that could be its report (links and the template's own left out),
-    sorted by path."""
+    sorted by path; one over the size read is said in ``said``."""
     import hashlib
 
     out = []
@@ -81,6 +83,8 @@ def find_reports(sub: Submission, template_pdfs: frozenset[str] = frozenset()) -
         if PurePosixPath(os.fsdecode(e.rel)).suffix.lower() != ".pdf" or e.link is not None:
             continue
         if e.size > _MAX_PDF:
+            if said is not None:
+                said.append(f"{os.fsdecode(e.rel)}: {e.size} bytes, over the {_MAX_PDF} read")
             continue
         h = hashlib.sha256()
         stream(e, h.update)
@@ -166,13 +170,13 @@ def report(
     sub: Submission, template_pdfs: frozenset[str] = frozenset(), limits: ToolLimits | None = None
 ) -> Report:
     """The flags of the submission's report (the first PDF that reads as one)."""
-    candidates = find_reports(sub, template_pdfs)
+    problems: list[str] = []
+    candidates = find_reports(sub, template_pdfs, problems)
     if not candidates:
-        return Report(None)
+        return Report(None, problems=tuple(problems))
     gone = missing("pdftotext")
     if gone:
         return Report(os.fsdecode(candidates[0].rel), problems=(gone,))
-    problems: list[str] = []
     for entry in candidates:
         name = os.fsdecode(entry.rel)
         pages, why = _read_pdf(entry, limits)

@@ -18,9 +18,9 @@ import os
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
-from usar_replay.core.errors import UnusableSubmission
+from usar_replay.core.errors import NoPackage, UnusableSubmission
 from usar_replay.core.folder_walk import Entry, shown, stream, walk
-from usar_replay.ros1.building.workspace import find_package
+from usar_replay.ros1.building.workspace import Package, find_package
 
 __all__ = [
     "CXX_SUFFIXES",
@@ -106,13 +106,22 @@ def read_text(entry: Entry, max_bytes: int = MAX_SOURCE_BYTES) -> tuple[str | No
         return None, f"not UTF-8 (byte {err.start})"
 
 
-def read_submission(path: str | os.PathLike[str], name: str = "") -> Submission:
+def read_submission(
+    path: str | os.PathLike[str], name: str = "", *, need_package: bool = True
+) -> Submission:
     """The team at ``path``: its package found as ``--ros1`` does, its files walked once.
 
     Raises a :class:`~usar_replay.core.errors.UsarError` (one line) when no package can be
-    found or the folder breaks the walk's rules: the caller makes it that team's verdict."""
+    found or the folder breaks the walk's rules: the caller makes it that team's verdict.
+    ``need_package`` False: a folder without ``package.xml`` is read as the package itself
+    (the course template as some copies of it are handed out)."""
     root = Path(path)
-    pkg = find_package(root)
+    try:
+        pkg = find_package(root)
+    except NoPackage:
+        if need_package or not root.is_dir():
+            raise
+        pkg = Package(root, root.name)
     try:
         entries = walk(root, skip_dirs=SKIP_DIRS, what=f"the folder {shown(root.name)}")
     except UnusableSubmission as err:

@@ -59,7 +59,7 @@ def function_names(text: str) -> set[str]:
 
 def read_template(path: str | os.PathLike[str]) -> Template:
     """The template at ``path`` (a package folder, or a folder holding one)."""
-    sub = read_submission(path, "template")
+    sub = read_submission(path, "template", need_package=False)
     lines = frozenset(
         normal(c.text)
         for s in sub.sources
