@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import codetools
+import pytest
 
 from usar_replay.code.template import NO_TEMPLATE, function_names, read_template
 
@@ -30,3 +32,14 @@ def test_a_template_without_package_xml_is_read_as_its_folder(tmp_path: Path) ->
     root = codetools.write(tmp_path / "final_project", {"src/main.cpp": codetools.TEMPLATE_MAIN})
     t = read_template(root)
     assert t.names == {"broadcast", "listen", "main"} and len(t.sources) == 1
+
+
+def test_names_are_qualified_and_fall_back_to_short_ones_without_doxygen(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    text = "class Robot {\n public:\n  int step();\n};\nint Robot::step() { return 1; }\n"
+    root = codetools.package(tmp_path / "t", "t", {"src/robot.cpp": text})
+    if shutil.which("doxygen"):
+        assert read_template(root).names == {"Robot::step"}
+    monkeypatch.setenv("PATH", "/nonexistent")
+    assert read_template(root).names == {"step"}

@@ -60,12 +60,10 @@ class PackageGrade:
 
 
 def _own(items: tuple[Symbol, ...], template: Template) -> list[Symbol]:
-    """The package's own symbols: not the template's functions (by short name), and in the
-    package's files."""
-    return [
-        s for s in items
-        if not (s.kind == "function" and s.name.split("::")[-1] in template.names)
-    ]  # fmt: skip
+    """The package's own symbols: not the template's functions (the same qualified name: a
+    free ``listen()`` kept from the template is the template's, a method ``Explorer::listen``
+    is the team's)."""
+    return [s for s in items if not (s.kind == "function" and s.name in template.names)]
 
 
 def grade(
@@ -92,7 +90,7 @@ def grade(
     else:
         undocumented = [s for s in own if not s.documented]
         metrics["doc_coverage"] = round(1 - len(undocumented) / len(own), 3) if own else None
-        said = f"{len(own) - len(undocumented)}/{len(own)} documented"
+        said = f"{len(own) - len(undocumented)}/{len(own)} documented" if own else ""
         if undocumented:
             said += f"; first not: {undocumented[0].file}:{undocumented[0].line}"
         evidence["doc_coverage"] = said
@@ -129,7 +127,7 @@ def grade(
     evidence["commented_out_lines"] = "; ".join(f"{f}:{a} ({n})" for f, a, n in out.blocks[:4])
     evidence["largest_commented_block"] = out.where
 
-    found = findings(srcs, template.names)
+    found = findings(srcs, frozenset(n.split("::")[-1] for n in template.names))
     if found.problem:
         for m in ("unused_functions", "unread_variables", "lint_findings"):
             metrics[m] = None

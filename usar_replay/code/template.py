@@ -21,6 +21,7 @@ from pathlib import PurePosixPath
 
 from usar_replay.code.comments import looks_like_code, normal
 from usar_replay.code.cxx import code_only, comments
+from usar_replay.code.doxygen import symbols
 from usar_replay.code.sources import Source, read_submission
 from usar_replay.core.folder_walk import stream
 
@@ -38,7 +39,8 @@ class Template:
     comment_lines: frozenset[str]
     """Its commented-out code lines, whitespace removed (:func:`~.comments.normal`)."""
     names: frozenset[str]
-    """The functions it defines (short names)."""
+    """The functions it defines, qualified as doxygen names them (``listen``,
+    ``Explorer::step``); by a definition's short name when doxygen is not installed."""
     pdf_sha256: frozenset[str]
     """Its PDFs (the course's handout): never a team's report."""
     path: str = ""
@@ -66,7 +68,11 @@ def read_template(path: str | os.PathLike[str]) -> Template:
         for c in comments(s.text)
         if not c.doc and looks_like_code(c.text)
     )
-    names = frozenset(n for s in sub.sources for n in function_names(s.text))
+    found = symbols(sub.sources)
+    if found.problem:
+        names = frozenset(n for s in sub.sources for n in function_names(s.text))
+    else:
+        names = frozenset(s.name for s in found.items if s.kind == "function")
     pdfs = set()
     for e in sub.entries:
         if PurePosixPath(os.fsdecode(e.rel)).suffix.lower() == ".pdf" and e.link is None:
