@@ -24,7 +24,7 @@ from usar_replay.batch.classreport import (
     to_table,
 )
 from usar_replay.batch.code_grade import CODE_JSON, CodeCell, cells_from_json, grade_code
-from usar_replay.batch.plan import GRADE_FORMAT, Plan, Submission, World
+from usar_replay.batch.plan import GRADE_FORMAT, Plan, Submission, make_worlds
 
 needs = pytest.mark.skipif(
     any(shutil.which(t) is None for t in ("doxygen", "cppcheck", "clang-format")),
@@ -40,7 +40,8 @@ def _class(tmp_path: Path) -> tuple[Plan, list[tuple[str, Path]]]:
     (subs / "py" / "mission.py").write_text("def main() -> None:\n    pass\n")
     out = tmp_path / "out"
     teams = [("alpha", subs / "alpha"), ("copy", subs / "copy"), ("py", subs / "py")]
-    plan = Plan(out, [Submission(t, p, "", "", "") for t, p in teams], [World("w", "", "w")])
+    world = replace(make_worlds((), (), None)[0], name="w")  # the course world
+    plan = Plan(out, [Submission(t, p, "", "", "") for t, p in teams], [world])
     for team, _ in teams:
         (out / team).mkdir(parents=True)
         grade = {"format": GRADE_FORMAT, "outcome": "done", "points": 60.0, "max_points": 60.0}
@@ -100,3 +101,21 @@ def test_cells_from_json_reads_only_its_format() -> None:
     assert cells_from_json(doc) == {"a": CodeCell(3.0, 6.0, ("3/6 x = 1  a.cpp:1",), ("b (0.70)",))}
     assert cells_from_json({"format": "other"}) == {} and cells_from_json(None) == {}
     assert CODE_JSON == "code.json"
+
+
+@needs
+def test_the_driver_writes_the_code_grade_with_code(tmp_path: Path) -> None:
+    """``grade_class(..., code=True)`` (what ``usar batch --code`` calls) after the runs."""
+    from usar_replay.batch.driver import grade_class
+    from usar_replay.batch.engines import make_engine
+
+    plan, _ = _class(tmp_path)
+    tmpl = codetools.template(tmp_path / "template")
+    summary = grade_class(plan, make_engine("local", 1), gradescope=True, quiet=True,
+                          code=True, code_template=str(tmpl))  # fmt: skip
+    assert "code submission (usar code" in summary.table
+    doc = json.loads((plan.out_root / "code.json").read_text())
+    assert doc["template"] == str(tmpl)
+    results = json.loads((plan.out_root / "alpha" / "results.json").read_text())
+    assert [t["name"] for t in results["tests"]][-1] == "code submission: the code rubric"
+    assert "code_max" in (plan.out_root / "summary.csv").read_text().splitlines()[0]
