@@ -72,3 +72,21 @@ def test_a_refused_team_scores_zero_and_says_why() -> None:
     g = refused("t", "/x", "src/p.cpp: not a regular file", default_rubric())
     assert g.verdict == "unreadable" and g.points == 0 and g.max_points == 60
     assert all(s.note == "src/p.cpp: not a regular file" for s in g.lines)
+
+
+def test_a_tool_stopped_by_the_teams_files_scores_zero_not_null(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file made to hang doxygen must not take its lines out of the maximum."""
+    import usar_replay.code.doxygen as dox
+    from usar_replay.code.tools import Ran
+
+    def stopped(*_a: object, **_k: object) -> Ran:
+        return Ran(-9, "", "", "its 30 s wall limit")
+
+    monkeypatch.setattr(dox, "run_tool", stopped)
+    g = grade(read_submission(codetools.alpha(tmp_path / "a")), default_rubric())
+    by = {s.line.id: s for s in g.lines}
+    assert by["doc_coverage"].points == 0 and by["classes"].points == 0
+    assert by["doc_coverage"].note == "doxygen exceeded its 30 s wall limit"
+    assert g.max_points == 57

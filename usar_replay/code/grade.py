@@ -9,6 +9,7 @@ template does not hold: the template's functions, commented-out lines and PDFs n
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,11 @@ from usar_replay.code.style import style
 from usar_replay.code.template import NO_TEMPLATE, Template
 
 __all__ = ["Options", "PackageGrade", "grade", "refused"]
+
+_TOOLS = ("doxygen ", "cppcheck ", "clang-format ", "g++ ")
+_ON_FILES = re.compile(r"^\S+ (exceeded |failed \(exit)")
+"""A tool's note that says the team's files stopped it (a limit, a failure), not that it is
+missing or that a header is found nowhere."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,7 +169,10 @@ def grade(
 
     rep = report(sub, template.pdf_sha256)
     metrics["report_pages"] = rep.pages
-    lines = score(rubric, metrics, evidence, notes)
+    failed = frozenset(
+        m for m, note in notes.items() if note.startswith(_TOOLS) and _ON_FILES.search(note)
+    )
+    lines = score(rubric, metrics, evidence, notes, failed)
     return PackageGrade(
         team=sub.name,
         package=sub.package_name,

@@ -159,13 +159,16 @@ def score(
     metrics: Mapping[str, object],
     evidence: Mapping[str, str],
     notes: Mapping[str, str],
+    failed: frozenset[str] = frozenset(),
 ) -> list[Scored]:
     """Each line of ``rubric`` scored on ``metrics`` (an unknown or None metric: not judged,
-    the note says why)."""
+    the note says why). A metric in ``failed`` could not be measured because of the team's
+    files (a tool past its limits on them, or failing on them): its lines score 0, never
+    ``null``, so a file made to stop a tool cannot take a line out of the maximum."""
     out = []
     for line in rubric.lines:
         value = metrics.get(line.metric)
-        share = _share(line, value)
+        share = 0.0 if line.metric in failed and value is None else _share(line, value)
         note = notes.get(line.metric, "")
         if share is None and not note:
             note = f"{line.metric} was not measured"
