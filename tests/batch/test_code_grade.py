@@ -119,3 +119,17 @@ def test_the_driver_writes_the_code_grade_with_code(tmp_path: Path) -> None:
     results = json.loads((plan.out_root / "alpha" / "results.json").read_text())
     assert [t["name"] for t in results["tests"]][-1] == "code submission: the code rubric"
     assert "code_max" in (plan.out_root / "summary.csv").read_text().splitlines()[0]
+
+
+def test_a_code_template_without_code_is_a_usage_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from usar_replay.cli.main import main
+
+    (tmp_path / "subs").mkdir()
+    args = ["batch", str(tmp_path / "subs"), "-o", str(tmp_path / "out")]
+    assert main([*args, "--code-template", str(tmp_path)]) == 2
+    assert "--code-template: give --code too" in capsys.readouterr().err
+    assert main([*args, "--code", "--code-template", str(tmp_path / "none")]) == 2
+    assert "--code-template " in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

@@ -98,3 +98,32 @@ def test_an_output_that_exists_is_refused(
     (tmp_path / "g.json").write_text("{}")
     assert main(["code", str(pkg), "--json", str(tmp_path / "g.json")]) == 2
     assert "--overwrite" in capsys.readouterr().err
+
+
+def test_hostile_folders_are_their_teams_verdicts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A huge (sparse) file, a link out, a binary and a non-UTF-8 source: each is that team's
+    finding or verdict; every other team is graded, nothing crashes or hangs (exit 1)."""
+    root = tmp_path / "class"
+    codetools.alpha(root / "good")
+    huge = codetools.beta(root / "huge")
+    with open(huge / "src" / "blob.bin", "wb") as f:
+        f.truncate(300 * 1024 * 1024)
+    linked = codetools.beta(root / "linked")
+    os.symlink("/etc/shadow", linked / "src" / "secret.h")
+    odd = codetools.beta(root / "odd")
+    (odd / "src" / "bin.cpp").write_bytes(b"\x7fELF\0\0\0")
+    (odd / "src" / "latin.cpp").write_bytes(b"// \xe9t\xe9\nint x;\n")
+    json_path = tmp_path / "g.json"
+    assert main(["code", str(root), "--json", str(json_path)]) == 1
+    text = capsys.readouterr().out
+    doc = json.loads(json_path.read_text())
+    verdicts = {p["team"]: p["verdict"] for p in doc["packages"]}
+    assert verdicts == {"good": "graded", "huge": "unreadable", "linked": "unreadable",
+                        "odd": "graded"}  # fmt: skip
+    odd_pkg = next(p for p in doc["packages"] if p["team"] == "odd")
+    assert any("bin.cpp: binary" in f for f in odd_pkg["findings"])
+    assert any("latin.cpp: not UTF-8" in f for f in odd_pkg["findings"])
+    assert "huge (no package): 0/60 points, unreadable" in text
+    assert "a link leaving" in text and "/etc/shadow" in text
