@@ -90,3 +90,13 @@ def test_a_tool_stopped_by_the_teams_files_scores_zero_not_null(
     assert by["doc_coverage"].points == 0 and by["classes"].points == 0
     assert by["doc_coverage"].note == "doxygen exceeded its 30 s wall limit"
     assert g.max_points == 57
+
+
+def test_a_package_without_cxx_scores_no_code_points(tmp_path: Path) -> None:
+    """Nothing to measure is not clean code: no unused functions of nothing."""
+    pkg = codetools.package(tmp_path / "e", "e", {"doc/instructions.txt": "roslaunch e e\n"})
+    g = grade(read_submission(pkg), default_rubric())
+    by = {s.line.id: s for s in g.lines}
+    assert by["unused_functions"].points == 0 and by["formatting"].points == 0
+    assert by["unused_functions"].note == "no readable C++ sources in the package"
+    assert by["instructions"].points == 4 and g.points == 4 and g.max_points == 60

@@ -32,6 +32,12 @@ _TOOLS = ("doxygen ", "cppcheck ", "clang-format ", "g++ ")
 _ON_FILES = re.compile(r"^\S+ (exceeded |failed \(exit)")
 """A tool's note that says the team's files stopped it (a limit, a failure), not that it is
 missing or that a header is found nowhere."""
+_CODE_METRICS = frozenset(
+    {"doc_coverage", "commented_out_lines", "largest_commented_block", "unused_functions",
+     "unread_variables", "lint_findings", "classes", "main_lines", "format_changed_share",
+     "docs_html", "builds_clean"}
+)  # fmt: skip
+"""The metrics of the code itself (not the deliverables, not the report)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -172,6 +178,11 @@ def grade(
     failed = frozenset(
         m for m, note in notes.items() if note.startswith(_TOOLS) and _ON_FILES.search(note)
     )
+    if not srcs:  # nothing to measure is not clean code: every code line scores 0
+        for m in _CODE_METRICS:
+            metrics[m] = None
+            notes[m] = "no readable C++ sources in the package"
+        failed |= _CODE_METRICS
     lines = score(rubric, metrics, evidence, notes, failed)
     return PackageGrade(
         team=sub.name,
