@@ -48,3 +48,16 @@ def test_a_team_with_a_fifo_is_its_verdict_not_the_end(tmp_path: Path) -> None:
     assert verdicts == {"alpha": "graded", "bad": "unreadable"}
     bad = next(g for g in done.grades if g.team == "bad")
     assert "not a regular file" in bad.findings[0]
+
+
+def test_a_class_where_one_team_has_no_package_is_still_a_class(tmp_path: Path) -> None:
+    root = tmp_path / "class"
+    codetools.alpha(root / "alpha")
+    codetools.beta(root / "beta")
+    (root / "python_team").mkdir()
+    (root / "python_team" / "mission.py").write_text("def main() -> None: ...\n")
+    assert [n for n, _ in teams([str(root)])] == ["alpha", "beta", "python_team"]
+    repo = tmp_path / "repo"
+    codetools.alpha(repo / "catkin_ws" / "src" / "final_project")
+    (repo / "docs").mkdir()
+    assert teams([str(repo)]) == [("repo", repo)]

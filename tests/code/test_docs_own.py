@@ -37,3 +37,11 @@ def test_stale_html_misses_the_new_files(tmp_path: Path) -> None:
 def test_no_html_is_none(tmp_path: Path) -> None:
     got = docs_own(read_submission(codetools.beta(tmp_path / "b")), ["MarkerBook"])
     assert got.own is None and got.pages == 0
+
+
+def test_case_insensitive_doxygen_page_names_are_read() -> None:
+    from usar_replay.code.docs_own import _page_source
+
+    assert _page_source("_robot_8h.html") == "robot.h"
+    assert _page_source("main__new_8cpp_source.html") == "main_new.cpp"
+    assert _page_source("classfp_1_1_robot.html") is None

@@ -3,7 +3,8 @@
 Why here: ``usar code PKG...`` and ``usar code DIR`` (a folder of team folders, as ``usar
 batch`` takes) grade the same way, and ``usar batch --code`` reuses it. A path that is (or holds
 exactly one) catkin package is one team, found as ``--ros1`` finds it; a path that holds several
-is a class folder, each non-hidden sub-folder a team. A team whose folder cannot be read (a
+is a class folder (two or more of its sub-folders hold a package), each non-hidden sub-folder
+a team. A team whose folder cannot be read (a
 FIFO, a link out, a file over the caps, no package) is that team's verdict (``unreadable``,
 every line 0, the reason said), never the end of the class.
 """
@@ -46,6 +47,16 @@ def _sub_folders(path: Path) -> list[Path]:
         raise UsageError(f"{path}: cannot be read ({err.strerror})") from None
 
 
+def _holds_package(folder: Path) -> bool:
+    try:
+        find_package(folder)
+    except SeveralPackages:
+        return True
+    except UsarError:
+        return False
+    return True
+
+
 def teams(paths: Sequence[str]) -> list[tuple[str, Path]]:
     """(team name, folder) of every team in ``paths``, sorted by name (see the docstring)."""
     out: dict[str, Path] = {}
@@ -53,13 +64,17 @@ def teams(paths: Sequence[str]) -> list[tuple[str, Path]]:
         path = Path(raw)
         if not path.is_dir():
             raise UsageError(f"{raw}: no such folder; give package folders or a class folder")
-        try:
-            find_package(path)
-            found = [path]
-        except SeveralPackages:
-            found = _sub_folders(path)
-        except NoPackage:
-            found = _sub_folders(path) if len(paths) == 1 else [path]
+        subs = [] if (path / "package.xml").is_file() else _sub_folders(path)
+        if sum(1 for s in subs if _holds_package(s)) >= 2:
+            found = subs  # a class folder: each sub-folder is a team (one without: its verdict)
+        else:
+            try:
+                find_package(path)
+                found = [path]
+            except SeveralPackages:
+                found = subs
+            except NoPackage:
+                found = subs if len(paths) == 1 else [path]
         if not found:
             raise UsageError(f"{raw}: no catkin package in it; give package folders")
         for folder in found:

@@ -48,12 +48,33 @@ def html_files(sub: Submission) -> list[str]:
     )
 
 
+_ESCAPES = {"_": "_", "8": ".", "1": ":", "2": "/", "3": "<", "4": ">", "5": "*", "6": "&",
+            "7": "|", "9": "!"}  # fmt: skip
+
+
+def _unescape(stem: str) -> str:
+    """doxygen's file-name escaping undone: ``__`` ``_``, ``_8`` ``.``; with
+    ``CASE_SENSE_NAMES = NO``, ``_r`` is ``R`` (lower-cased here anyway)."""
+    out, i = [], 0
+    while i < len(stem):
+        ch = stem[i]
+        if ch == "_" and i + 1 < len(stem):
+            nxt = stem[i + 1]
+            out.append(_ESCAPES.get(nxt, nxt))
+            i += 2
+        else:
+            out.append(ch)
+            i += 1
+    return "".join(out).lower()
+
+
 def _page_source(name: str) -> str | None:
-    """``explorer_8cpp.html`` -> ``explorer.cpp`` (doxygen's page of a file)."""
+    """``explorer_8cpp.html`` -> ``explorer.cpp`` (doxygen's page of a file; ``_robot_8h.html``,
+    as a case-insensitive doxygen names ``Robot.h``, -> ``robot.h``)."""
     m = _PAGE.match(name)
     if not m:
         return None
-    return m.group(1).replace("__", "_").lower() + "." + m.group(2)
+    return _unescape(m.group(1)) + "." + m.group(2)
 
 
 def _short(name: str) -> str:
