@@ -70,3 +70,23 @@ def test_a_pdf_over_the_size_read_is_said(tmp_path: Path) -> None:
     got = report(read_submission(pkg))
     assert got.file is None
     assert got.problems == (f"huge.pdf: {65 * 1024 * 1024} bytes, over the 67108864 read",)
+
+
+@needs
+def test_doxygens_pdfs_are_not_the_report_and_a_named_report_comes_first(tmp_path: Path) -> None:
+    team = tmp_path / "team"
+    pkg = codetools.beta(team / "final_project")
+    codetools.pdf(pkg / "doc" / "latex" / "dir_3de2_dep.pdf", ["src"])
+    codetools.pdf(team / "slides.pdf", ["Our demo day slides"])
+    codetools.pdf(team / "Final_Report_G5.pdf", codetools.REPORT_PAGES)
+    assert report(read_submission(team)).file == "Final_Report_G5.pdf"
+
+
+@needs
+def test_a_ligature_is_its_letters(tmp_path: Path) -> None:
+    """pdftotext gives U+FB01 for "fi": read as its letters, a typo in a word with one is
+    still found (it was dropped: "\ufb01" is no ASCII letter)."""
+    pkg = codetools.beta(tmp_path / "t")
+    codetools.pdf(pkg / "report.pdf", ["1 Introduction\nThe \ufb01ducal marker is found."])
+    got = report(read_submission(pkg))
+    assert got.misspelled == ("fiducal",)

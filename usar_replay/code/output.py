@@ -130,6 +130,9 @@ def to_text(grades: Sequence[PackageGrade], similar: Sequence[Pair], threshold: 
         out.append(_cut(f"{g.team} ({g.package or 'no package'}): {_num(g.points)}/"
                         f"{_num(g.max_points)} points" + ("" if g.verdict == "graded"
                                                          else f", {g.verdict}")))  # fmt: skip
+        if g.verdict != "graded":  # every line 0 for the one reason below
+            out += [_cut(f"  finding: {f}") for f in g.findings]
+            continue
         for s in g.lines:
             pts = "  -  " if s.points is None else f"{s.points:5.4g}"
             shown = "" if s.measured is None else f" = {s.measured}"

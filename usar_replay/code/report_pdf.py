@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import re
 import tempfile
+import unicodedata
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path, PurePosixPath
@@ -74,13 +75,18 @@ def allowed_words() -> frozenset[str]:
 def find_reports(
     sub: Submission, template_pdfs: frozenset[str] = frozenset(), said: list[str] | None = None
 ) -> list[Entry]:
-    """The submission's PDFs that could be its report (links and the template's own left out),
-    sorted by path; one over the size read is said in ``said``."""
+    """The submission's PDFs that could be its report, the likeliest first (a name that says
+    "report", then the largest): links, the template's own and doxygen's output (anything under
+    a ``latex/`` or ``html/`` folder: its graphs, its ``refman.pdf``) left out; one over the size
+    read is said in ``said``."""
     import hashlib
 
     out = []
     for e in sub.entries:
-        if PurePosixPath(os.fsdecode(e.rel)).suffix.lower() != ".pdf" or e.link is not None:
+        rel = PurePosixPath(os.fsdecode(e.rel))
+        if rel.suffix.lower() != ".pdf" or e.link is not None:
+            continue
+        if {"latex", "html"} & {part.lower() for part in rel.parts[:-1]}:
             continue
         if e.size > _MAX_PDF:
             if said is not None:
@@ -90,6 +96,7 @@ def find_reports(
         stream(e, h.update)
         if h.hexdigest() not in template_pdfs:
             out.append(e)
+    out.sort(key=lambda e: ("report" not in os.fsdecode(e.rel).lower(), -e.size, e.rel))
     return out
 
 
@@ -147,7 +154,8 @@ def _read_pdf(entry: Entry, limits: ToolLimits | None) -> tuple[list[str] | None
         return None, f"pdftotext exceeded {ran.limit}"
     if ran.code != 0:
         return None, f"pdftotext could not read it (exit {ran.code})"
-    pages = ran.output.split("\f")
+    # NFKC: a ligature (U+FB01 for "fi") is its letters, or "fiducial" reads as "iducial"
+    pages = unicodedata.normalize("NFKC", ran.output).split("\f")
     if pages and not pages[-1].strip():
         pages.pop()
     return pages, ""
