@@ -108,4 +108,10 @@ def findings(
             return Findings((), f"cppcheck exceeded {ran.limit}")
         if ran.code != 0:
             return Findings((), f"cppcheck failed (exit {ran.code})")
-        return Findings(tuple(parse_xml(ran.errors, template_names)))
+        # cppcheck writes a name's backslash (an escaped byte: ``caf\\xe9.cpp``) as ``/``
+        names = {s.rel.replace("\\", "/"): s.rel for s in srcs}
+        found = [
+            Finding(f.id, f.severity, names.get(f.file, f.file), f.line, f.symbol, f.msg)
+            for f in parse_xml(ran.errors, template_names)
+        ]
+        return Findings(tuple(sorted(found, key=lambda f: (f.file, f.line, f.id, f.symbol))))

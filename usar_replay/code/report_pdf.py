@@ -24,7 +24,7 @@ from pathlib import Path, PurePosixPath
 
 from usar_replay.code.sources import Submission
 from usar_replay.code.tools import ToolLimits, missing, run_tool
-from usar_replay.core.folder_walk import Entry, stream
+from usar_replay.core.folder_walk import Entry, shown, stream
 
 __all__ = ["MAX_PAGES", "OUTLINE", "Report", "allowed_words", "find_reports", "report",
            "sections", "cpp_lines", "words"]  # fmt: skip
@@ -83,20 +83,20 @@ def find_reports(
 
     out = []
     for e in sub.entries:
-        rel = PurePosixPath(os.fsdecode(e.rel))
+        rel = PurePosixPath(shown(e.rel))
         if rel.suffix.lower() != ".pdf" or e.link is not None:
             continue
         if {"latex", "html"} & {part.lower() for part in rel.parts[:-1]}:
             continue
         if e.size > _MAX_PDF:
             if said is not None:
-                said.append(f"{os.fsdecode(e.rel)}: {e.size} bytes, over the {_MAX_PDF} read")
+                said.append(f"{shown(e.rel)}: {e.size} bytes, over the {_MAX_PDF} read")
             continue
         h = hashlib.sha256()
         stream(e, h.update)
         if h.hexdigest() not in template_pdfs:
             out.append(e)
-    out.sort(key=lambda e: ("report" not in os.fsdecode(e.rel).lower(), -e.size, e.rel))
+    out.sort(key=lambda e: ("report" not in shown(e.rel).lower(), -e.size, e.rel))
     return out
 
 
@@ -184,9 +184,9 @@ def report(
         return Report(None, problems=tuple(problems))
     gone = missing("pdftotext")
     if gone:
-        return Report(os.fsdecode(candidates[0].rel), problems=(gone,))
+        return Report(shown(candidates[0].rel), problems=(gone,))
     for entry in candidates:
-        name = os.fsdecode(entry.rel)
+        name = shown(entry.rel)
         pages, why = _read_pdf(entry, limits)
         if pages is None:
             problems.append(f"{name}: {why}")

@@ -44,6 +44,9 @@ class Source:
     """One C++ file of the package: its path relative to the package, and its text."""
 
     rel: str
+    """As :func:`~usar_replay.core.folder_walk.shown` writes it: a name that is not UTF-8, or
+    holds a control character, escaped (``caf\\xe9.cpp``), so that every output can hold it
+    and the copy a tool runs on has a name of its own."""
     text: str
 
     @property
@@ -82,7 +85,7 @@ class Submission:
     def entry(self, rel: str) -> Entry | None:
         """The walked entry of ``rel`` (relative to :attr:`root`)."""
         for e in self.entries:
-            if os.fsdecode(e.rel) == rel:
+            if shown(e.rel) == rel:
                 return e
         return None
 
@@ -126,13 +129,13 @@ def read_submission(
         entries = walk(root, skip_dirs=SKIP_DIRS, what=f"the folder {shown(root.name)}")
     except UnusableSubmission as err:
         raise UnusableSubmission(f"{shown(root.name)}: {err}") from None
-    prefix = pkg.path.relative_to(root).as_posix() if pkg.path != root else ""
+    prefix = shown(pkg.path.relative_to(root).as_posix()) if pkg.path != root else ""
     prefix = "" if prefix == "." else prefix
     sources: list[Source] = []
     findings: list[str] = []
     files: list[str] = []
     for e in entries:
-        rel = os.fsdecode(e.rel)
+        rel = shown(e.rel)
         files.append(rel)
         inside = not prefix or rel.startswith(prefix + "/")
         if not inside or PurePosixPath(rel).suffix.lower() not in CXX_SUFFIXES:

@@ -23,7 +23,7 @@ from usar_replay.code.comments import looks_like_code, normal
 from usar_replay.code.cxx import code_only, comments
 from usar_replay.code.doxygen import symbols
 from usar_replay.code.sources import Source, read_submission
-from usar_replay.core.folder_walk import stream
+from usar_replay.core.folder_walk import shown, stream
 
 __all__ = ["NO_TEMPLATE", "Template", "function_names", "read_template"]
 
@@ -75,7 +75,7 @@ def read_template(path: str | os.PathLike[str]) -> Template:
         names = frozenset(s.name for s in found.items if s.kind == "function")
     pdfs = set()
     for e in sub.entries:
-        if PurePosixPath(os.fsdecode(e.rel)).suffix.lower() == ".pdf" and e.link is None:
+        if PurePosixPath(shown(e.rel)).suffix.lower() == ".pdf" and e.link is None:
             h = hashlib.sha256()
             stream(e, h.update)
             pdfs.add(h.hexdigest())

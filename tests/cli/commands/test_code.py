@@ -127,3 +127,24 @@ def test_hostile_folders_are_their_teams_verdicts(
     assert any("latin.cpp: not UTF-8" in f for f in odd_pkg["findings"])
     assert "huge (no package): 0/60 points, unreadable" in text
     assert "a link leaving" in text and "/etc/shadow" in text
+
+
+def test_file_names_that_are_not_utf8_are_shown_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A name that is not UTF-8 (an old zip's ``caf\\xe9.cpp``) or holds a control character
+    is escaped in every output: the JSON is written, never a UnicodeEncodeError."""
+    pkg = codetools.beta(tmp_path / "t")
+    src = os.fsencode(pkg / "src")
+    with open(os.path.join(src, b"caf\xe9.cpp"), "wb") as f:
+        f.write(b"int unused_fn(int a) { return a; }\n// foo();\n// bar(1);\n")
+    with open(os.path.join(src, b"rtl\xe2\x80\xaeppc.cpp"), "wb") as f:
+        f.write(b"int x2;\n")
+    assert main(["code", str(pkg), "--json", str(tmp_path / "g.json"),
+                 "--csv", str(tmp_path / "g.csv")]) == 0  # fmt: skip
+    text = capsys.readouterr().out
+    assert "src/caf\\xe9.cpp:2" in text and "\u202e" not in text
+    doc = json.loads((tmp_path / "g.json").read_text(encoding="utf-8"))
+    assert doc["packages"][0]["evidence"]["unused_functions"].startswith(
+        "src/caf\\xe9.cpp:1 unused_fn"
+    )
