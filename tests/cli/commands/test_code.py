@@ -59,9 +59,9 @@ def test_a_missing_tool_is_one_line_and_its_lines_say_so(
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
     assert err == [
-        "usar code: doxygen is not installed: apt-get install doxygen (not scored: classes, "
-        "doc_coverage, docs_html, main_driver)"
+        "usar code: doxygen is not installed: apt-get install doxygen; 4 rubric lines not scored"
     ]
+    assert all(len(line) <= 100 for line in err)
     doc = json.loads((tmp_path / "g.json").read_text())
     lines = {x["id"]: x for x in doc["packages"][0]["lines"]}
     assert lines["doc_coverage"]["points"] is None
@@ -148,3 +148,23 @@ def test_file_names_that_are_not_utf8_are_shown_escaped(
     assert doc["packages"][0]["evidence"]["unused_functions"].startswith(
         "src/caf\\xe9.cpp:1 unused_fn"
     )
+
+
+def test_a_missing_report_tool_is_said_too(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for tool in TOOLS:
+        if tool != "hunspell":
+            os.symlink(shutil.which(tool) or "", bin_dir / tool)
+    monkeypatch.setenv("PATH", str(bin_dir))
+    pkg = codetools.beta(tmp_path / "t")
+    codetools.pdf(pkg / "report.pdf", codetools.REPORT_PAGES)
+    assert main(["code", str(pkg)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "usar code: hunspell is not installed: apt-get install hunspell hunspell-en-us; report "
+        "flags partial"
+    ]
+    assert len(err[0]) <= 100

@@ -72,10 +72,19 @@ def run(args: argparse.Namespace) -> int:
     if "html" in outs:
         write_text(outs["html"], pairs_html(done.similar, done.threshold),
                    overwrite=args.overwrite)  # fmt: skip
-    gone = sorted({s.note for g in done.grades for s in g.lines
-                   if "is not installed" in s.note})  # fmt: skip
+    # a missing tool: one line each, naming the Debian package; the lines that need it say so
+    needs: dict[str, set[str]] = {}
+    for g in done.grades:
+        for s in g.lines:
+            if "is not installed" in s.note:
+                needs.setdefault(s.note, set()).add(f"{s.line.id}")
+        for p in g.report.problems if g.report else ():
+            if "is not installed" in p:
+                needs.setdefault(p, set()).add("the report's flags")
+    gone = sorted(needs)
     for line in gone:
-        ids = sorted({s.line.id for g in done.grades for s in g.lines if s.note == line})
-        print(f"usar code: {line} (not scored: {', '.join(ids)})", file=sys.stderr)
+        n = len([x for x in needs[line] if x != "the report's flags"])
+        what = f"{n} rubric lines not scored" if n else "report flags partial"
+        print(f"usar code: {line}; {what}", file=sys.stderr)
     bad = [g.team for g in done.grades if g.verdict != "graded"]
     return EXIT_FAIL if gone or bad else EXIT_OK
