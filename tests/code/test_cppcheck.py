@@ -55,3 +55,15 @@ def test_without_cppcheck_it_says_what_to_install(monkeypatch: pytest.MonkeyPatc
     monkeypatch.setenv("PATH", "/nonexistent")
     got = findings([Source("a.cpp", "int a;\n")])
     assert got.problem == "cppcheck is not installed: apt-get install cppcheck"
+
+
+def test_a_report_cut_at_its_size_is_the_teams_failure(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Thousands of findings cut the XML: read as it is, it would be fewer (or none)."""
+    import usar_replay.code.cppcheck as cc
+    from usar_replay.code.tools import Ran
+
+    monkeypatch.setattr(cc, "missing", lambda _tool: "")
+    monkeypatch.setattr(cc, "run_tool", lambda *_a, **_k: Ran(0, "", "<results><err", "", True))
+    got = findings([Source("a.cpp", "int a;\n")])
+    assert got.items == () and got.problem.startswith("cppcheck exceeded its report's size")
+

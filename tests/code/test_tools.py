@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.code.tools import DEBIAN, ToolLimits, missing, run_tool, write_copy
+from usar_replay.code.tools import DEBIAN, OUTPUT_CAP, ToolLimits, missing, run_tool, write_copy
 
 
 def test_a_missing_tool_names_its_debian_package(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -37,3 +37,9 @@ def test_output_comes_back_and_the_copy_stays_inside(tmp_path: Path) -> None:
     assert not (tmp_path / "escape.cpp").exists()
     ran = run_tool(["cat", "src/a.cpp"], tmp_path / "w")
     assert (ran.code, ran.output, ran.limit) == (0, "int a;\n", "")
+
+
+def test_the_tools_output_says_when_it_was_cut(tmp_path: Path) -> None:
+    ran = run_tool(["head", "-c", str(OUTPUT_CAP + 10), "/dev/zero"], tmp_path)
+    assert ran.cut and len(ran.output) == OUTPUT_CAP
+    assert not run_tool(["echo", "hi"], tmp_path).cut

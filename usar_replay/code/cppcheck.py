@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from usar_replay.code.sources import Source
-from usar_replay.code.tools import ToolLimits, missing, run_tool, write_copy
+from usar_replay.code.tools import OUTPUT_CAP, ToolLimits, missing, run_tool, write_copy
 
 __all__ = ["UNREAD", "UNUSED", "Finding", "Findings", "findings", "parse_xml"]
 
@@ -108,6 +108,8 @@ def findings(
             return Findings((), f"cppcheck exceeded {ran.limit}")
         if ran.code != 0:
             return Findings((), f"cppcheck failed (exit {ran.code})")
+        if ran.cut:  # a cut report would read as fewer findings: the team's files made it
+            return Findings((), f"cppcheck exceeded its report's size ({OUTPUT_CAP} bytes)")
         # cppcheck writes a name's backslash (an escaped byte: ``caf\\xe9.cpp``) as ``/``
         names = {s.rel.replace("\\", "/"): s.rel for s in srcs}
         found = [

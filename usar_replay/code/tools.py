@@ -28,7 +28,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["DEBIAN", "Ran", "ToolLimits", "missing", "run_tool", "sandboxed", "write_copy"]
+__all__ = [
+    "DEBIAN", "OUTPUT_CAP", "Ran", "ToolLimits", "missing", "run_tool", "sandboxed", "write_copy"
+]  # fmt: skip
 
 DEBIAN: dict[str, str] = {
     "doxygen": "doxygen",
@@ -41,7 +43,7 @@ DEBIAN: dict[str, str] = {
 }
 """Each tool and the Debian package(s) that bring it."""
 
-_OUTPUT_CAP = 4 * 1024 * 1024
+OUTPUT_CAP = 4 * 1024 * 1024
 """Bytes of a tool's output kept."""
 
 
@@ -57,10 +59,12 @@ class ToolLimits:
 class Ran:
     code: int
     output: str
-    """stdout, cut at :data:`_OUTPUT_CAP` bytes, decoded leniently."""
+    """stdout, cut at :data:`OUTPUT_CAP` bytes, decoded leniently."""
     errors: str
     limit: str
     """'' or the limit the tool went past, in words."""
+    cut: bool = False
+    """Its stdout or stderr was longer than :data:`OUTPUT_CAP` (what is kept is cut)."""
 
 
 def missing(tool: str) -> str:
@@ -152,8 +156,8 @@ def run_tool(
                 with contextlib.suppress(OSError):
                     os.killpg(proc.pid, signal.SIGKILL)
                 code = proc.wait()
-        output = _read(out_path)
-        errors = _read(err_path)
+        output, cut_out = _read(out_path)
+        errors, cut_err = _read(err_path)
     limit = ""
     if timed_out:
         limit = f"its {lim.wall_s:g} s wall limit"
@@ -163,9 +167,11 @@ def run_tool(
         limit = f"its file size limit ({lim.file_mb} MiB)"
     elif code != 0 and ("bad_alloc" in errors or "out of memory" in errors.lower()):
         limit = f"its memory limit ({lim.memory_mb} MiB)"
-    return Ran(code, output, errors, limit)
+    return Ran(code, output, errors, limit, cut_out or cut_err)
 
 
-def _read(path: Path) -> str:
+def _read(path: Path) -> tuple[str, bool]:
+    """The first :data:`OUTPUT_CAP` bytes of ``path`` as text, and whether there was more."""
     with path.open("rb") as f:
-        return f.read(_OUTPUT_CAP).decode("utf-8", "replace")
+        data = f.read(OUTPUT_CAP + 1)
+    return data[:OUTPUT_CAP].decode("utf-8", "replace"), len(data) > OUTPUT_CAP
