@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
 import codetools
 import pytest
@@ -43,3 +44,11 @@ def test_without_doxygen_it_says_what_to_install(monkeypatch: pytest.MonkeyPatch
     found = symbols([Source("src/main.cpp", "int main() {}\n")])
     assert found.items == ()
     assert found.problem == "doxygen is not installed: apt-get install doxygen"
+
+
+def test_xml_that_cannot_be_read_is_an_error_not_fewer_symbols(tmp_path: Path) -> None:
+    from usar_replay.code.doxygen import parse_xml
+
+    (tmp_path / "classA.xml").write_text("<doxygen><compounddef kind='class'>")
+    with pytest.raises(ValueError, match=r"classA\.xml"):
+        parse_xml(tmp_path)

@@ -87,15 +87,15 @@ def _rel(path: str) -> str:
 
 def parse_xml(folder: Path) -> list[Symbol]:
     """Every class (with its method count) and function doxygen's XML in ``folder`` lists,
-    each once, sorted."""
+    each once, sorted; ValueError when a file of it is not XML."""
     found: dict[str, Symbol] = {}
     for path in sorted(folder.glob("*.xml")):
         if path.name in ("index.xml", "Doxyfile.xml"):
             continue
         try:
             root = ET.parse(path).getroot()
-        except ET.ParseError:
-            continue
+        except ET.ParseError as err:  # skipped, its functions would be missing from the count
+            raise ValueError(f"{path.name}: {err}") from None
         for comp in root.iter("compounddef"):
             kind = comp.get("kind", "")
             functions = []
@@ -145,4 +145,7 @@ def symbols(sources: Iterable[Source], limits: ToolLimits | None = None) -> Symb
             return Symbols((), f"doxygen exceeded {ran.limit}")
         if ran.code != 0:
             return Symbols((), f"doxygen failed (exit {ran.code})")
-        return Symbols(tuple(parse_xml(work / "out" / "xml")))
+        try:
+            return Symbols(tuple(parse_xml(work / "out" / "xml")))
+        except ValueError as err:
+            return Symbols((), f"doxygen failed (exit 0, its XML unreadable: {err})")
