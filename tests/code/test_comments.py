@@ -42,3 +42,12 @@ def test_the_templates_own_lines_do_not_count() -> None:
     src = Source("src/main.cpp", codetools.TEMPLATE_MAIN)
     assert commented_out([src]).lines == 4
     assert commented_out([src], tmpl).lines == 0
+
+
+def test_code_switched_off_by_if_zero_counts() -> None:
+    text = (
+        "int a;\n#if 0\nint b;\n#ifdef X\nint c;\n#endif\nint d;\n#endif\nint e;\n"
+        "#if 1\nint f;\n#endif\n"
+    )
+    got = commented_out([Source("a.cpp", text)])
+    assert (got.lines, got.largest, got.where) == (5, 5, "a.cpp:3")

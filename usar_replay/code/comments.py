@@ -7,6 +7,7 @@ C++ (:func:`looks_like_code`): it ends with ``;``, ``{`` or ``}``, or is a prepr
 a control statement or a call. Documentation comments (``///``, ``/** */``) are never code:
 doxygen shows their examples. Lines that are the course template's own comments
 (``template_lines``, whitespace ignored) are the template's, not the team's, and do not count.
+Code switched off with ``#if 0 ... #endif`` counts as well: it is a comment by other means.
 """
 
 from __future__ import annotations
@@ -15,10 +16,10 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from usar_replay.code.cxx import comments
+from usar_replay.code.cxx import code_only, comments
 from usar_replay.code.sources import Source
 
-__all__ = ["CommentedOut", "commented_out", "looks_like_code", "normal"]
+__all__ = ["CommentedOut", "commented_out", "if_zero_blocks", "looks_like_code", "normal"]
 
 _ENDS = re.compile(r"(;|\{|\}|\};|\)\s*;?)\s*(//.*)?$")
 _STARTS = re.compile(
@@ -48,6 +49,30 @@ def looks_like_code(text: str) -> bool:
     if _STARTS.match(t) and any(c in t for c in "();=<{"):
         return True
     return bool(_CALL.match(t)) and "(" in t and " " not in t.split("(")[0].strip()
+
+
+_IF0 = re.compile(r"^\s*#\s*if\s+(0|false)\b")
+_IF = re.compile(r"^\s*#\s*if(n?def)?\b")
+_ENDIF = re.compile(r"^\s*#\s*endif\b")
+
+
+def if_zero_blocks(text: str) -> list[tuple[int, int]]:
+    """(first line, lines) of each ``#if 0 ... #endif`` block's body: code switched off by the
+    preprocessor is commented-out code too (nested ``#if``s inside it are followed)."""
+    out: list[tuple[int, int]] = []
+    depth, start = 0, 0
+    for number, line in enumerate(code_only(text).split("\n"), 1):
+        if depth == 0:
+            if _IF0.match(line):
+                depth, start = 1, number
+            continue
+        if _IF.match(line):
+            depth += 1
+        elif _ENDIF.match(line):
+            depth -= 1
+            if depth == 0 and number - start - 1 > 0:
+                out.append((start + 1, number - start - 1))
+    return out
 
 
 @dataclass(frozen=True, slots=True)
@@ -85,6 +110,9 @@ def commented_out(
             last = c.line
         if run_len:
             blocks.append((src.rel, run_start, run_len))
+        for first, n in if_zero_blocks(src.text):
+            blocks.append((src.rel, first, n))
+            total += n
     blocks.sort(key=lambda b: (-b[2], b[0], b[1]))
     largest = blocks[0] if blocks else None
     return CommentedOut(
