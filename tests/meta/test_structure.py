@@ -48,11 +48,14 @@ LAYERS: dict[str, frozenset[str]] = {
     "pipeline": frozenset({"core", "world", "log", "sim", "node", "grading"}),
     "ros1": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline"}),
     "viewer": frozenset({"core", "world", "log", "grading"}),
-    "batch": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline", "ros1"}),
+    "code": frozenset({"core", "node", "ros1"}),
+    "batch": frozenset(
+        {"core", "world", "log", "sim", "node", "grading", "pipeline", "ros1", "code"}
+    ),
     "cli": frozenset(
         {
             *("core", "world", "log", "sim", "node", "api", "grading", "pipeline", "ros1"),
-            *("viewer", "batch"),
+            *("viewer", "code", "batch"),
         }
     ),
 }
@@ -69,6 +72,7 @@ PURPOSE = {
     "pipeline": "record and replay",
     "ros1": "a course's ROS 1 catkin package run against usar's world (build, bridge)",
     "viewer": "what rerun shows",
+    "code": "the code submission graded, copies across a class, the report's flags",
     "batch": "grading a class",
     "cli": "the usar command",
 }

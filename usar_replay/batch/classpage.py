@@ -73,6 +73,19 @@ def _num(x: float) -> str:
     return f"{x:.4g}"
 
 
+def _code_cell(grades: ClassGrades, team: str) -> str:
+    """The team's code grade (``usar batch --code``), and the teams its code is similar to,
+    linking the page of their passages side by side (``code.html``, beside this page)."""
+    c = grades.code.get(team)
+    if c is None:
+        return "<td class='muted'>no package</td>"
+    text = f"{_num(c.points)}/{_num(c.max_points)}"
+    if c.similar:
+        text += ("<br><a href='code.html'>similar to "
+                 + html.escape(", ".join(c.similar)) + "</a>")  # fmt: skip
+    return f"<td class='num'>{text}</td>"
+
+
 def class_page(grades: ClassGrades, link: Callable[[str, str], str | None]) -> str:
     """The page (see the module doc); ``link(team, world)`` is a run page's address relative to
     the page, or None where there is none."""
@@ -87,6 +100,8 @@ def class_page(grades: ClassGrades, link: Callable[[str, str], str | None]) -> s
         )
     ]
     head = ["team", "world", *(t for _, t in used), "points", "verdict", "started as"]
+    if grades.code:
+        head.append("code")
     rows = ["<tr>" + "".join(f"<th>{e(h)}</th>" for h in head) + "</tr>"]
     for team in grades.teams:
         for k, world in enumerate(grades.worlds):
@@ -111,8 +126,11 @@ def class_page(grades: ClassGrades, link: Callable[[str, str], str | None]) -> s
             rows.append(
                 f"<tr><td>{e(team) if k == 0 else ''}</td><td>{world_cell}</td>{''.join(cols)}"
                 f"<td class='num'>{_num(cell.points)}/{_num(cell.max_points)}</td>"
-                f"<td>{verdict}</td><td class='start'>{e(start)}</td></tr>"
-            )
+                f"<td>{verdict}</td><td class='start'>{e(start)}</td>"
+                + (_code_cell(grades, team) if grades.code and k == 0 else
+                   "<td></td>" if grades.code else "")
+                + "</tr>"
+            )  # fmt: skip
     totals = [grades.total(t) for t in grades.teams]
     full_marks = sum(1 for got, full in totals if full > 0 and got >= full)
     body = (

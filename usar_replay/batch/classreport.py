@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from usar_replay.batch.code_grade import CODE_JSON, CodeCell, cells_from_json
 from usar_replay.batch.plan import GRADE_FORMAT, Plan, read_json
 
 __all__ = [
@@ -89,6 +90,8 @@ class ClassGrades:
     """Teams whose submission has no mission: why."""
     starts: dict[str, tuple[str, str]] = field(default_factory=dict)
     """A ROS 1 team's start as it ran (or as the plan read it) and where it was read."""
+    code: dict[str, CodeCell] = field(default_factory=dict)
+    """Each team's code grade (``usar batch --code``; empty without it)."""
 
     def total(self, team: str) -> tuple[float, float]:
         cells = [self.cells[(team, w)] for w in self.worlds]
@@ -171,7 +174,8 @@ def from_folder(out_root: Path) -> ClassGrades | None:
                     float(g.get("max_points", 0.0)),
                     g,
                 )
-    return ClassGrades(teams, worlds, cells, problems, starts)
+    code = cells_from_json(read_json(out_root / CODE_JSON))
+    return ClassGrades(teams, worlds, cells, problems, starts, code)
 
 
 def start_text(grades: ClassGrades, team: str) -> str:
@@ -191,7 +195,9 @@ def to_csv(grades: ClassGrades) -> str:
     ``done`` (``world: outcome``)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["team", *grades.worlds, "total", "max_total", "problems", "start", "start_from"])
+    code_cols = ["code", "code_max", "code_similar_to"] if grades.code else []
+    w.writerow(["team", *grades.worlds, "total", "max_total", "problems", "start", "start_from",
+                *code_cols])  # fmt: skip
     for team in grades.teams:
         cells = [grades.cells[(team, wn)] for wn in grades.worlds]
         total, full = grades.total(team)
@@ -210,9 +216,29 @@ def to_csv(grades: ClassGrades) -> str:
                 _num(full),
                 "; ".join(notes),
                 *grades.starts.get(team, ("", "")),
+                *(_code_cells(grades, team) if grades.code else []),
             ]
         )
     return buf.getvalue()
+
+
+def _code_cells(grades: ClassGrades, team: str) -> list[str]:
+    c = grades.code.get(team)
+    if c is None:
+        return ["", "", ""]
+    return [_num(c.points), _num(c.max_points), "; ".join(c.similar)]
+
+
+def _code_table(grades: ClassGrades, width: int) -> list[str]:
+    """The code grades under the demo's table: a line per team (docs/code-rubric.md)."""
+    lines = ["code submission (usar code; the demo's total above does not include it):"]
+    for team in grades.teams:
+        c = grades.code.get(team)
+        said = "no catkin package" if c is None else f"{_num(c.points)}/{_num(c.max_points)}"
+        if c is not None and c.similar:
+            said += "; similar to " + ", ".join(c.similar) + " (see code.html)"
+        lines.append(_wrap(f"  {team}: {said}", width))
+    return lines
 
 
 def to_table(grades: ClassGrades, width: int = 100) -> str:
@@ -269,6 +295,8 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
     if started:
         lines.append("started as:")
         lines += [_wrap(f"  {team}: {text}", width) for team, text in started]
+    if grades.code:
+        lines += _code_table(grades, width)
     return "\n".join(lines)
 
 
@@ -300,7 +328,9 @@ def gradescope_results(
     visibility: str = "visible",
 ) -> dict[str, Any]:
     """Gradescope's autograder ``results.json`` for one team: a test per world (its points,
-    ``passed`` at full marks, the rubric lines and the outcome as output)."""
+    ``passed`` at full marks, the rubric lines and the outcome as output) and, with ``usar
+    batch --code``, a test for the code submission with its own ``max_score``; the top-level
+    score is their sum."""
     tests = []
     for number, world in enumerate(grades.worlds, start=1):
         c = grades.cells[(team, world)]
@@ -327,6 +357,23 @@ def gradescope_results(
             }
         )
     total, full = grades.total(team)
+    code = grades.code.get(team)
+    if code is not None:  # its own test, its own max_score (docs/code-rubric.md)
+        said = ["Code submission, graded by usar code (docs/code-rubric.md):", *code.lines]
+        if code.similar:
+            said.append("Similar to (for a person to review, never points): "
+                        + ", ".join(code.similar))  # fmt: skip
+        tests.append(
+            {
+                "name": "code submission: the code rubric",
+                "number": str(len(tests) + 1),
+                "score": round(code.points, 3),
+                "max_score": round(code.max_points, 3),
+                "status": "passed" if code.points >= code.max_points > 0 else "failed",
+                "output": "\n".join(said),
+                "visibility": visibility,
+            }
+        )
     failed = [w for w in grades.worlds if grades.cells[(team, w)].outcome != "done"]
     summary = f"usar batch: {_num(total)}/{_num(full)} points on {len(grades.worlds)} worlds"
     if failed:
@@ -335,6 +382,9 @@ def gradescope_results(
         summary += f"\n{grades.problems[team]}"
     if start_text(grades, team):
         summary += f"\nStarted with: {start_text(grades, team)}"
+    if code is not None:
+        summary += f"\nusar code: {_num(code.points)}/{_num(code.max_points)} points"
+        total, full = total + code.points, full + code.max_points
     return {
         "score": round(total, 3),
         "max_score": round(full, 3),

@@ -223,10 +223,14 @@ def grade_class(
     visibility: str = "visible",
     quiet: bool = False,
     stream: TextIO | None = None,
+    code: bool = False,
+    code_template: str | None = None,
+    code_jobs: int = 1,
 ) -> BatchSummary:
     """Execute the plan's runs, then write ``summary.csv``, ``summary.txt`` and (``gradescope``)
-    each team's ``results.json``. KeyboardInterrupt propagates after the running runs are cut
-    off (their logs closed, no manifest entry: the next batch redoes them)."""
+    each team's ``results.json``; with ``code``, each team's code submission graded beside its
+    demo (:mod:`usar_replay.batch.code_grade`). KeyboardInterrupt propagates after the running
+    runs are cut off (their logs closed, no manifest entry: the next batch redoes them)."""
     summary = BatchSummary(plan)
     with _Progress(plan, quiet, stream or sys.stderr) as progress:
 
@@ -238,6 +242,13 @@ def grade_class(
     full = {w.name: max_points(w.scenario_toml) for w in plan.worlds}
     grades = collect(plan, full)
     out = plan.out_root
+    if code:
+        from dataclasses import replace
+
+        from usar_replay.batch.code_grade import grade_code
+
+        teams = [(s.team, s.path) for s in plan.submissions]
+        grades = replace(grades, code=grade_code(teams, out, code_template, code_jobs))
     write_text(out / SUMMARY_CSV, to_csv(grades), overwrite=True)
     summary.table = to_table(grades)
     write_text(out / SUMMARY_TXT, summary.table + "\n", overwrite=True)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 from usar_replay import __version__
 from usar_replay.cli.commands import (
     batch,
+    code,
     doctor,
     echo,
     grade,
@@ -33,7 +34,7 @@ if TYPE_CHECKING:
 __all__ = ["COMMANDS", "build_parser"]
 
 COMMANDS = (
-    record, replay, grade, report, batch, view, echo, log, scenario, info, recover, doctor
+    record, replay, grade, report, batch, code, view, echo, log, scenario, info, recover, doctor
 )
 """The commands, in the order ``usar --help`` lists them."""
 

@@ -57,3 +57,14 @@ def test_the_course_templates_packages_are_in_the_line() -> None:
                  "libimage-transport-dev", "libcv-bridge-dev", "libvisualization-msgs-dev",
                  "libangles-dev"):
         assert name in debian.APT_PACKAGES
+
+
+def test_the_code_grades_tools_are_in_the_line_but_never_stop_a_ros1_run() -> None:
+    """``usar code`` needs doxygen, cppcheck, clang-format, poppler and hunspell: the one apt
+    line brings them, and :func:`debian.check` (``--ros1``) never asks for them."""
+    line = debian.install_line()
+    for name in ("doxygen", "cppcheck", "clang-format", "poppler-utils", "hunspell",
+                 "hunspell-en-us"):
+        assert name in debian.CODE_TOOLS and f" {name}" in line
+    assert not set(debian.missing()) & debian.CODE_TOOLS
+    assert set(debian.missing(code=True)) <= debian.CODE_TOOLS

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
 from usar_replay.cli.textout import print_wrapped
-from usar_replay.core.errors import UsageError
+from usar_replay.core.errors import UsageError, UsarError
 
 if TYPE_CHECKING:
     pass
@@ -68,6 +68,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         default="visible",
         help="Gradescope visibility of the tests (visible)",
     )
+    p.add_argument("--code", action="store_true",
+                   help="also grade each team's code submission (usar code; docs/code-rubric.md)")
+    p.add_argument("--code-template", metavar="DIR",
+                   help="with --code: the course template, boilerplate for the code grade")
     p.add_argument("--quiet", action="store_true", help="no progress bar or per-run lines")
     p.set_defaults(func=run)
 
@@ -122,6 +126,15 @@ def run(args: argparse.Namespace) -> int:
         max_capped=args.max_capped,
         hold_wall_s=args.hold_wall,
     )
+    if args.code_template and not args.code:
+        raise UsageError("--code-template: give --code too (it is the code grade's template)")
+    if args.code_template:
+        from usar_replay.code.template import read_template
+
+        try:
+            read_template(args.code_template)  # a bad template is a usage error before any run
+        except UsarError as err:
+            raise UsageError(f"--code-template {args.code_template}: {err}") from None
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: is a file; give a folder for the batch's output")
@@ -153,6 +166,9 @@ def run(args: argparse.Namespace) -> int:
             gradescope=args.gradescope,
             visibility=args.visibility,
             quiet=args.quiet,
+            code=args.code,
+            code_template=args.code_template,
+            code_jobs=jobs,
         )
     except KeyboardInterrupt:
         print(

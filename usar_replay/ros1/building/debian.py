@@ -23,7 +23,9 @@ from pathlib import Path
 
 from usar_replay.core.errors import MissingRos1
 
-__all__ = ["APT_PACKAGES", "DIST_PACKAGES", "MissingRos1", "check", "install_line", "missing"]
+__all__ = [
+    "APT_PACKAGES", "CODE_TOOLS", "DIST_PACKAGES", "MissingRos1", "check", "install_line", "missing"
+]  # fmt: skip
 
 DIST_PACKAGES = Path("/usr/lib/python3/dist-packages")
 """Where Debian installs rospy, actionlib, tf2_ros and the generated Python messages."""
@@ -61,8 +63,20 @@ APT_PACKAGES: dict[str, str] = {
     "python3-rosservice": "rosservice call, a TA's third command (--after-launch)",
     "python3-rostopic": "rostopic pub, a TA's third command (--after-launch)",
     "python3-std-srvs": "std_srvs in Python, for rosservice call /start (SetBool, Trigger)",
+    "doxygen": "usar code: documentation coverage from doxygen's XML",
+    "cppcheck": "usar code: unused functions, unread variables, lint",
+    "clang-format": "usar code: formatting against the course's (Google) style",
+    "poppler-utils": "usar code: the report's text and pages (pdftotext)",
+    "hunspell": "usar code: the report's spelling",
+    "hunspell-en-us": "usar code: the en_US dictionary hunspell checks against",
 }
 """What ``apt-get install`` needs, with why (``--no-install-recommends`` is enough)."""
+
+CODE_TOOLS = frozenset(
+    {"doxygen", "cppcheck", "clang-format", "poppler-utils", "hunspell", "hunspell-en-us"}
+)
+"""The packages ``usar code`` needs and ``--ros1`` does not: in the one apt line, but never
+a reason for :func:`check` to refuse a run (``usar code`` names a missing one itself)."""
 
 # a file each package installs: the check looks for these, never runs apt or dpkg
 _PROBES: dict[str, str] = {
@@ -98,6 +112,12 @@ _PROBES: dict[str, str] = {
     "python3-rosservice": "/usr/bin/rosservice",
     "python3-rostopic": "/usr/bin/rostopic",
     "python3-std-srvs": str(DIST_PACKAGES / "std_srvs" / "srv" / "__init__.py"),
+    "doxygen": "/usr/bin/doxygen",
+    "cppcheck": "/usr/bin/cppcheck",
+    "clang-format": "/usr/bin/clang-format",
+    "poppler-utils": "/usr/bin/pdftotext",
+    "hunspell": "/usr/bin/hunspell",
+    "hunspell-en-us": "/usr/share/hunspell/en_US.dic",
 }
 
 
@@ -107,10 +127,13 @@ def install_line(packages: list[str] | None = None) -> str:
     return "apt-get install -y --no-install-recommends " + " ".join(names)
 
 
-def missing() -> list[str]:
-    """The Debian packages of :data:`APT_PACKAGES` that are not installed here (on another
-    system: all of them)."""
-    return [name for name, probe in _PROBES.items() if not Path(probe).exists()]
+def missing(*, code: bool = False) -> list[str]:
+    """The Debian packages of :data:`APT_PACKAGES` that a ROS 1 run needs (``code``: those
+    ``usar code`` needs) and are not installed here (on another system: all of them)."""
+    return [
+        name for name, probe in _PROBES.items()
+        if (name in CODE_TOOLS) == code and not Path(probe).exists()
+    ]  # fmt: skip
 
 
 def check() -> None:

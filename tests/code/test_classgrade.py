@@ -1,0 +1,63 @@
+"""code/classgrade: teams found in the paths, each graded, copies listed, bad folders said."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import codetools
+import pytest
+
+from usar_replay.code.classgrade import grade_class, teams
+from usar_replay.code.rubric import default_rubric
+from usar_replay.code.template import read_template
+from usar_replay.core.errors import UsageError
+
+
+def _class(root: Path) -> Path:
+    for name in ("alpha", "copy_of_alpha", "beta", "procedural", "borrowed"):
+        getattr(codetools, name)(root / name)
+    return root
+
+
+def test_a_class_folder_is_its_teams(tmp_path: Path) -> None:
+    root = _class(tmp_path / "class")
+    (root / "_notes").mkdir()
+    got = [name for name, _ in teams([str(root)])]
+    assert got == ["alpha", "beta", "borrowed", "copy_of_alpha", "procedural"]
+    assert [n for n, _ in teams([str(root / "beta"), str(root / "alpha")])] == ["alpha", "beta"]
+    with pytest.raises(UsageError, match="no such folder"):
+        teams([str(tmp_path / "none")])
+
+
+def test_the_copy_is_listed_and_the_honest_pairs_are_not(tmp_path: Path) -> None:
+    root = _class(tmp_path / "class")
+    tmpl = read_template(codetools.template(tmp_path / "tmpl"))
+    done = grade_class([str(root)], default_rubric(), tmpl, jobs=2)
+    assert [(p.a, p.b) for p in done.similar] == [("alpha", "copy_of_alpha")]
+    assert [g.team for g in done.grades] == sorted(g.team for g in done.grades)
+
+
+def test_a_team_with_a_fifo_is_its_verdict_not_the_end(tmp_path: Path) -> None:
+    root = tmp_path / "class"
+    codetools.alpha(root / "alpha")
+    codetools.beta(root / "bad")
+    os.mkfifo(root / "bad" / "src" / "x.cpp")
+    done = grade_class([str(root)], default_rubric())
+    verdicts = {g.team: g.verdict for g in done.grades}
+    assert verdicts == {"alpha": "graded", "bad": "unreadable"}
+    bad = next(g for g in done.grades if g.team == "bad")
+    assert "not a regular file" in bad.findings[0]
+
+
+def test_a_class_where_one_team_has_no_package_is_still_a_class(tmp_path: Path) -> None:
+    root = tmp_path / "class"
+    codetools.alpha(root / "alpha")
+    codetools.beta(root / "beta")
+    (root / "python_team").mkdir()
+    (root / "python_team" / "mission.py").write_text("def main() -> None: ...\n")
+    assert [n for n, _ in teams([str(root)])] == ["alpha", "beta", "python_team"]
+    repo = tmp_path / "repo"
+    codetools.alpha(repo / "catkin_ws" / "src" / "final_project")
+    (repo / "docs").mkdir()
+    assert teams([str(repo)]) == [("repo", repo)]

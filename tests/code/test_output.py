@@ -1,0 +1,39 @@
+"""code/output: the table fits 100 columns; JSON and CSV are versioned and deterministic."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+
+import codetools
+
+from usar_replay.code.classgrade import grade_class
+from usar_replay.code.output import FORMAT, to_csv, to_json, to_text
+from usar_replay.code.rubric import default_rubric
+
+
+def test_the_outputs(tmp_path: Path) -> None:
+    codetools.alpha(tmp_path / "c" / "alpha")
+    codetools.copy_of_alpha(tmp_path / "c" / "copy")
+    codetools.procedural(tmp_path / "c" / "proc")
+    done = grade_class([str(tmp_path / "c")], default_rubric())
+    doc = json.loads(to_json(done.grades, done.similar, rubric="r", template=None,
+                             threshold=done.threshold))  # fmt: skip
+    assert doc["format"] == FORMAT == "usar-code/1"
+    pkg = doc["packages"][0]
+    assert {"package", "path", "points", "max_points", "lines", "metrics"} <= set(pkg)
+    assert {"id", "points", "max_points", "measured"} <= set(pkg["lines"][0])
+    assert [{k: p[k] for k in ("a", "b")} for p in doc["similar"]] == [{"a": "alpha",
+                                                                         "b": "copy"}]
+    again = grade_class([str(tmp_path / "c")], default_rubric(), jobs=2)
+    assert to_json(again.grades, again.similar, rubric="r", template=None,
+                   threshold=again.threshold) == to_json(
+        done.grades, done.similar, rubric="r", template=None, threshold=done.threshold)
+    rows = list(csv.DictReader(io.StringIO(to_csv(done.grades, done.similar))))
+    assert [r["team"] for r in rows] == ["alpha", "copy", "proc"]
+    assert rows[0]["format"] == FORMAT and rows[0]["similar_to"] == "copy (0.91)"
+    text = to_text(done.grades, done.similar, done.threshold)
+    assert all(len(line) <= 100 for line in text.splitlines())
+    assert "0.91  alpha ~ copy" in text
