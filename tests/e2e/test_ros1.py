@@ -19,6 +19,7 @@ from usar_replay.cli.main import main
 from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import yaw_from_quat
 from usar_replay.grading.grade import grade_file
+from usar_replay.log import ros1_run
 from usar_replay.log.run import open_run
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import find_package, package_sha256
@@ -131,6 +132,8 @@ def test_the_example_package_scores_60_on_one_room(tmp_path: Path) -> None:
     assert info.target.startswith(f"ros1:{EXAMPLE}")
     assert info.target.endswith("--launch usar_course.launch")
     assert info.sha256 == package_sha256(find_package(EXAMPLE))
+    ran = ros1_run.of(run)  # its node subscribes to /fiducial_transforms: its detections count
+    assert ran is not None and ran.detections_read is True
     # `usar replay --grade` of a ROS 1 log (bit for bit, graded again): tests/ros1/test_replay.py
 
 

@@ -16,6 +16,7 @@ from clitools import usar
 from conftest import one_room
 
 from usar_replay.core import contract, msgs
+from usar_replay.grading.grade import grade_file
 from usar_replay.log import ros1_run
 from usar_replay.log.run import open_run
 from usar_replay.world.scenario_toml import save
@@ -72,6 +73,9 @@ def test_info_says_the_tolerances_their_files_and_the_targets_replaced(recorded:
     ) in flat
     assert "/mission/aruco_lookup_locations/target_1 = target 1 (param/our_targets.yaml" in flat
     assert "/mission/my_copy/t2 = target 2, known by its value" in flat
+    ran = ros1_run.of(open_run(recorded))  # none of its nodes reads /fiducial_transforms
+    assert ran is not None and ran.detections_read is False
+    assert not grade_file(recorded).check("marker_0.detected").passed
 
 
 def test_a_node_reads_the_graded_worlds_targets_from_its_private_parameters(

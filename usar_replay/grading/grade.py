@@ -89,6 +89,17 @@ def with_goal_tolerances(
     )
 
 
+def _learn_run(grader: RubricGrader, run: Run) -> None:
+    """What the log says of the run that a rubric may judge by beside the messages: whether a
+    ROS 1 package's node subscribed to ``/fiducial_transforms`` (a grader that has no
+    ``detections_read`` does not ask)."""
+    from usar_replay.log import ros1_run
+
+    ran = ros1_run.of(run)
+    if ran is not None and hasattr(grader, "detections_read"):
+        grader.detections_read = ran.detections_read
+
+
 def observe_run(run: Run, thresholds: Thresholds | None = None) -> RubricGrader:
     """The run's rubric grader, fed every message of the log it reads: the rubric's own
     observations (``usar record``'s summary counts markers with them). Nothing is required: a
@@ -96,6 +107,7 @@ def observe_run(run: Run, thresholds: Thresholds | None = None) -> RubricGrader:
     scenario = run.require_scenario()
     rubric = rubric_for(scenario)
     grader = rubric.grader(scenario, with_goal_tolerances(thresholds, run))
+    _learn_run(grader, run)
     grader.start_ns = run.start_ns  # the run's clock starts with the log, whatever topic
     feed = grader.feed
     # the course's detections count as the world published them ("sim"), never a mission's
@@ -168,6 +180,7 @@ class LiveGrade:
             if with_goal_tolerances(self.given, run) != self.thresholds:
                 # the package's move_base said other tolerances than the live grader knew
                 return grade_run(run, self.given)
+            _learn_run(self.grader, run)
         report = self.grader.report(str(path), log_complete=True, log_problem="")
         if self._writer is None:
             return report

@@ -108,6 +108,10 @@ class Ros1Run:
     targets_replaced: tuple[TargetReplaced, ...] = ()
     """The launch file's parameters that held the course's targets (empty: none, or a log
     before usar said)."""
+    detections_read: bool | None = None
+    """Whether a node of the package subscribed to ``/fiducial_transforms`` during the run
+    (the master said so, tick by tick); None: a log before usar said. The rubric counts a
+    detection only for a package that could use it (rubric usar v3)."""
     holds: int = 0
     """Ticks the bridge held for a node's shutdown (wall time the graph took, not sim time)."""
     capped: int = 0
@@ -186,6 +190,7 @@ class Ros1Run:
                 {"param": t.param, "target": t.target, "source": t.source, "how": t.how}
                 for t in self.targets_replaced
             ],
+            **({} if self.detections_read is None else {"detections_read": self.detections_read}),
         }
         return tomli_w.dumps(data)
 
@@ -205,6 +210,9 @@ class Ros1Run:
             applied_settings=tuple(str(s) for s in data.get("applied_settings", [])),
             holds=int(data.get("holds", 0)),
             capped=int(data.get("capped", 0)),
+            detections_read=(
+                None if "detections_read" not in data else bool(data["detections_read"])
+            ),
             nodes=_nodes(data.get("nodes", [])),
             replaced=_nodes(data.get("replaced", [])),
             parameters=tuple(

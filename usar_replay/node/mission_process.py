@@ -242,6 +242,9 @@ class MissionProcess:
         self._sent: collections.deque[float] = collections.deque()
         self._last_read = 0.0
         self.capped = 0
+        self.detections_read = False
+        """A ROS 1 graph's node subscribed to ``/fiducial_transforms`` in some tick
+        (:data:`.protocol.FLAG_DETECTIONS_READ`)."""
         self.ready_info = ""
         """What the process said with its ready frame (:func:`.protocol.ready_frame`)."""
         """Ticks whose wall cap ran out (:data:`protocol.FLAG_CAPPED`)."""
@@ -596,6 +599,7 @@ class MissionProcess:
         if flag & protocol.FLAG_HELD:
             self.hold_wall_s += took
         self.capped += bool(flag & protocol.FLAG_CAPPED)
+        self.detections_read = self.detections_read or bool(flag & protocol.FLAG_DETECTIONS_READ)
         over_time = self._time_budget()
         if over_time is not None:
             self._proc.kill()

@@ -118,6 +118,9 @@ FLAG_HELD = 2
 """Outputs flag: the ROS 1 bridge held the tick for a node's shutdown (counted, budgeted)."""
 FLAG_CAPPED = 4
 """Outputs flag: the tick's wall cap ran out before the ROS 1 graph went idle."""
+FLAG_DETECTIONS_READ = 8
+"""Outputs flag: a node of the ROS 1 graph subscribes to ``/fiducial_transforms`` (the
+master says so; the rubric counts a detection only for a package that could use it)."""
 
 
 def outputs_frame(t_ns: int, outputs: Sequence[Wire], done: bool | int = False) -> bytes:

@@ -68,6 +68,7 @@ from usar_replay.core import contract, msgs
 from usar_replay.node import kernel_sandbox
 from usar_replay.node.protocol import (
     FLAG_CAPPED,
+    FLAG_DETECTIONS_READ,
     FLAG_HELD,
     FrameKind,
     outputs_frame,
@@ -493,6 +494,7 @@ class Bridge:
             wire = [wire_item(topic, m) for topic, m in outputs]
             done |= FLAG_HELD if self.holds > holds else 0
             done |= FLAG_CAPPED if self.capped > capped else 0
+            done |= FLAG_DETECTIONS_READ if self.topics.subscribed(contract.FIDUCIALS) else 0
             if not send_within(self.conn, outputs_frame(t_ns, wire, done), self.write_timeout_s):
                 return
 

@@ -351,6 +351,7 @@ class Ros1Process(MissionProcess):
             ),
             goal_tolerances=tuple(GoalTolerance(*row) for row in tolerances),
             targets_replaced=_targets(facts),
+            detections_read=self.detections_read,
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]
         prefix = contract.NODE_OUTPUT_ATTACHMENT_PREFIX

@@ -66,6 +66,14 @@ class TopicRecorder:
         """The last :meth:`discover` found a topic registration (a publisher or subscriber of
         any node) that was not there at the one before: a connection may be on its way."""
 
+    def subscribed(self, topic: str) -> bool:
+        """Whether a node other than the bridge subscribed to ``topic`` at the last
+        :meth:`discover` (the master's registrations)."""
+        return any(
+            kind == "sub" and t == topic and name != self.node
+            for kind, t, name in self._registrations or ()
+        )
+
     @property
     def topics(self) -> list[str]:
         """The topics subscribed so far, sorted."""

@@ -53,3 +53,18 @@ def test_without_the_detector_node_the_detection_lines_say_so() -> None:
         )
     detect(g, [], 3 * S)
     assert marker_detected(g, 0).measured == "never detected"
+
+
+def test_a_package_that_reads_no_detections_detected_nothing() -> None:
+    """The course's detector saw the marker at the target, but no node of the package
+    subscribes to /fiducial_transforms (the log's ros1.toml says so): no detection of its."""
+    g = Grader(world())
+    drive(g, "explorer", [TARGETS[0]], 4 * S)
+    detect(g, [0], 5 * S)
+    assert marker_detected(g, 0).passed  # a Python mission, or an older log: not known
+    g.detections_read = False
+    line = marker_detected(g, 0)
+    assert not line.passed and line.points == 0
+    assert line.measured == (
+        "no node subscribes to /fiducial_transforms (seen in 1 frame at a target)"
+    )

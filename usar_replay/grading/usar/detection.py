@@ -21,12 +21,18 @@ def marker_detected(g: Observations, mid: int) -> Check:
     each = 12.0 / max(len(g.markers), 1)
     if not g.fiducial_messages:
         measured = NO_DETECTOR
+    elif g.detections_read is False:
+        t = None  # seen by the course's detector, but nothing of the package read it
+        seen = plural(frames, "frame")
+        measured = f"no node subscribes to {contract.FIDUCIALS} (seen in {seen} at a target)"
     elif t is not None:
         measured = f"in {plural(frames, 'frame')} at a target, first at {sim_s(t)}"
     elif glimpsed:
         first = g.glimpsed_ns[mid]
-        measured = f"only glimpsed away from the targets ({plural(glimpsed, 'frame')}, first at " \
+        measured = (
+            f"only glimpsed away from the targets ({plural(glimpsed, 'frame')}, first at "
             f"{sim_s(first)})"
+        )
     else:
         measured = "never detected"
     return Check(
@@ -39,12 +45,12 @@ def marker_detected(g: Observations, mid: int) -> Check:
         measured=measured,
         threshold=f"at least 1 frame on {contract.FIDUCIALS} within {g.target_radius:g} m of "
         "a target",
-        evidence_ns=t if t is not None else g.glimpsed_ns.get(mid),
+        evidence_ns=t if t is not None else g.glimpsed_ns.get(mid, g.detected_ns.get(mid)),
         value=float(frames),
         unit="frames",
         limit=1.0,
         op=">=",
-        evidence="first detection" if t is not None else (
-            "first glimpse" if mid in g.glimpsed_ns else ""
-        ),
+        evidence="first detection"
+        if t is not None
+        else ("first glimpse" if mid in g.glimpsed_ns or mid in g.detected_ns else ""),
     )

@@ -280,6 +280,10 @@ class Observations:
         self._frame_marker: dict[str, int] = {}
         """The marker each frame name was last broadcast as (a detection's)."""
         """Per frame, the detections (image stamp, ID) it was broadcast as, the recent ones."""
+        self.detections_read: bool | None = None
+        """Whether the mission could read the detections: a ROS 1 package's node subscribed
+        to ``/fiducial_transforms`` (the log's ``ros1.toml``); None: not known (a Python
+        mission, whose nodes read them in its own process, or an older log)."""
         self.fiducial_messages = 0
         """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
         self.period_ns = math.ceil(1e9 / scenario.camera.rate_hz)
