@@ -12,9 +12,11 @@ mission drive alike. The server follows actionlib's rules as move_base does:
   (goal in collision and no free cell near it, no path, stuck) otherwise.
 
 A goal inside an obstacle or its inflation is moved to the nearest free cell within
-:data:`GOAL_TOLERANCE_M` first, as move_base's global planner does with its ``default_tolerance``
-(students' follower goals are markers on walls). The other robot, where tf says it stands when
-the goal arrives, is an obstacle in this robot's costmap, as its laser would mark it.
+:data:`GOAL_TOLERANCE_M` first; a goal deeper in is ABORTED, as move_base aborts it (issue 43:
+a package sending its explorer "home" to (0, 0), inside the course's walls, hung there on
+Gazebo; usar's move_base had moved the goal 0.39 m and called it reached). The other robot,
+where tf says it stands when the goal arrives, is an obstacle in this robot's costmap, as its
+laser would mark it.
 
 Order, as move_base's own code has it: each control cycle publishes the feedback first; at a
 goal's end, move_base's ``resetState()`` publishes the zero velocity and only then does
@@ -47,8 +49,13 @@ from usar_replay.world.nav import (
 
 __all__ = ["GOAL_TOLERANCE_M", "MoveBase"]
 
-GOAL_TOLERANCE_M = 0.5
-"""How far a goal in collision may be moved to a free cell (global_planner's tolerance)."""
+GOAL_TOLERANCE_M = 0.25
+"""How far a goal in collision may be moved to a free cell. The course template's
+GlobalPlanner has ``default_tolerance`` 0.0 (a goal in an obstacle is no plan: move_base
+aborts it) and treats as obstacle only the cells within the footprint's inscribed radius
+(0.077 m for the template's offset footprint), while usar's costmap keeps the circumscribed
+radius (:data:`usar_replay.world.nav.ROBOT_RADIUS`, 0.26 m) clear: a goal up to 0.26 - 0.077
+plus one 0.05 m cell (0.23 m) inside usar's clear zone is one move_base plans to."""
 
 Pose = tuple[float, float, float]
 

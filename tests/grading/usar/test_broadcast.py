@@ -327,3 +327,22 @@ def test_broadcasts_while_the_explorer_turns_fast_do_not_decide() -> None:
     assert line.passed and line.measured.startswith("marker_frame: median of 2 broadcasts at"), (
         line.measured
     )
+
+
+def test_a_dummy_frame_sent_all_along_is_no_frame_of_the_marker() -> None:
+    """rpatil10's package: the course template's dummy ``my_frame`` (a fixed place, every
+    loop, detection or not) beside the right ``marker_frame``: the marker is broadcast right
+    (a TA looks at marker_frame); only_on_detection fails for the dummy."""
+    g = Grader(world())
+    drive(g, "explorer", [TARGETS[0]], 4 * S)
+    for k in range(60):  # 6 s of the dummy at 10 Hz, far from every marker
+        t = 1 * S + k * 100 * MS
+        camera(g, t)
+        send(g, "my_frame", (5.0, -3.0, 0.0), t, parent=contract.MAP)
+        if 40 <= k < 45:  # the marker in view for half a second
+            detect(g, [0], t)
+            send(g, contract.MARKER_FRAME, MARKERS[0], t)
+    line = marker_broadcast(g, 0)
+    assert line.passed, line.measured
+    assert line.measured.startswith("marker_frame: median of 5 broadcasts")
+    assert not only_on_detection(g).passed

@@ -53,8 +53,16 @@ def frame_places(g: Observations, mid: int) -> list[FramePlace]:
     """Each frame broadcast for marker ``mid``, placed as a TA sees it in RViz: the median of
     its broadcasts while the explorer was at a target, of detections within the reliable range
     (when no frame of the marker was broadcast so, the median of all its broadcasts); a frame
-    never found in ``map`` is ``off`` with an infinite error. By frame name."""
+    never found in ``map`` is ``off`` with an infinite error. By frame name.
+
+    Only the frames broadcast *as detections* are judged where the marker has some: a frame
+    sent mostly without a detection (a timer's, the course template's dummy ``my_frame`` left
+    in, as rpatil10's package has it) is no frame of the marker's, so it cannot be its worst
+    (``only_on_detection`` judges it); where a marker has no other, it is judged alone (a stored
+    pose sent again, which "follows the robot around", fails there)."""
     frames = sorted(g.broadcasts[mid].frames.values(), key=lambda f: f.frame)
+    of_detections = [f for f in frames if _of_detections(g, f.frame)]
+    frames = of_detections or frames
     at_target = any(f.at_target for f in frames)
     marker = g.markers[mid]
     out: list[FramePlace] = []
@@ -80,6 +88,12 @@ def frame_places(g: Observations, mid: int) -> list[FramePlace]:
             kind = "off"
         out.append(FramePlace(f, (place[0], place[1], place[2]), err, kind, n, where))
     return out
+
+
+def _of_detections(g: Observations, frame: str) -> bool:
+    """Were most of ``frame``'s broadcasts made on a detection?"""
+    with_one, without = g.frame_tally.get(frame, [0, 0])
+    return with_one >= without
 
 
 def _stand_off(

@@ -277,6 +277,10 @@ class Observations:
         self.last_fiducials_empty = False
         """The latest ``/fiducial_transforms`` held nothing (the marker out of view)."""
         self._sent: dict[str, set[tuple[int, int]]] = {}
+        self.frame_tally: dict[str, list[int]] = {}
+        """Per frame name, [broadcasts on a detection, broadcasts without one]: a frame sent
+        mostly without one (a timer's, the template's dummy ``my_frame``) is not a detection's
+        (:func:`usar_replay.grading.usar.broadcast.frame_places`)."""
         self._frame_marker: dict[str, int] = {}
         """The marker each frame name was last broadcast as (a detection's)."""
         """Per frame, the detections (image stamp, ID) it was broadcast as, the recent ones."""
@@ -488,14 +492,17 @@ class Observations:
         # no detection came recently, or the marker is out of view now and this is no
         # detection's first broadcast (a stored pose sent again: the handout's "broadcast only
         # when the marker is detected")
-        if not window or (self.last_fiducials_empty and (copied is None or again)):
+        alone = not window or (self.last_fiducials_empty and (copied is None or again))
+        tally = self.frame_tally.setdefault(frame, [0, 0])
+        tally[1 if alone else 0] += times
+        if alone:
             self.without_detection += times
             if self.without_detection_ns is None:
                 self.without_detection_ns, self.without_detection_what = t_ns, what
             self.bad_broadcasts += times
         elif not on_camera:
             self.bad_broadcasts += times
-        if not window or (self.last_fiducials_empty and (copied is None or again)):
+        if alone:
             # no detection to be the broadcast of; a frame that was a marker's shows in RViz
             # where the marker is not (a stored pose sent again "follows the robot around")
             known = self._frame_marker.get(frame)
