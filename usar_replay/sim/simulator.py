@@ -91,7 +91,8 @@ with _quiet_stdout():
     import pybullet as p
 
 from usar_replay.core import contract, msgs  # noqa: E402
-from usar_replay.sim import eglshadow  # noqa: E402
+from usar_replay.sim import course_view, eglshadow  # noqa: E402
+from usar_replay.sim.course_view import CourseCamera, Region  # noqa: E402
 from usar_replay.world.scenario import Scenario  # noqa: E402
 
 __all__ = [
@@ -244,6 +245,8 @@ class Simulator:
         self.frame_seq = 0
         self.frames_rendered = 0
         """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
+        self.regions_rendered = 0
+        """How many course-camera regions :meth:`render_region` rendered."""
         self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
         self._static_depth: tuple[object, np.ndarray] | None = None
         """The depth buffer of the last render with no robot in view, and the camera pose it
@@ -704,6 +707,41 @@ class Simulator:
         """(BGR image, OpenGL depth buffer in [0, 1]: :func:`_depth_buffer_value`) from
         pybullet."""
         cam = self.scenario.camera
+        return self._render_with(cam.width, cam.height, self._projection)
+
+    def course_region(self, cam: CourseCamera) -> Region | None:
+        """The part of ``cam``'s image where a marker may be detected now (None: nowhere),
+        from the camera robot's true pose and the markers (:func:`course_view.region`)."""
+        eye, rot = self.camera_pose()
+        return course_view.region(eye, rot, self.scenario.markers, cam)
+
+    def render_region(self, cam: CourseCamera, where: Region) -> np.ndarray:
+        """The camera robot's view as ``cam`` would see it, only the pixels of ``where``:
+        (height, width, 3) uint8 BGR, the same pixels as that window of a full render at
+        ``cam``'s size, at a fraction of the cost.
+
+        How: an off-axis frustum (pybullet's ``computeProjectionMatrix``, OpenGL's
+        ``glFrustum``) whose sides pass through the window's edges on the near plane, where
+        the full image's symmetric frustum has its pixel grid; so each rendered pixel samples
+        the scene where the full render's pixel does. Does not advance the camera's clock (the
+        frame it goes with is :meth:`render_camera`'s)."""
+        fx, fy, _, _ = cam.intrinsics()
+        right_full = NEAR_PLANE * (cam.width / 2.0) / fx
+        top_full = NEAR_PLANE * (cam.height / 2.0) / fy
+        left = -right_full + 2.0 * right_full * where.x / cam.width
+        right = -right_full + 2.0 * right_full * (where.x + where.width) / cam.width
+        top = top_full - 2.0 * top_full * where.y / cam.height
+        bottom = top_full - 2.0 * top_full * (where.y + where.height) / cam.height
+        projection = p.computeProjectionMatrix(
+            left, right, bottom, top, NEAR_PLANE, FAR_PLANE, physicsClientId=self._client
+        )
+        self.regions_rendered += 1
+        return self._render_with(where.width, where.height, projection)[0]
+
+    def _render_with(
+        self, width: int, height: int, projection: Any
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(BGR image, depth buffer) of the camera robot's view through ``projection``."""
         eye, rot = self.camera_pose()
         target = eye + rot[:, 2]
         up = -rot[:, 1]
@@ -713,10 +751,10 @@ class Simulator:
         quiet = _quiet_stdout() if self.renderer_name == "egl" else contextlib.nullcontext()
         with quiet:  # the EGL plugin prints its GL vendor on stdout on some frames
             _, _, rgba, buf, _ = p.getCameraImage(
-                cam.width,
-                cam.height,
+                width,
+                height,
                 viewMatrix=view,
-                projectionMatrix=self._projection,
+                projectionMatrix=projection,
                 shadow=0,
                 lightDirection=LIGHT_DIRECTION,
                 lightColor=(1, 1, 1),
@@ -728,9 +766,9 @@ class Simulator:
                 flags=p.ER_NO_SEGMENTATION_MASK,
                 physicsClientId=self._client,
             )
-        img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
+        img = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
         bgr = cv2.cvtColor(img, cv2.COLOR_RGBA2BGR)
-        depth = np.asarray(buf, dtype=np.float32).reshape(cam.height, cam.width)
+        depth = np.asarray(buf, dtype=np.float32).reshape(height, width)
         return bgr, depth
 
     def marker_poses(self) -> dict[int, msgs.Pose]:
