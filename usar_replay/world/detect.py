@@ -97,8 +97,10 @@ def _region_of(info: msgs.CameraInfo, shape: tuple[int, ...]) -> tuple[int, int,
             f"a region of {roi.width}x{roi.height} px came as a {shape[1]}x{shape[0]} image"
         )
     if roi.x_offset + roi.width > info.width or roi.y_offset + roi.height > info.height:
-        raise DetectError(f"a region of {roi.width}x{roi.height} px at ({roi.x_offset}, "
-                          f"{roi.y_offset}) is outside the {info.width}x{info.height} camera")
+        raise DetectError(
+            f"a region of {roi.width}x{roi.height} px at ({roi.x_offset}, "
+            f"{roi.y_offset}) is outside the {info.width}x{info.height} camera"
+        )
     ratio = max(info.width, info.height) / max(roi.width, roi.height)
     return roi.x_offset, roi.y_offset, ratio
 
@@ -270,6 +272,7 @@ def _detections(
     """Each valid detection in the frame, sorted by ID: (ID, (transform, corners))."""
     img = decode_grey(data)
     dx, dy, ratio = _region_of(info, img.shape)
+    shift = np.array([dx, dy], dtype=np.float64)  # the region's corners in the full image
     corners, ids, _ = _detector(params, ratio).detectMarkers(img)
     k = np.array(info.k, dtype=np.float64).reshape(3, 3)
     dist = np.array(info.d if info.d else (0.0,) * 5, dtype=np.float64)
@@ -279,7 +282,7 @@ def _detections(
         for mid, c in sorted(
             zip(np.asarray(ids).ravel().tolist(), corners, strict=True), key=lambda pair: pair[0]
         ):
-            pts = np.asarray(c, dtype=np.float64).reshape(4, 2) + (dx, dy)
+            pts = np.asarray(c, dtype=np.float64).reshape(4, 2) + shift
             pose = _solve(obj, pts, k, dist, params.max_reprojection_error)
             if pose is None:
                 log.debug("marker %d at seq %d: no valid pose, dropped", mid, image_seq)
