@@ -135,7 +135,7 @@ COURSE_VIEW_INFO = "/usar/course_camera/region/camera_info"
 the recorder rendered for the frame of the same tick: written by the ``recorder`` only when a
 marker can be in view, never sent to a mission (:mod:`usar_replay.sim.course_view`)."""
 COURSE_VIEW_IMAGE = "/usar/course_camera/region/image_raw/compressed"
-"""That region's pixels (``CompressedImage``, lossless PNG): what the course's detector
+"""That region's grey levels (``CompressedImage``, lossless PNG): what the course's detector
 searched, so replay re-detects from the log alone."""
 COURSE_VIEW_TOPICS: tuple[str, ...] = (COURSE_VIEW_INFO, COURSE_VIEW_IMAGE)
 CLOCK = "/clock"

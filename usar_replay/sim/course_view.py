@@ -12,8 +12,9 @@ A marker is a candidate when its printed face is toward the camera, its four cor
 front of the camera, its projected quadrilateral overlaps the image, and its projected
 perimeter is at least half the smallest one OpenCV's detector accepts in the full image
 (``minMarkerPerimeterRate`` times the image's larger side): each test only drops a marker the
-full-size detector could not find. Occlusion is not tested: the region is rendered with the
-whole scene, so a marker behind a wall simply is not in it.
+full-size detector could not find. The region is rendered with the
+whole scene; the simulator's depth test (the frame's depth buffer) drops a marker wholly
+behind a wall or the other robot, and any marker left behind one simply is not in the pixels.
 
 The margin (:data:`MARGIN_PX`, and :data:`MARGIN_RATE` of the region's size) keeps the
 detector's adaptive thresholding (windows up to 23 px) and corner refinement away from the
@@ -23,6 +24,7 @@ region's edges, so the region detects as the same pixels of a full render do.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -123,11 +125,17 @@ def marker_corners(m: Marker) -> np.ndarray:
 
 
 def region(
-    eye: np.ndarray, rot: np.ndarray, markers: tuple[Marker, ...], cam: CourseCamera
+    eye: np.ndarray,
+    rot: np.ndarray,
+    markers: tuple[Marker, ...],
+    cam: CourseCamera,
+    hidden: Callable[[np.ndarray], bool] | None = None,
 ) -> Region | None:
     """The rectangle of ``cam``'s image (optical centre ``eye`` and optical-frame rotation
     ``rot`` in map) that holds every marker it may detect, with the margin; None when none
-    can be detected (the module's docstring says which tests)."""
+    can be detected (the module's docstring says which tests). ``hidden``: given a marker's
+    corners in the optical frame, True when it is wholly hidden behind something nearer (the
+    simulator's depth test of the frame it goes with)."""
     fx, fy, cx, cy = cam.intrinsics()
     boxes: list[tuple[float, float, float, float]] = []
     for m in markers:
@@ -143,6 +151,8 @@ def region(
             continue
         perimeter = float(np.sum(np.hypot(np.diff(u, append=u[0]), np.diff(v, append=v[0]))))
         if perimeter < 0.5 * MIN_PERIMETER_RATE * max(cam.width, cam.height):
+            continue
+        if hidden is not None and hidden(pts):
             continue
         boxes.append((float(u.min()), float(v.min()), float(u.max()), float(v.max())))
     if not boxes:

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import math
 import os
 import pkgutil
@@ -246,7 +247,11 @@ class Simulator:
         self.frames_rendered = 0
         """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
         self.regions_rendered = 0
-        """How many course-camera regions :meth:`render_region` rendered."""
+        """How many course-camera regions :meth:`render_region` rendered (the rest were
+        reused: nothing moved)."""
+        self._frame_depth: tuple[tuple[object, ...], np.ndarray] | None = None
+        """The view key and depth buffer of the camera's last render (:meth:`course_region`)."""
+        self._last_region: tuple[object, np.ndarray] | None = None
         self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
         self._static_depth: tuple[object, np.ndarray] | None = None
         """The depth buffer of the last render with no robot in view, and the camera pose it
@@ -629,6 +634,7 @@ class Simulator:
             img = self._last_frame[1]
         else:
             img, depth = self._render()
+            self._frame_depth = (key, depth)
             img.setflags(write=False)
             self._last_frame = (key, img)
             self.frames_rendered += 1
@@ -711,9 +717,42 @@ class Simulator:
 
     def course_region(self, cam: CourseCamera) -> Region | None:
         """The part of ``cam``'s image where a marker may be detected now (None: nowhere),
-        from the camera robot's true pose and the markers (:func:`course_view.region`)."""
+        from the camera robot's true pose and the markers (:func:`course_view.region`).
+
+        After :meth:`render_camera`, a marker the frame's depth buffer shows wholly behind
+        something nearer (a wall, the other robot; less :data:`OCCLUSION_MARGIN_M`) is not a
+        candidate: the course camera sees the scene from the same pose, so it is hidden there
+        too. The test is conservative as :meth:`_maybe_in_view`'s: the deepest value in the
+        marker's projected box decides."""
         eye, rot = self.camera_pose()
-        return course_view.region(eye, rot, self.scenario.markers, cam)
+        me = self.robots[self.camera_robot]
+        frame, last = self._frame_depth, self._last_frame
+        hidden = None
+        # only with the depth of a frame of this very pose (render_camera just before)
+        current = frame is not None and last is not None and frame[0] == last[0]
+        if current and last is not None and last[0][0] == (me.x, me.y, me.yaw):
+            assert frame is not None
+            hidden = functools.partial(self._hidden_marker, frame[1])
+        return course_view.region(eye, rot, self.scenario.markers, cam, hidden)
+
+    def _hidden_marker(self, depth: np.ndarray, pts: np.ndarray) -> bool:
+        """Whether a marker whose corners are ``pts`` (rows, in the optical frame, all in front)
+        is wholly hidden in the frame whose depth buffer is ``depth``."""
+        cam = self.scenario.camera
+        fx, fy, cx, cy = self._intrinsics
+        u = fx * pts[:, 0] / pts[:, 2] + cx
+        v = fy * pts[:, 1] / pts[:, 2] + cy
+        m = CULL_MARGIN_PX
+        u0 = max(0, math.floor(float(u.min()) - m))
+        u1 = min(cam.width, math.ceil(float(u.max()) + m) + 1)
+        v0 = max(0, math.floor(float(v.min()) - m))
+        v1 = min(cam.height, math.ceil(float(v.max()) + m) + 1)
+        if u0 >= u1 or v0 >= v1:
+            return False  # outside this frame: the region test decides
+        nearest = float(pts[:, 2].min()) - OCCLUSION_MARGIN_M
+        if nearest <= NEAR_PLANE:
+            return False
+        return float(depth[v0:v1, u0:u1].max()) < _depth_buffer_value(nearest)
 
     def render_region(self, cam: CourseCamera, where: Region) -> np.ndarray:
         """The camera robot's view as ``cam`` would see it, only the pixels of ``where``:
@@ -735,8 +774,14 @@ class Simulator:
         projection = p.computeProjectionMatrix(
             left, right, bottom, top, NEAR_PLANE, FAR_PLANE, physicsClientId=self._client
         )
+        key = (self._view_key(), cam, where)
+        if self._last_region is not None and self._last_region[0] == key:
+            return self._last_region[1]  # nothing moved: the very pixels a render gives
+        img = self._render_with(where.width, where.height, projection)[0]
+        img.setflags(write=False)
+        self._last_region = (key, img)
         self.regions_rendered += 1
-        return self._render_with(where.width, where.height, projection)[0]
+        return img
 
     def _render_with(
         self, width: int, height: int, projection: Any
