@@ -6,8 +6,8 @@ This renders one marker on a wall from 1 to 6 m and at several angles to its fac
 detects it
 
 * ``640x480``: the recorded frame (JPEG, as recorded), pixel fields scaled to 1920 (the old way);
-* ``region``: the course camera's pixels around the marker only (:meth:`Simulator.render_region`,
-  the recorder's default), encoded as the recorder logs them;
+* ``region``: the course camera's pixels around the marker only, as the recorder renders and
+  logs them by default (:func:`~usar_replay.pipeline.course_detector.course_view`: grey PNG);
 * ``1920x1080``: a whole course-size frame (PNG), the reference,
 
 and prints, per range and angle, the median and worst position error of the detected marker
@@ -16,7 +16,7 @@ render's, and the CPU time per frame of each way (render + encode + detect).
 
 Usage::
 
-    python bench/bench_course_detect.py [--renderer egl|tiny] [--encoding png|jpeg]
+    python bench/bench_course_detect.py [--renderer egl|tiny]
 """
 
 from __future__ import annotations
@@ -28,8 +28,9 @@ import time
 import cv2
 import numpy as np
 
-from usar_replay.core import msgs
+from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
+from usar_replay.pipeline.course_detector import course_view
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.course_view import CourseCamera
 from usar_replay.sim.simulator import Simulator
@@ -80,7 +81,6 @@ def _error(sim: Simulator, found: msgs.FiducialTransformArray) -> float | None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--renderer", default="auto", choices=("auto", "egl", "tiny"))
-    parser.add_argument("--encoding", default="png", choices=("png", "jpeg"))
     args = parser.parse_args()
     cv2.setNumThreads(1)
     params = DetectorParams()
@@ -94,7 +94,7 @@ def main() -> None:
     frames = 0
     small = Simulator(_world(640, 480), renderer=args.renderer)
     full = Simulator(_world(1920, 1080), renderer=args.renderer)
-    print(f"renderer {small.renderer_name}, region encoding {args.encoding}")
+    print(f"renderer {small.renderer_name}")
     try:
         for rng, ang, x, y, yaw in _poses():
             frames += 1
@@ -110,15 +110,16 @@ def main() -> None:
             cpu["640x480"] += time.process_time() - t
             pixels["640x480"] += img.shape[0] * img.shape[1]
             t = time.process_time()
-            where = small.course_region(course)
-            if where is None:
+            wire = course_view(small, course, info)
+            view = {topic: cdr.decode(data, mt) for topic, mt, data in wire}
+            if not view:
                 results["region"] = msgs.FiducialTransformArray()
             else:
-                crop = small.render_region(course, where)
-                data = encode_image(crop, args.encoding)
-                image = msgs.CompressedImage(format=args.encoding, data=data)
-                results["region"] = detect(image, course.info(msgs.Header(), where), params)
-                pixels["region"] += crop.shape[0] * crop.shape[1]
+                part, part_info = view[contract.COURSE_VIEW_IMAGE], view[contract.COURSE_VIEW_INFO]
+                assert isinstance(part, msgs.CompressedImage)
+                assert isinstance(part_info, msgs.CameraInfo)
+                results["region"] = detect(part, part_info, params)
+                pixels["region"] += part_info.roi.width * part_info.roi.height
             cpu["region"] += time.process_time() - t
             t = time.process_time()
             img = full.render_camera()
