@@ -57,3 +57,20 @@ def test_no_region_when_the_camera_faces_a_bare_wall() -> None:
     with Simulator(scn, renderer="tiny") as sim:
         sim.teleport("explorer", -4.0, 2.5, math.pi)  # the start, facing the west wall
         assert sim.course_region(cam) is None
+
+
+def test_a_marker_behind_a_wall_gets_no_region_once_the_frame_shows_it_hidden() -> None:
+    """Marker 1 faces south from the start strip; from (-2.44, -1.5) looking north it is in
+    front of the camera and faces it, but the west divider wall stands between: the frame's
+    depth buffer shows it hidden, so no region is rendered for it."""
+    scn = course_world()
+    cam = CourseCamera.of(scn.camera)
+    assert cam is not None
+    with Simulator(scn, renderer="tiny") as sim:
+        sim.teleport("explorer", -2.44, -1.5, math.pi / 2)
+        assert sim.course_region(cam) is not None  # geometry alone: a candidate
+        sim.render_camera()
+        assert sim.course_region(cam) is None  # the frame shows the wall in front of it
+        sim.teleport("explorer", -2.44, 1.0, math.pi / 2)  # the same marker, in plain sight
+        sim.render_camera()
+        assert sim.course_region(cam) is not None

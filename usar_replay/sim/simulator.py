@@ -728,10 +728,12 @@ class Simulator:
         me = self.robots[self.camera_robot]
         frame, last = self._frame_depth, self._last_frame
         hidden = None
-        # only with the depth of a frame of this very pose (render_camera just before)
-        current = frame is not None and last is not None and frame[0] == last[0]
-        if current and last is not None and last[0][0] == (me.x, me.y, me.yaw):
-            assert frame is not None
+        if (  # only with the depth of a frame of this very pose (render_camera just before)
+            frame is not None
+            and last is not None
+            and frame[0] == last[0]
+            and last[0][0] == (me.x, me.y, me.yaw)
+        ):
             hidden = functools.partial(self._hidden_marker, frame[1])
         return course_view.region(eye, rot, self.scenario.markers, cam, hidden)
 
@@ -764,6 +766,9 @@ class Simulator:
         the full image's symmetric frustum has its pixel grid; so each rendered pixel samples
         the scene where the full render's pixel does. Does not advance the camera's clock (the
         frame it goes with is :meth:`render_camera`'s)."""
+        key = (self._view_key(), cam, where)
+        if self._last_region is not None and self._last_region[0] == key:
+            return self._last_region[1]  # nothing moved: the very pixels a render gives
         fx, fy, _, _ = cam.intrinsics()
         right_full = NEAR_PLANE * (cam.width / 2.0) / fx
         top_full = NEAR_PLANE * (cam.height / 2.0) / fy
@@ -774,9 +779,6 @@ class Simulator:
         projection = p.computeProjectionMatrix(
             left, right, bottom, top, NEAR_PLANE, FAR_PLANE, physicsClientId=self._client
         )
-        key = (self._view_key(), cam, where)
-        if self._last_region is not None and self._last_region[0] == key:
-            return self._last_region[1]  # nothing moved: the very pixels a render gives
         img = self._render_with(where.width, where.height, projection)[0]
         img.setflags(write=False)
         self._last_region = (key, img)
