@@ -153,9 +153,10 @@ class RecordSettings:
     the course camera's pixels around every marker that can be in view (nothing when none
     can), logs them, and the course's detector searches those: poses, ``fiducial_area`` and
     ``image_error`` as the course camera gives them (bench/bench_course_detect.py: at 4-6 m a
-    median pose error of 3.7 cm, against the 640x480 frame's 21 cm). false: the detector searches the recorded
-    640x480 frame and scales its pixel fields. Unset: true for a new recording; a log
-    recorded before this setting existed reads as false. The log stores the value that ran."""
+    median pose error of 3.7 cm, against the 640x480 frame's 21 cm). false: the detector
+    searches the recorded 640x480 frame and scales its pixel fields. Unset: true for a new
+    recording; a log recorded before this setting existed reads as false. The log stores the
+    value that ran."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -1,7 +1,7 @@
 """Where in the course's 1920x1080 camera a marker can be: the region the recorder renders.
 
 Why: the course's TurtleBot3 waffle camera is 1920x1080 (``COURSE_CAMERA``); usar records
-640x480 frames, whose raw pose error at 4-6 m is about three times the course camera's
+640x480 frames, whose raw pose error at 4-6 m is several times the course camera's
 (bench/bench_course_detect.py). Rendering the whole course frame costs some 6 times a 640x480
 frame, yet the detector only needs the pixels around a marker. The recorder knows the world,
 so it projects every marker's corners with the course camera's intrinsics and renders, at the
