@@ -2,6 +2,7 @@
 
     python bench/bench_record.py [--course-seconds 120] [--only room|course] [--encoding E]
                                  [--keep DIR] [--latency 0|1] [--camera WxH@HZ]
+                                 [--course-detection on|off]
 
 Records the one-room world of the tests (the whole mission: explorer, then follower) and the
 first ``--course-seconds`` of sim time of the course world, into a temporary directory, and
@@ -14,7 +15,11 @@ per sim-minute, frames rendered against frames recorded, and usar's CPU split by
 * ``log``: serialising and writing messages; ``physics``: the sim's steps;
 * ``detect``: the course's ArUco detector (trusted, on usar's side: issue #21; before it, the
   mission process ran it);
+* ``region``: the course camera's region around the markers that can be in view (issue 43:
+  finding it, rendering it at 1920x1080's pixel density, PNG), with ``record.course_detection``;
 * ``rest``: tf, odometry, the process boundary and the loop itself.
+
+``--course-detection off`` records as before issue 43 (the detector on the 640x480 frames).
 
 ``--camera 1920x1080@30`` records with another camera (size and rate; the field of view stays
 the scenario's): what the course's own camera (the TurtleBot3 waffle's in Gazebo) would cost
@@ -47,7 +52,7 @@ from usar_replay.world.scenario import Scenario, course_world
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from conftest import one_room
 
-STAGES = ("render", "encode", "log", "physics", "detect")
+STAGES = ("render", "encode", "log", "physics", "detect", "region")
 _spent: defaultdict[str, float] = defaultdict(float)
 _calls: defaultdict[str, int] = defaultdict(int)
 
@@ -77,6 +82,8 @@ def _instrument() -> None:
         from usar_replay.pipeline import course_detector
 
         points.append((course_detector, "detect", "detect"))
+        points.append((record, "course_view", "region"))
+        points.append((sim.Simulator, "render_region", "regions"))  # counted, inside region
     except ImportError:
         pass
     if not hasattr(sim.Simulator, "_render"):  # before frames were reused
@@ -92,13 +99,19 @@ def _children_cpu() -> float:
 
 
 def bench(
-    label: str, scenario: Scenario, max_sim_time: float | None, out: Path, latency: int
+    label: str,
+    scenario: Scenario,
+    max_sim_time: float | None,
+    out: Path,
+    latency: int,
+    course: bool | None = None,
 ) -> None:
     _spent.clear()
     _calls.clear()
-    settings = RunSettings(
-        record=RecordSettings(max_sim_time_s=max_sim_time, actuation_latency_ticks=latency)
-    )
+    record_settings = RecordSettings(max_sim_time_s=max_sim_time, actuation_latency_ticks=latency)
+    if course is not None and "course_detection" in RecordSettings.__dataclass_fields__:
+        record_settings = dataclasses.replace(record_settings, course_detection=course)
+    settings = RunSettings(record=record_settings)
     wall0, cpu0, child0 = time.perf_counter(), time.process_time(), _children_cpu()
     result = record.record(scenario, out, settings)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
@@ -123,7 +136,9 @@ def bench(
     )
     print(
         f"  log {result.size_bytes / 1e6:.2f} MB = {result.size_bytes / 1e6 / minutes:.2f} MB"
-        f" per sim-minute; {result.frames} frames" + f", {rendered} rendered"
+        f" per sim-minute; {result.frames} frames"
+        + f", {rendered} rendered"
+        + (f", {_calls['regions']} course-camera regions" if _calls["regions"] else "")
     )
     shown = {s: _spent.get(s, 0.0) for s in STAGES}
     rest = cpu - sum(shown.values())
@@ -151,7 +166,13 @@ def main() -> None:
     ap.add_argument(
         "--camera", type=_camera_arg, help="WxH@HZ, e.g. 1920x1080@30; default: the scenario's"
     )
+    ap.add_argument(
+        "--course-detection",
+        choices=("on", "off"),
+        help="record.course_detection (issue 43); default: the recorder's",
+    )
     args = ap.parse_args()
+    course = None if args.course_detection is None else args.course_detection == "on"
     _instrument()
 
     def world(scn: Scenario) -> Scenario:
@@ -172,6 +193,7 @@ def main() -> None:
                 None,
                 Path(tmp) / "room.mcap",
                 args.latency,
+                course,
             )
         if args.only in (None, "course"):
             bench(
@@ -180,6 +202,7 @@ def main() -> None:
                 args.course_seconds,
                 Path(tmp) / "course.mcap",
                 args.latency,
+                course,
             )
 
 

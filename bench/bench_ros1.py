@@ -2,6 +2,7 @@
 
     python bench/bench_ros1.py [--world room|course] [--rtf 0.5] [--package DIR]
                                [--launch FILE ...] [--latency 0|1] [--detection-latency 0|1]
+                               [--course-detection on|off]
 
 Builds the package once into an empty build cache (catkin_make: the build time), then records
 it on the world with each ``--rtf`` wall cap (the slowest pace, a safety net: the graph itself
@@ -24,6 +25,8 @@ one core at a time, as before 2026-11-27. Likewise ``record.detection_latency_ti
 1, the course's detections of a frame come with the next tick); ``--detection-latency 0``
 measures them in the frame's own tick, as before. The Python runs always use their own
 defaults, 0 and 0 (bench/bench_record.py: with 1 the Python mission was slower).
+``--course-detection`` sets ``record.course_detection`` for both (issue 43: the course's
+detector at the course camera's 1920x1080, from regions the recorder renders; default on).
 Nothing is asserted; the numbers go into docs/ros1.md.
 """
 
@@ -70,10 +73,19 @@ def main() -> None:
         choices=[0, 1],
         help="the ROS 1 runs' detection latency (ticks)",
     )
+    ap.add_argument(
+        "--course-detection",
+        choices=["on", "off"],
+        help="record.course_detection for both missions (default: the recorder's)",
+    )
     args = ap.parse_args()
+    course = None if args.course_detection is None else args.course_detection == "on"
+    _COURSE[0] = course
     ros1_settings = RunSettings(
         record=RecordSettings(
-            actuation_latency_ticks=args.latency, detection_latency_ticks=args.detection_latency
+            actuation_latency_ticks=args.latency,
+            detection_latency_ticks=args.detection_latency,
+            **({} if course is None else {"course_detection": course}),
         )
     )
     launches = args.launch or (TWINS if Path(args.package) == EXAMPLE else [""])
@@ -136,10 +148,20 @@ def say(text: str) -> None:
     print(textwrap.fill(text, 100, subsequent_indent="    ", break_on_hyphens=False))
 
 
+_COURSE: list[bool | None] = [None]
+"""``--course-detection`` (None: the recorder's default)."""
+
+
 def _python_rtf(scenario: Scenario, out: Path, when: str) -> float:
     """The built-in Python mission recorded on ``scenario``: its real-time factor, printed."""
     start, stolen = time.perf_counter(), _steal()
-    result = python_record.record(scenario, out, RunSettings())
+    course = _COURSE[0]
+    settings = (
+        RunSettings()
+        if course is None
+        else RunSettings(record=RecordSettings(course_detection=course))
+    )
+    result = python_record.record(scenario, out, settings)
     wall = time.perf_counter() - start
     steal = steal_since(stolen)
     report = grade_file(out)

@@ -3,15 +3,20 @@ frames of an ArUco marker (drawn with OpenCV) tick by tick."""
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 import pytest
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.settings import DetectorParams
-from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.pipeline.course_detector import CourseDetector, course_view, mission_inputs
 from usar_replay.sim.camera import encode_image
+from usar_replay.sim.course_view import CourseCamera
+from usar_replay.sim.simulator import Simulator
 from usar_replay.world.assignment import ROS2_FINAL, USAR, Assignment
+from usar_replay.world.scenario import course_world
 
 INFO = msgs.CameraInfo(
     height=480,
@@ -164,3 +169,66 @@ def test_replay_delivers_a_latent_detection_where_it_was_recorded() -> None:
     assert [out for out, _, _ in results] == recorded_ticks
     assert [len(redone) for _, _, redone in results] == [0, 1, 0]
     assert [recorded == redone for _, recorded, redone in results] == [True, True, True]
+
+
+def _course_tick() -> tuple[list[tuple[str, str, bytes]], list[tuple[str, str, bytes]]]:
+    """A course-world frame facing marker 0 from its target: (the tick's inputs, the
+    recorder's :func:`course_view` of it)."""
+    scn = course_world()
+    cam = CourseCamera.of(scn.camera)
+    assert cam is not None
+    with Simulator(scn, renderer="tiny") as sim:
+        tx, ty = scn.targets[0]
+        m = scn.marker_by_id(0)
+        sim.teleport("explorer", tx, ty, math.atan2(m.y - ty, m.x - tx) + 0.2)
+        info = sim.camera_info()
+        frame = msgs.CompressedImage(
+            header=info.header, format="png", data=encode_image(sim.render_camera())
+        )
+        view = course_view(sim, cam, info)
+        again = course_view(sim, cam, info)
+    assert view == again  # the same scene gives the same bytes
+    wire = [
+        (contract.CAMERA_INFO, info.__msgtype__, cdr.encode(info)),
+        (contract.IMAGE, frame.__msgtype__, cdr.encode(frame)),
+    ]
+    return wire, view
+
+
+def test_at_the_course_resolution_the_region_is_searched() -> None:
+    wire, view = _course_tick()
+    assert [w[0] for w in view] == list(contract.COURSE_VIEW_TOPICS)
+    det = CourseDetector(DetectorParams(), USAR, pixel_scale=3.0, course=True)
+    out = det.add_detections(wire, view)
+    assert [w[0] for w in out] == [contract.CAMERA_INFO, contract.IMAGE, contract.FIDUCIALS]
+    found = cdr.decode(out[-1][2], out[-1][1])
+    assert isinstance(found, msgs.FiducialTransformArray)
+    assert [f.fiducial_id for f in found.transforms] == [0]
+    assert found.header == cdr.decode(wire[1][2], wire[1][1]).header  # the frame's stamp
+    assert found.transforms[0].fiducial_area > 10000  # the course camera's pixels, unscaled
+    # the same tick detected again gives the same bytes
+    again = CourseDetector(DetectorParams(), USAR, pixel_scale=3.0, course=True)
+    assert again.add_detections(wire, view) == out
+
+
+def test_at_the_course_resolution_a_frame_without_a_region_is_never_decoded() -> None:
+    """No marker can be in view (no region): an empty detection, without decoding the frame
+    (these bytes are no image: decoding them would raise DetectError)."""
+    info = (contract.CAMERA_INFO, msgs.CameraInfo.__msgtype__, cdr.encode(INFO))
+    header = msgs.Header(stamp=msgs.Time.from_ns(5), frame_id="cam")
+    junk = msgs.CompressedImage(header=header, format="png", data=b"not an image")
+    wire = [info, (contract.IMAGE, junk.__msgtype__, cdr.encode(junk))]
+    det = CourseDetector(DetectorParams(), USAR, course=True)
+    out = det.add_detections(wire)
+    found = cdr.decode(out[-1][2], out[-1][1])
+    assert found == msgs.FiducialTransformArray(header=header, image_seq=0)
+    assert det.seq == 1  # a searched frame all the same, as aruco_detect counts it
+
+
+def test_replay_re_detects_from_the_logged_region() -> None:
+    wire, view = _course_tick()
+    live = CourseDetector(DetectorParams(), USAR, course=True)
+    recorded = live.add_detections(wire, view)
+    again = CourseDetector(DetectorParams(), USAR, course=True)
+    _, was, redone = again.replay_tick(recorded, [], view)
+    assert was == redone and redone[0][0] == contract.FIDUCIALS

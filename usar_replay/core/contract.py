@@ -28,6 +28,9 @@ __all__ = [
     "CLOCK",
     "ENABLE_DETECTIONS",
     "FIDUCIALS",
+    "COURSE_VIEW_IMAGE",
+    "COURSE_VIEW_INFO",
+    "COURSE_VIEW_TOPICS",
     "GROUND_TRUTH_TOPICS",
     "IMAGE",
     "MAP",
@@ -128,6 +131,14 @@ MARKER_POSES = "/explorer/marker_poses"
 ROSOUT = "/rosout"
 TRUTH_MARKERS = "/ground_truth/markers"
 """True marker poses (face normal along the marker frame's +x in ``map``)."""
+COURSE_VIEW_INFO = "/usar/course_camera/region/camera_info"
+"""The course camera's ``CameraInfo`` (1920x1080 in the course world) with ``roi`` the region
+the recorder rendered for the frame of the same tick: written by the ``recorder`` only when a
+marker can be in view, never sent to a mission (:mod:`usar_replay.sim.course_view`)."""
+COURSE_VIEW_IMAGE = "/usar/course_camera/region/image_raw/compressed"
+"""That region's grey levels (``CompressedImage``, lossless PNG): what the course's detector
+searched, so replay re-detects from the log alone."""
+COURSE_VIEW_TOPICS: tuple[str, ...] = (COURSE_VIEW_INFO, COURSE_VIEW_IMAGE)
 CLOCK = "/clock"
 """rosgraph_msgs/Clock: not written to the log (log time is sim time), named for the node API."""
 

@@ -147,6 +147,16 @@ class RecordSettings:
     for a ROS 1 package (whose frame ticks then wait for the detector no longer: bench/
     bench_ros1.py), 0 for a Python mission (the order its own ``ArucoDetect`` once had). The
     log stores the value that ran, and replay delivers its re-run detections the same way."""
+    course_detection: bool | None = setting(None)
+    """true: in a world whose detections are in the course camera's pixels (the course's
+    1920x1080: ``camera.pixel_fields_width``), the recorder renders, for each camera frame,
+    the course camera's pixels around every marker that can be in view (nothing when none
+    can), logs them, and the course's detector searches those: poses, ``fiducial_area`` and
+    ``image_error`` as the course camera gives them (bench/bench_course_detect.py: at 4-6 m a
+    median pose error of 3.7 cm, against the 640x480 frame's 21 cm). false: the detector
+    searches the recorded 640x480 frame and scales its pixel fields. Unset: true for a new
+    recording; a log recorded before this setting existed reads as false. The log stores the
+    value that ran."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -51,9 +51,10 @@ from usar_replay.node.mission_process import (
     hide_from_mission,
 )
 from usar_replay.node.mission_target import MissionTarget, resolve_target
-from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.pipeline.course_detector import CourseDetector, course_view, mission_inputs
 from usar_replay.pipeline.status_line import NodeLines
 from usar_replay.sim.camera import encode_image
+from usar_replay.sim.course_view import CourseCamera
 from usar_replay.sim.simulator import SimRobot, Simulator
 from usar_replay.world.assignment import Assignment
 from usar_replay.world.assignment import of as assignment_of
@@ -203,6 +204,9 @@ class _Observed:
     wire: list[tuple[str, str, bytes]]
     truth: list[tuple[str, msgs.Message]]
     frame: int
+    course: list[tuple[str, str, bytes]] = dataclasses.field(default_factory=list)
+    """The course camera's region for the frame (:func:`course_view`): the recorder's, logged,
+    never sent to the mission."""
 
 
 def _observe(
@@ -210,21 +214,27 @@ def _observe(
     scenario: Scenario,
     asg: Assignment,
     first: list[tuple[str, msgs.Message]],
+    course: CourseCamera | None = None,
 ) -> _Observed:
     """What the simulator publishes now: ``first`` (``/tf_static``, ``/map`` at the start),
     ``/tf`` (where the assignment's simulator publishes the robots' odom links), a camera frame
-    when one is due, odometry; and the ground truth of the moment."""
+    when one is due, odometry; and the ground truth of the moment. With ``course`` (the
+    course's detector at the course camera's resolution), the frame's region of that camera
+    where a marker can be in view."""
     t = sim.now_ns
     batch = list(first)
     if asg.sim_base_tf:
         batch.append((contract.TF, sim.tf()))
     frame = 0
+    view: list[tuple[str, str, bytes]] = []
     if sim.camera_due():
         cam = sim.camera_info()
         data = encode_image(sim.render_camera(), scenario.camera.encoding)
         image = msgs.CompressedImage(header=cam.header, format=scenario.camera.encoding, data=data)
         batch += [(asg.camera_info_topic, cam), (asg.image_topic, image)]
         frame = 1
+        if course is not None:
+            view = course_view(sim, course, cam)
     batch += [(contract.odom(r), sim.odometry(r)) for r in asg.robot_names]
     wire = [(topic, msg.__msgtype__, cdr.encode(msg)) for topic, msg in batch]
     stamp = msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.MAP)
@@ -232,7 +242,7 @@ def _observe(
         (contract.truth_pose(r), msgs.PoseStamped(header=stamp, pose=sim.true_pose(r)))
         for r in asg.robot_names
     ]
-    return _Observed(t, wire, truth, frame)
+    return _Observed(t, wire, truth, frame, view)
 
 
 def _step(sim: Simulator, commands: list[tuple[str, msgs.Twist]], steps: int) -> None:
@@ -342,14 +352,20 @@ def record(
 def with_latency(settings: RunSettings, default: int) -> RunSettings:
     """``settings`` with ``record.actuation_latency_ticks`` and
     ``record.detection_latency_ticks`` set: ``default`` where unset (1 for a ROS 1 package, 0
-    for a Python mission: the settings' doc), so the log stores the values that ran."""
+    for a Python mission: the settings' doc), and ``record.course_detection`` (true where
+    unset), so the log stores the values that ran."""
     rs = settings.record
     actuation = default if rs.actuation_latency_ticks is None else rs.actuation_latency_ticks
     detection = default if rs.detection_latency_ticks is None else rs.detection_latency_ticks
-    if (actuation, detection) == (rs.actuation_latency_ticks, rs.detection_latency_ticks):
+    course = True if rs.course_detection is None else rs.course_detection
+    ran = (actuation, detection, course)
+    if ran == (rs.actuation_latency_ticks, rs.detection_latency_ticks, rs.course_detection):
         return settings
     latency = dataclasses.replace(
-        rs, actuation_latency_ticks=actuation, detection_latency_ticks=detection
+        rs,
+        actuation_latency_ticks=actuation,
+        detection_latency_ticks=detection,
+        course_detection=course,
     )
     return dataclasses.replace(settings, record=latency)
 
@@ -427,17 +443,21 @@ def _tick_loop(
     # the log being written holds the truth: unreadable to the mission even next to its file
     hidden = hide_from_mission(limits, str(writer.part_path))
     # the course's, trusted; pixel fields in the course camera's pixels (CameraSettings)
+    course = CourseCamera.of(scenario.camera) if rs.course_detection else None
     detector = CourseDetector.for_run(
         settings.detector,
         asg,
         scenario.camera.pixel_scale(),
         latency_ticks=rs.detection_latency_ticks or 0,
+        course=course is not None,
     )
+    if detector is None:
+        course = None  # a world without the course's detector needs no regions
     inputs = mission_inputs(asg, detector is not None)
     # the first tick (the world's static facts, ground truth at t0) is written before the
     # mission starts: a mission that never reaches its first tick (a crash at import, a ROS 1
     # graph that never gets ready, a failed build) still leaves a gradable log (issue 31)
-    start = _observe(sim, scenario, asg, first)
+    start = _observe(sim, scenario, asg, first, course)
     _write_tick(writer, start, run, detector)
     tick: _Observed | None = start
     with _attached(
@@ -458,7 +478,7 @@ def _tick_loop(
         try:
             while tick is not None:
                 if not sent_ahead and not written and detector is not None:
-                    tick.wire = detector.deliver(tick.wire)
+                    tick.wire = detector.deliver(tick.wire, tick.course)
                 try:
                     if ahead is not None:
                         raise ahead  # the send ahead failed: as if it failed here
@@ -466,7 +486,7 @@ def _tick_loop(
                         proc.send(tick.t, tick.wire)
                         if detector is not None:
                             # with a detection latency: while the mission takes in the frame
-                            detector.after_send(tick.wire)
+                            detector.after_send(tick.wire, tick.course)
                 finally:
                     if unwritten is not None:
                         _write_outputs(writer, unwritten)
@@ -477,7 +497,7 @@ def _tick_loop(
                 nxt: _Observed | None = None
                 if latency:
                     _step(sim, commands, steps_per_tick)
-                    nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                    nxt = _observe(sim, scenario, asg, [], course) if sim.now_ns <= end_ns else None
                     if nxt is not None and not nxt.frame:
                         # a tick without a camera frame depends on nothing the mission says
                         # in this one: sent now, the mission takes it up as soon as it is
@@ -493,7 +513,7 @@ def _tick_loop(
                     return
                 if not latency:
                     _step(sim, commands, steps_per_tick)
-                    nxt = _observe(sim, scenario, asg, []) if sim.now_ns <= end_ns else None
+                    nxt = _observe(sim, scenario, asg, [], course) if sim.now_ns <= end_ns else None
                 tick = nxt
         finally:
             if unwritten is not None:
@@ -540,7 +560,7 @@ def _write_tick(
     """One tick's inputs into the log, with the course's detections (after the previous
     tick's enable switch) added to what the mission will be sent."""
     if detector is not None:
-        tick.wire = detector.deliver(tick.wire)
+        tick.wire = detector.deliver(tick.wire, tick.course)
     _write_inputs(writer, tick, run)
 
 
@@ -550,6 +570,8 @@ def _write_inputs(writer: bag.BagWriter, tick: _Observed, run: _Run) -> None:
         writer.write_raw(topic, msgtype, raw, tick.t, publisher="sim")
     for topic, msg in tick.truth:
         writer.write(topic, msg, tick.t, publisher="recorder")
+    for topic, msgtype, raw in tick.course:
+        writer.write_raw(topic, msgtype, raw, tick.t, publisher="recorder")
     run.frames += tick.frame
     run.last_t = tick.t
 

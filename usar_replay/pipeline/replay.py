@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.core import cdr, contract, msgs
+from usar_replay.core.contract import COURSE_VIEW_TOPICS
 from usar_replay.core.errors import LogError, UsageError
 from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
@@ -55,6 +56,7 @@ from usar_replay.node.mission_process import (
 )
 from usar_replay.node.mission_target import MissionTarget, resolve_target
 from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.sim.course_view import CourseCamera
 from usar_replay.world.assignment import of as assignment_of
 
 __all__ = [
@@ -482,12 +484,16 @@ def replay(
     world_detects = bool(asg.course_detections) and SIM in run.reader.publishers(
         asg.course_detections
     )
+    # at the course camera's resolution, from the regions the recorder logged (a log from
+    # before them reads record.course_detection as unset: its 640x480 frames, as it ran)
+    course = bool(use.record.course_detection) and CourseCamera.of(scenario.camera) is not None
     redetect = (
         CourseDetector(
             use.detector,
             asg,
             scenario.camera.pixel_scale(),
             latency_ticks=use.record.detection_latency_ticks or 0,
+            course=course,
         )
         if world_detects
         else None
@@ -670,10 +676,15 @@ def _redetect(detector: CourseDetector, tick: _Tick, *, recorded_switches: bool)
     re-run's detections (with the recorded settings, the recorded bytes; with ``--set
     detector.*``, the changed detector's), and the recorded ones are compared with them. The
     detector is switched by the tick's recorded outputs (``recorded_switches``), else by the
-    replayed ones as they come back (:attr:`_Replayer.switches`)."""
+    replayed ones as they come back (:attr:`_Replayer.switches`). At the course camera's
+    resolution it searches the course camera's regions the recorder logged with the frame
+    (the ``recorder``'s :data:`~usar_replay.core.contract.COURSE_VIEW_TOPICS`, which the
+    mission is never sent), so replay renders nothing and still re-detects from the log
+    alone."""
     recorded_outputs = [(p.topic, p.msgtype, p.data) for p in tick.recorded]
+    view = [(m.topic, m.msgtype, m.data) for m in tick.truth if m.topic in COURSE_VIEW_TOPICS]
     tick.inputs, recorded, redone = detector.replay_tick(
-        tick.inputs, recorded_outputs if recorded_switches else []
+        tick.inputs, recorded_outputs if recorded_switches else [], view
     )
 
     def pending(items: list[tuple[str, str, bytes]]) -> list[_Pending]:

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import math
 import os
 import pkgutil
@@ -91,7 +92,8 @@ with _quiet_stdout():
     import pybullet as p
 
 from usar_replay.core import contract, msgs  # noqa: E402
-from usar_replay.sim import eglshadow  # noqa: E402
+from usar_replay.sim import course_view, eglshadow  # noqa: E402
+from usar_replay.sim.course_view import CourseCamera, Region  # noqa: E402
 from usar_replay.world.scenario import Scenario  # noqa: E402
 
 __all__ = [
@@ -244,6 +246,12 @@ class Simulator:
         self.frame_seq = 0
         self.frames_rendered = 0
         """How many frames pybullet actually rendered (the rest were reused: nothing moved)."""
+        self.regions_rendered = 0
+        """How many course-camera regions :meth:`render_region` rendered (the rest were
+        reused: nothing moved)."""
+        self._frame_depth: tuple[tuple[object, ...], np.ndarray] | None = None
+        """The view key and depth buffer of the camera's last render (:meth:`course_region`)."""
+        self._last_region: tuple[object, np.ndarray] | None = None
         self._last_frame: tuple[tuple[object, ...], np.ndarray] | None = None
         self._static_depth: tuple[object, np.ndarray] | None = None
         """The depth buffer of the last render with no robot in view, and the camera pose it
@@ -626,6 +634,7 @@ class Simulator:
             img = self._last_frame[1]
         else:
             img, depth = self._render()
+            self._frame_depth = (key, depth)
             img.setflags(write=False)
             self._last_frame = (key, img)
             self.frames_rendered += 1
@@ -704,6 +713,82 @@ class Simulator:
         """(BGR image, OpenGL depth buffer in [0, 1]: :func:`_depth_buffer_value`) from
         pybullet."""
         cam = self.scenario.camera
+        return self._render_with(cam.width, cam.height, self._projection)
+
+    def course_region(self, cam: CourseCamera) -> Region | None:
+        """The part of ``cam``'s image where a marker may be detected now (None: nowhere),
+        from the camera robot's true pose and the markers (:func:`course_view.region`).
+
+        After :meth:`render_camera`, a marker the frame's depth buffer shows wholly behind
+        something nearer (a wall, the other robot; less :data:`OCCLUSION_MARGIN_M`) is not a
+        candidate: the course camera sees the scene from the same pose, so it is hidden there
+        too. The test is conservative as :meth:`_maybe_in_view`'s: the deepest value in the
+        marker's projected box decides."""
+        eye, rot = self.camera_pose()
+        me = self.robots[self.camera_robot]
+        frame, last = self._frame_depth, self._last_frame
+        hidden = None
+        if (  # only with the depth of a frame of this very pose (render_camera just before)
+            frame is not None
+            and last is not None
+            and frame[0] == last[0]
+            and last[0][0] == (me.x, me.y, me.yaw)
+        ):
+            hidden = functools.partial(self._hidden_marker, frame[1])
+        return course_view.region(eye, rot, self.scenario.markers, cam, hidden)
+
+    def _hidden_marker(self, depth: np.ndarray, pts: np.ndarray) -> bool:
+        """Whether a marker whose corners are ``pts`` (rows, in the optical frame, all in front)
+        is wholly hidden in the frame whose depth buffer is ``depth``."""
+        cam = self.scenario.camera
+        fx, fy, cx, cy = self._intrinsics
+        u = fx * pts[:, 0] / pts[:, 2] + cx
+        v = fy * pts[:, 1] / pts[:, 2] + cy
+        m = CULL_MARGIN_PX
+        u0 = max(0, math.floor(float(u.min()) - m))
+        u1 = min(cam.width, math.ceil(float(u.max()) + m) + 1)
+        v0 = max(0, math.floor(float(v.min()) - m))
+        v1 = min(cam.height, math.ceil(float(v.max()) + m) + 1)
+        if u0 >= u1 or v0 >= v1:
+            return False  # outside this frame: the region test decides
+        nearest = float(pts[:, 2].min()) - OCCLUSION_MARGIN_M
+        if nearest <= NEAR_PLANE:
+            return False
+        return float(depth[v0:v1, u0:u1].max()) < _depth_buffer_value(nearest)
+
+    def render_region(self, cam: CourseCamera, where: Region) -> np.ndarray:
+        """The camera robot's view as ``cam`` would see it, only the pixels of ``where``:
+        (height, width, 3) uint8 BGR, the same pixels as that window of a full render at
+        ``cam``'s size, at a fraction of the cost.
+
+        How: an off-axis frustum (pybullet's ``computeProjectionMatrix``, OpenGL's
+        ``glFrustum``) whose sides pass through the window's edges on the near plane, where
+        the full image's symmetric frustum has its pixel grid; so each rendered pixel samples
+        the scene where the full render's pixel does. Does not advance the camera's clock (the
+        frame it goes with is :meth:`render_camera`'s)."""
+        key = (self._view_key(), cam, where)
+        if self._last_region is not None and self._last_region[0] == key:
+            return self._last_region[1]  # nothing moved: the very pixels a render gives
+        fx, fy, _, _ = cam.intrinsics()
+        right_full = NEAR_PLANE * (cam.width / 2.0) / fx
+        top_full = NEAR_PLANE * (cam.height / 2.0) / fy
+        left = -right_full + 2.0 * right_full * where.x / cam.width
+        right = -right_full + 2.0 * right_full * (where.x + where.width) / cam.width
+        top = top_full - 2.0 * top_full * where.y / cam.height
+        bottom = top_full - 2.0 * top_full * (where.y + where.height) / cam.height
+        projection = p.computeProjectionMatrix(
+            left, right, bottom, top, NEAR_PLANE, FAR_PLANE, physicsClientId=self._client
+        )
+        img = self._render_with(where.width, where.height, projection)[0]
+        img.setflags(write=False)
+        self._last_region = (key, img)
+        self.regions_rendered += 1
+        return img
+
+    def _render_with(
+        self, width: int, height: int, projection: Any
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(BGR image, depth buffer) of the camera robot's view through ``projection``."""
         eye, rot = self.camera_pose()
         target = eye + rot[:, 2]
         up = -rot[:, 1]
@@ -713,10 +798,10 @@ class Simulator:
         quiet = _quiet_stdout() if self.renderer_name == "egl" else contextlib.nullcontext()
         with quiet:  # the EGL plugin prints its GL vendor on stdout on some frames
             _, _, rgba, buf, _ = p.getCameraImage(
-                cam.width,
-                cam.height,
+                width,
+                height,
                 viewMatrix=view,
-                projectionMatrix=self._projection,
+                projectionMatrix=projection,
                 shadow=0,
                 lightDirection=LIGHT_DIRECTION,
                 lightColor=(1, 1, 1),
@@ -728,9 +813,9 @@ class Simulator:
                 flags=p.ER_NO_SEGMENTATION_MASK,
                 physicsClientId=self._client,
             )
-        img = np.asarray(rgba, dtype=np.uint8).reshape(cam.height, cam.width, 4)
+        img = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
         bgr = cv2.cvtColor(img, cv2.COLOR_RGBA2BGR)
-        depth = np.asarray(buf, dtype=np.float32).reshape(cam.height, cam.width)
+        depth = np.asarray(buf, dtype=np.float32).reshape(height, width)
         return bgr, depth
 
     def marker_poses(self) -> dict[int, msgs.Pose]:

@@ -67,14 +67,42 @@ _REFINE = {
 }
 
 
-@functools.cache
-def _detector(params: DetectorParams) -> cv2.aruco.ArucoDetector:
-    """One ArucoDetector per parameter set: building one per frame is wasteful."""
+@functools.lru_cache(maxsize=256)
+def _detector(params: DetectorParams, size_ratio: float = 1.0) -> cv2.aruco.ArucoDetector:
+    """One ArucoDetector per parameter set: building one per frame is wasteful.
+
+    ``size_ratio``: the full camera image's larger side over the searched image's (a region
+    of it: :func:`_region_of`). OpenCV bounds a marker's perimeter as a share of the searched
+    image's larger side, so in a region the shares grow by this ratio and the same markers
+    pass as in the full image."""
     dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, params.dictionary))
     p = cv2.aruco.DetectorParameters()
     p.cornerRefinementMethod = _REFINE[params.corner_refinement]
     p.adaptiveThreshWinSizeStep = params.threshold_window_step
+    if size_ratio != 1.0:
+        p.minMarkerPerimeterRate *= size_ratio
+        p.maxMarkerPerimeterRate *= size_ratio
     return cv2.aruco.ArucoDetector(dictionary, p)
+
+
+def _region_of(info: msgs.CameraInfo, shape: tuple[int, ...]) -> tuple[int, int, float]:
+    """(x offset, y offset, size ratio) of an image that is ``info.roi`` of ``info``'s camera
+    (ROS's ``RegionOfInterest``; all zero: the whole image). The image must be the region's
+    size: anything else is a :class:`DetectError`."""
+    roi = info.roi
+    if roi.width == 0 and roi.height == 0 and roi.x_offset == 0 and roi.y_offset == 0:
+        return 0, 0, 1.0
+    if (roi.height, roi.width) != tuple(shape[:2]):
+        raise DetectError(
+            f"a region of {roi.width}x{roi.height} px came as a {shape[1]}x{shape[0]} image"
+        )
+    if roi.x_offset + roi.width > info.width or roi.y_offset + roi.height > info.height:
+        raise DetectError(
+            f"a region of {roi.width}x{roi.height} px at ({roi.x_offset}, "
+            f"{roi.y_offset}) is outside the {info.width}x{info.height} camera"
+        )
+    ratio = max(info.width, info.height) / max(roi.width, roi.height)
+    return roi.x_offset, roi.y_offset, ratio
 
 
 @functools.cache
@@ -196,13 +224,18 @@ def detect_with_corners(
 ) -> tuple[msgs.FiducialTransformArray, dict[int, np.ndarray]]:
     """:func:`detect`, plus each published detection's four image corners (for drawing).
 
+    An image that is a region of its camera's (``info.roi`` set, as ROS's ``CameraInfo``
+    says one: the course camera's pixels around the markers) is searched as that part of the
+    full image: its corners are shifted by the region's offset before the pose is solved with
+    the full camera's ``K``, so the pose and the pixel fields are the full camera's.
+
     The detections are a pure function of (frame bytes, camera matrix and distortion,
     parameters); the header and ``image_seq`` are the frame's. So the previous call's detections
     are kept and, when the next call has the same bytes, camera and parameters (a parked camera,
     whose encoder hands back the very same bytes), reused under the new header and sequence
     number without decoding the frame: exactly what detecting again would give.
     """
-    key = (bytes(image.data), info.k, info.d, params)
+    key = (bytes(image.data), info.k, info.d, info.width, info.height, info.roi, params)
     with _DETECTED.lock:
         last = _DETECTED.last
         hit = last is not None and last[0] == key
@@ -238,7 +271,9 @@ def _detections(
 ) -> _Found:
     """Each valid detection in the frame, sorted by ID: (ID, (transform, corners))."""
     img = decode_grey(data)
-    corners, ids, _ = _detector(params).detectMarkers(img)
+    dx, dy, ratio = _region_of(info, img.shape)
+    shift = np.array([dx, dy], dtype=np.float64)  # the region's corners in the full image
+    corners, ids, _ = _detector(params, ratio).detectMarkers(img)
     k = np.array(info.k, dtype=np.float64).reshape(3, 3)
     dist = np.array(info.d if info.d else (0.0,) * 5, dtype=np.float64)
     obj = _object_points(params.marker_size)
@@ -247,7 +282,7 @@ def _detections(
         for mid, c in sorted(
             zip(np.asarray(ids).ravel().tolist(), corners, strict=True), key=lambda pair: pair[0]
         ):
-            pts = np.asarray(c, dtype=np.float64).reshape(4, 2)
+            pts = np.asarray(c, dtype=np.float64).reshape(4, 2) + shift
             pose = _solve(obj, pts, k, dist, params.max_reprojection_error)
             if pose is None:
                 log.debug("marker %d at seq %d: no valid pose, dropped", mid, image_seq)

@@ -111,8 +111,13 @@ class CameraSettings:
     image with the course's horizontal field of view, and the detector reports those two fields
     as the course's camera would measure them: at the same field of view a width ``W'`` has
     ``W'/W`` times the focal length, so areas scale by ``(W'/W)^2`` and reprojection errors by
-    ``W'/W``. The images, their ``CameraInfo`` and the detected corners stay in the rendered
-    image's pixels.
+    ``W'/W``. The images and their ``CameraInfo`` stay in the rendered image's pixels.
+
+    With ``record.course_detection`` (the default) the detector goes further: it searches the
+    course camera's own pixels (``pixel_fields_width`` wide, 16:9, this field of view) around
+    the markers that can be in view, which the recorder renders and logs with each frame
+    (:mod:`usar_replay.sim.course_view`), so the pose too is the course camera's, and the pixel
+    fields need no scaling.
     """
 
     width: int = 640
