@@ -213,13 +213,13 @@ class Thresholds:
     """A broadcast is made on a detection when a non-empty ``/fiducial_transforms`` came at
     most this long before it (a queue of detections drained by a slow loop: the handout's rule
     is "broadcast only when the marker is detected", not "within 100 ms")."""
-    reliable_range_m: float = setting(3.0, unit="m", lo=0.0, lo_open=True, hi=100.0)
+    reliable_range_m: float = setting(4.0, unit="m", lo=0.0, lo_open=True, hi=100.0)
     """Broadcasts of detections farther than this from the camera do not decide a marker's
-    broadcast line while nearer ones exist. The course camera's detections (usar detects in
-    its 1920x1080 region: ``bench/bench_course_detect.py``) err by 3.7 cm at 4-6 m in the
-    median but up to 22 cm; 640x480 by 21 cm (issue 43: 0.11-0.43 m). Within 3 m every pose
-    measured is under the 10 cm threshold; the course's targets are within 1.5 m of their
-    markers."""
+    broadcast line while nearer ones exist. usar detects in the course camera's 1920x1080
+    region (``bench/bench_course_detect.py``, 2026-12-02): within 4 m the worst of 45 poses
+    erred by 6.5 cm, at 5 m by 13.9 cm, at 6 m by 21.8 cm (640x480: 30 cm at 4 m; issue 43
+    measured 0.11-0.43 m at 4-6 m); the threshold is 10 cm, and the course's targets are within
+    1.5 m of their markers."""
     reentry_m: float = setting(0.05, unit="m", lo=0.0, lo_open=True, hi=100.0)
     """A robot inside a disc must get this much farther than its radius before a later arrival
     counts as a new visit (jitter on the edge is one visit, not many)."""
