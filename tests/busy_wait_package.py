@@ -7,6 +7,8 @@ and result, and waits for each in one of three shapes (its private parameter ``~
 
 * ``silent``: ``while (!goals.empty()) { if (client.getState() == SUCCEEDED) { ... } }``: no
   spinOnce, no sleep, no log line while it waits: a thread with no pausing point at all;
+* ``late``: ``silent`` after a second of sim time asleep: its thread is the graph's at real-time
+  priority by then (the recorder gives it before each tick) when it starts to spin;
 * ``ok``: ``while (ros::ok()) { if (client.getState() == SUCCEEDED) { ...; sleep } }``: it
   sleeps only once a goal has ended, and between the goals it spins on ``ros::ok()`` alone;
 * ``rate``: the same logic in a ``ros::Rate(20)`` loop (the pace the busy shapes are held to).
@@ -21,7 +23,7 @@ from __future__ import annotations
 from pathlib import Path
 
 NAME = "busy_client"
-SHAPES = ("silent", "ok", "rate")
+SHAPES = ("silent", "late", "ok", "rate")
 
 MAIN_CPP = r"""
 // A node that busy-waits on its action client (usar-replay's test package, issue 43).
@@ -70,8 +72,9 @@ int main(int argc, char** argv) {
   // the last goal first: goals.back() is the next one
   std::vector<std::pair<double, double>> goals = {start, {start.first + 0.5, start.second}};
   int reached = 0;
+  if (shape == "late") ros::Duration(1.0).sleep();
   client.sendGoal(goal_at(goals.back().first, goals.back().second));
-  if (shape == "silent") {
+  if (shape == "silent" || shape == "late") {
     while (!goals.empty()) {
       if (client.getState() == actionlib::SimpleClientGoalState::SUCCEEDED) {
         goals.pop_back();
