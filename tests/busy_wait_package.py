@@ -115,7 +115,7 @@ PACKAGE_XML = f"""<?xml version="1.0"?>
 <package format="2">
   <name>{NAME}</name>
   <version>1.0.0</version>
-  <description>usar-replay's test package: a node that busy-waits on its action client.</description>
+  <description>usar-replay's test package: a node busy-waiting on its action client.</description>
   <maintainer email="usar@example.invalid">usar-replay</maintainer>
   <license>MIT</license>
   <buildtool_depend>catkin</buildtool_depend>

@@ -29,7 +29,9 @@ def test_a_thread_polling_the_clock_must_wake_before_the_graph_is_idle() -> None
 
 def test_a_busy_graph_is_not_idle_and_the_cap_ends_the_wait() -> None:
     # it writes: no spinner (a loop with no call at all counts as waiting: test_spinners.py)
-    child = start_child("import os\nfd = os.open(os.devnull, os.O_WRONLY)\nwhile True: os.write(fd, b'x')")
+    child = start_child(
+        "import os\nfd = os.open(os.devnull, os.O_WRONLY)\nwhile True: os.write(fd, b'x')"
+    )
     try:
         quiet = Quiescence(own_tid=threading.get_native_id())
         wait_for(lambda: len(quiet.refresh()) > 1, "the child")
