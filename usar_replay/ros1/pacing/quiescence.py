@@ -71,6 +71,10 @@ CONFINED_RECHECK = 32
 """Waits between two checks of :meth:`Quiescence.confined` on an unchanged tree (a thread
 may widen its CPUs or lose its real-time policy at any time; new threads are checked at
 once)."""
+SPIN_CAP_S = 0.1
+"""The shortest cap of a wait while a spinner spins (:mod:`.spinners`): a wait asked with a
+shorter one (the first tick's, 3 ms) would end at its cap before a spinner could spin its
+allowance, on some recordings and not on others."""
 STARVED_MAX_S = 2.0
 """The most a wait's cap moves on for the asker's own wait for a CPU (:meth:`Quiescence.wait`)."""
 NAP_S = 0.0002
@@ -593,8 +597,10 @@ class Quiescence:
         the asker may share). The cap counts only time the asker could run: its own wait for
         a CPU (``schedstat``'s run delay, beside a real-time spinner not yet moved aside)
         moves the cap on, at most :data:`STARVED_MAX_S` a wait, and so does a spinner moved
-        aside in this wait (a fresh cap, once per thread)."""
-        deadline = None if cap_s is None else time.perf_counter() + cap_s
+        aside in this wait (a fresh cap, once per thread); while a spinner spins the cap is
+        at least :data:`SPIN_CAP_S`."""
+        began = time.perf_counter()
+        deadline = None if cap_s is None else began + cap_s
         delay = self._run_delay()
         moved = 0.0
         base: dict[int, ThreadState] | None = None
@@ -637,12 +643,15 @@ class Quiescence:
                         self.spun += bool(spin)
                         return True
                     base = None
-            if deadline is not None and time.perf_counter() > deadline:
+            if deadline is not None and (clock := time.perf_counter()) > deadline:
+                if spin and clock - began < SPIN_CAP_S:
+                    deadline = began + SPIN_CAP_S  # a cap shorter than a spinner's allowance
                 starved = min(self._run_delay() - delay, STARVED_MAX_S) - moved
-                if starved <= 0.001:
+                if starved > 0.001:
+                    deadline, moved = deadline + starved, moved + starved
+                elif clock > deadline:
                     self.sockets_waiting()  # :attr:`connected` as of the wait's end all the same
                     return False
-                deadline, moved = deadline + starved, moved + starved
             if short > 0:
                 time.sleep(short)  # pacing only: the spinner's CPU time decides
             elif nap_s > 0:

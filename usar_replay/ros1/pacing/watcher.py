@@ -198,7 +198,7 @@ def serve(sock: socket.socket, root: int, ignore: Collection[int] = ()) -> None:
                 answer["snapshots"] = quiet.snapshots
                 if quiet.spun:
                     answer["spun"] = quiet.spun
-                    answer["spinners"] = len(quiet.spinners.demoted)
+                    answer["spinners"] = quiet.spinners.moved
                 for key, value in (("untimed", quiet.untimed), ("connected", quiet.connected)):
                     if told.get(key) != value:
                         answer[key] = sorted(value)
