@@ -118,6 +118,8 @@ class Spinners:
         """Threads moved to ``SCHED_IDLE`` (each once)."""
         self.refused = ""
         """Why a demotion was refused (empty while none was)."""
+        self.moved = 0
+        """Threads moved to ``SCHED_IDLE`` so far (gone ones included)."""
 
     def update(
         self, running: Mapping[int, tuple[int, tuple[int, int, int] | None]]
@@ -179,6 +181,7 @@ class Spinners:
             return False
         except OSError:
             return False
+        self.moved += 1
         return True
 
     def forget(self, tids: Collection[int]) -> None:
