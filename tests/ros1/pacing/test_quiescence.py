@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 import pytest
 from proctools import child as start_child
@@ -36,6 +37,8 @@ def test_a_busy_graph_is_not_idle_and_the_cap_ends_the_wait() -> None:
         quiet = Quiescence(own_tid=threading.get_native_id())
         wait_for(lambda: len(quiet.refresh()) > 1, "the child")
         quiet.refresh(package=[child.pid])
+        io = Path(f"/proc/{child.pid}/io")
+        wait_for(lambda: int(io.read_text().split("syscw:")[1].split()[0]) > 1000, "its loop")
         assert not quiet.wait(0.05)
     finally:
         child.kill()

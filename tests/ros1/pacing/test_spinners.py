@@ -112,11 +112,17 @@ def test_a_busy_loop_that_writes_is_no_spinner_and_the_cap_ends_the_wait() -> No
     )
     try:
         quiet = _quiet_one(child.pid)
+        wait_for(lambda: _writes(child.pid) > 1000, "its loop")  # past its start-up
         assert not quiet.wait(0.1)
         assert quiet.spun == 0 and not quiet.spinners.demoted
     finally:
         child.kill()
         child.wait()
+
+
+def _writes(pid: int) -> int:
+    """The write calls ``pid`` made so far."""
+    return int(Path(f"/proc/{pid}/io").read_text().split("syscw:")[1].split()[0])
 
 
 def _quiet_one(pid: int) -> Quiescence:

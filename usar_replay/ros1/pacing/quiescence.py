@@ -611,11 +611,17 @@ class Quiescence:
             spin, demoted = self.spinners.update(
                 {tid: (s.cpu, s.spin) for tid, s in now.items() if s.running and s.spin}
             )
-            if demoted and cap_s is not None:
-                deadline = time.perf_counter() + cap_s
+            if demoted:
+                # no snapshots from here on: a woken SCHED_IDLE thread does not take the CPU
+                # from the asker (:meth:`confined`), and its stale reading would stand
+                alone, self._confined = False, None
+                if cap_s is not None:
+                    deadline = time.perf_counter() + cap_s
             short = 0.0
+            aside = False  # a thread moved aside is runnable and reacting: let it have the CPU
             if any(s.running and tid not in spin for tid, s in now.items()):
                 base = None
+                aside = any(now[tid].running for tid in self.spinners.demoted if tid in now)
             elif (
                 not spin
                 and before is not None
@@ -654,8 +660,8 @@ class Quiescence:
                     return False
             if short > 0:
                 time.sleep(short)  # pacing only: the spinner's CPU time decides
-            elif nap_s > 0:
-                time.sleep(nap_s)
+            elif nap_s > 0 or aside:
+                time.sleep(max(nap_s, NAP_S))
 
     def _run_delay(self) -> float:
         """Seconds the asking thread has waited for a CPU so far (its ``schedstat``'s second

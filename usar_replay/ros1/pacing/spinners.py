@@ -49,8 +49,9 @@ a thread found in ``SCHED_IDLE`` out of real-time priority. The watcher sleeps (
 pacing only) while a spinner's allowance is all a wait still needs, so that the spinner gets
 the CPU.
 
-Cost: each of a tick's two waits lasts at least the allowance while a thread spins (some
-2 x 3 ms a tick, beside the recorder's 5-8 ms).
+Cost: each of a tick's two waits lasts at least the allowance while a thread spins (2 x 2 ms
+of the spinner's CPU time a tick, more in wall time where it shares its CPU; the recorder's
+own work is some 5-8 ms a tick).
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ from dataclasses import dataclass
 
 __all__ = ["ALLOWANCE_S", "Spinners", "spin_key"]
 
-ALLOWANCE_S = 0.003
+ALLOWANCE_S = 0.002
 """CPU seconds a spinner spends with nothing new before it counts as waiting: well above one
 pass of any loop that only polls memory (a ``getState()`` pass is some 0.1 microseconds), and
 small beside a tick (50 ms of sim time; the recorder's own work is some 5-8 ms a tick)."""
