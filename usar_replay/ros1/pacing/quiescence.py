@@ -38,6 +38,7 @@ import os
 import platform
 import resource
 import struct
+import threading
 import time
 from collections.abc import Collection
 from dataclasses import dataclass
@@ -292,6 +293,8 @@ class Quiescence:
         """Samples taken (for the bridge's log)."""
         self.snapshots = 0
         """Waits that ended on one sample taken as a snapshot (:meth:`confined`)."""
+        self._own_sched: tuple[int, int] | None = None
+        """The asking thread's id and its ``schedstat``, open (:meth:`_run_delay`)."""
         self.spinners = Spinners()
         """The package's threads in a run without a pause (:mod:`.spinners`)."""
         self.spun = 0
@@ -323,6 +326,10 @@ class Quiescence:
                 os.close(self._loadavg)
             self._loadavg = -1
         self.children.close()
+        if self._own_sched is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._own_sched[1])
+            self._own_sched = None
 
     # -- processes, threads, sockets -------------------------------------------------------------
 
@@ -665,10 +672,14 @@ class Quiescence:
 
     def _run_delay(self) -> float:
         """Seconds the asking thread has waited for a CPU so far (its ``schedstat``'s second
-        field; 0 where it cannot be read)."""
+        field, the file kept open; 0 where it cannot be read)."""
+        tid = threading.get_native_id()
         try:
-            with open("/proc/thread-self/schedstat", "rb") as f:
-                return int(f.read().split()[1]) / 1e9
+            if self._own_sched is None or self._own_sched[0] != tid:
+                if self._own_sched is not None:
+                    os.close(self._own_sched[1])
+                self._own_sched = (tid, os.open("/proc/thread-self/schedstat", os.O_RDONLY))
+            return int(os.pread(self._own_sched[1], 128, 0).split()[1]) / 1e9
         except (OSError, IndexError, ValueError):
             return 0.0
 
