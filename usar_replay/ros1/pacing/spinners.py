@@ -42,12 +42,13 @@ bridge, and from the idle check's watcher (an ordinary process beside the graph,
 only in the kernel's real-time throttling window). So a spinner is moved to ``SCHED_IDLE`` the
 first time it has used its allowance without a pause (:meth:`Spinners.update`, same owner, no
 privilege needed; the flag that keeps children from inheriting a policy is kept), for the rest
-of the run: it then runs only while nothing else of the graph, the watcher or the recorder wants
-that CPU, which is exactly "when nothing new is left to react to"; every other thread's
-reaction runs before it, to its end, as without it; and the recorder's :class:`.OneCpu` leaves
-a thread found in ``SCHED_IDLE`` out of real-time priority. The watcher sleeps (wall time, for
-pacing only) while a spinner's allowance is all a wait still needs, so that the spinner gets
-the CPU.
+of the run: every other thread of the graph (real-time) and the watcher then come before it,
+so every other thread's reaction runs before it, to its end, as without it; and the recorder's
+:class:`.OneCpu` leaves a thread found in ``SCHED_IDLE`` out of real-time priority. (Against
+other sessions' processes it keeps a fair share: the graph leads a session of its own, and the
+kernel's autogroups share a CPU between sessions whatever the policies inside them.) The
+watcher sleeps (wall time, for pacing only) while a spinner's allowance is all a wait still
+needs, so that the spinner gets the CPU.
 
 Cost: each of a tick's two waits lasts at least the allowance while a thread spins (2 x 2 ms
 of the spinner's CPU time a tick, more in wall time where it shares its CPU; the recorder's
