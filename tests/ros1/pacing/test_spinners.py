@@ -77,11 +77,12 @@ def _quiet(pid: int) -> Quiescence:
     return quiet
 
 
-def test_the_key_is_voluntary_switches_reads_and_writes() -> None:
+def test_the_key_is_voluntary_switches_reads_writes_and_page_faults() -> None:
     status = b"Name:\tx\nvoluntary_ctxt_switches:\t7\nnonvoluntary_ctxt_switches:\t90\n"
     io = b"rchar: 1\nwchar: 2\nsyscr: 3\nsyscw: 4\nread_bytes: 0\n"
-    assert spin_key(status, io) == (7, 3, 4)
-    assert spin_key(b"", io) is None
+    stat = b"12 (a (b) c) R 1 12 12 0 -1 4194304 50 0 2 0 9 1 0 0 20 0 1 0 100 0 0"
+    assert spin_key(status, io, stat) == (7, 3, 4, 52)  # minflt 50 + majflt 2
+    assert spin_key(b"", io, stat) is None
 
 
 def test_a_silent_spinner_counts_as_waiting_and_reacts_in_the_wait_its_cause_came_in(
@@ -136,7 +137,7 @@ def test_the_allowance_is_counted_from_the_first_reading_that_moved() -> None:
     """A thread's ``schedstat`` on another CPU lags by up to a scheduler tick: CPU time counts
     from a reading that moved, which was exact when taken."""
     spin = Spinners(allowance_s=0.001)
-    key = (1, 2, 3)
+    key = (1, 2, 3, 0)
     got, _ = spin.update({7: (1_000_000, key)})
     assert got == frozenset()  # a run seen once: not yet a candidate
     got, _ = spin.update({7: (1_000_000, key)})
@@ -146,8 +147,8 @@ def test_the_allowance_is_counted_from_the_first_reading_that_moved() -> None:
     assert spin.short_s({7}, {7: 1_500_000}) == pytest.approx(0.001, abs=1e-9)
     spin.update({7: (2_600_000, key)})
     assert spin.short_s({7}, {7: 2_600_000}) <= 0
-    got, _ = spin.update({7: (2_700_000, (2, 2, 3))})  # it blocked once: a new run
+    got, _ = spin.update({7: (2_700_000, (2, 2, 3, 0))})  # it blocked once: a new run
     assert got == frozenset()
     spin.update({})  # blocked now
-    got, _ = spin.update({7: (2_800_000, (2, 2, 3))})
+    got, _ = spin.update({7: (2_800_000, (2, 2, 3, 0))})
     assert got == frozenset()

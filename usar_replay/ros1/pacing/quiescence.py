@@ -44,7 +44,7 @@ from collections.abc import Collection
 from dataclasses import dataclass
 
 from usar_replay.ros1.pacing.sock_diag import SockDiag
-from usar_replay.ros1.pacing.spinners import Spinners, spin_key
+from usar_replay.ros1.pacing.spinners import Key, Spinners, spin_key
 
 __all__ = [
     "NAP_S",
@@ -117,7 +117,7 @@ class ThreadState:
     what they do for the graph goes through sockets)."""
     cpu: int = 0
     """Its CPU time in ns (schedstat's first field)."""
-    spin: tuple[int, int, int] | None = None
+    spin: Key | None = None
     """A runnable package thread's :func:`.spinners.spin_key` (None for any other)."""
 
 
@@ -250,15 +250,19 @@ class _Thread:
         self.untimed = False
         """The package thread's wait then has no timeout."""
 
-    def spin_key(self) -> tuple[int, int, int] | None:
-        """:func:`.spinners.spin_key` now (None where the files cannot be read)."""
+    def spin_key(self) -> Key | None:
+        """:func:`.spinners.spin_key` now (None where the files cannot be read, and for a
+        Python interpreter's thread: see :mod:`.spinners`)."""
         base = f"/proc/{self.pid}/task/{self.tid}/"
         try:
+            if os.path.basename(os.readlink(f"/proc/{self.pid}/exe")).startswith("python"):
+                return None
             if self.status is None:
                 self.status = os.open(base + "status", os.O_RDONLY)
             if self.io is None:
                 self.io = os.open(base + "io", os.O_RDONLY)
-            return spin_key(os.pread(self.status, 4096, 0), os.pread(self.io, 512, 0))
+            status, io = os.pread(self.status, 4096, 0), os.pread(self.io, 512, 0)
+            return spin_key(status, io, os.pread(self.stat, 1024, 0))
         except OSError:
             return None
 

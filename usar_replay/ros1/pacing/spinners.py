@@ -9,10 +9,13 @@ pacing shim (:mod:`.shim`), the thread never blocks, and the idle check (:mod:`.
 never found the graph idle: the start gate gave up ("the graph did not go idle"), or every
 tick waited for its wall cap (not repeatable). On Gazebo such a loop burns a CPU and works.
 
-What counts as a spinner: a thread of the package, seen runnable (``/proc/.../syscall`` says
-``running``) at every sample of a run, whose voluntary context switches (``status``: it never
-blocked) and read and write calls (``io``: ``syscr``, ``syscw``: it took nothing in and put
-nothing out) have not moved since the run began. It *spins*, for the idle check, once it has
+What counts as a spinner: a thread of a C++ node of the package (a Python interpreter's are
+left out: a rospy callback that computes in pure Python for milliseconds makes no call either,
+and busy rospy nodes are not paced), seen runnable (``/proc/.../syscall`` says ``running``) at
+every sample of a run, whose voluntary context switches (``status``: it never blocked), read
+and write calls (``io``: ``syscr``, ``syscw``: it took nothing in and put nothing out) and page
+faults (``stat``: a computation touching new memory faults, a loop polling the same memory does
+not) have not moved since the run began. It *spins*, for the idle check, once it has
 used :data:`ALLOWANCE_S` of its own CPU time (``schedstat``'s first field; CPU time, never wall
 time, so a loaded machine gives it as long) since the last moment anything new reached the
 graph: the base sample of :meth:`.Quiescence.wait`, at which every other thread was blocked,
@@ -62,7 +65,7 @@ import os
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 
-__all__ = ["ALLOWANCE_S", "Spinners", "spin_key"]
+__all__ = ["ALLOWANCE_S", "Key", "Spinners", "spin_key"]
 
 ALLOWANCE_S = 0.002
 """CPU seconds a spinner spends with nothing new before it counts as waiting: well above one
@@ -74,23 +77,30 @@ that little of its CPU time goes uncounted."""
 _IDLE = os.SCHED_IDLE | os.SCHED_RESET_ON_FORK
 
 
-def spin_key(status: bytes, io: bytes) -> tuple[int, int, int] | None:
-    """(voluntary context switches, read calls, write calls) from a thread's ``status`` and
-    ``io`` files; None where either lacks its field."""
+Key = tuple[int, int, int, int]
+"""What moves when a thread pauses: (voluntary context switches, read calls, write calls,
+page faults)."""
+
+
+def spin_key(status: bytes, io: bytes, stat: bytes) -> Key | None:
+    """The :data:`Key` from a thread's ``status``, ``io`` and ``stat`` files; None where one
+    lacks its field."""
     try:
         vol = int(status.split(b"voluntary_ctxt_switches:", 1)[1].split(None, 1)[0])
         reads = int(io.split(b"syscr:", 1)[1].split(None, 1)[0])
         writes = int(io.split(b"syscw:", 1)[1].split(None, 1)[0])
+        fields = stat[stat.rindex(b")") + 2 :].split()
+        faults = int(fields[7]) + int(fields[9])  # minflt, majflt
     except (IndexError, ValueError):
         return None
-    return vol, reads, writes
+    return vol, reads, writes, faults
 
 
 @dataclass(slots=True)
 class _Run:
     """One thread's run without a pause (see the module docstring)."""
 
-    key: tuple[int, int, int]
+    key: Key
     start: int
     """Its CPU time (ns) when the run was first seen."""
     anchor: int | None = None
@@ -124,7 +134,7 @@ class Spinners:
         """Threads moved to ``SCHED_IDLE`` so far (gone ones included)."""
 
     def update(
-        self, running: Mapping[int, tuple[int, tuple[int, int, int] | None]]
+        self, running: Mapping[int, tuple[int, Key | None]]
     ) -> tuple[frozenset[int], bool]:
         """One sample: ``running`` maps each runnable thread of the package to (its CPU time
         in ns, its :func:`spin_key`). Returns the threads whose run without a pause goes back
