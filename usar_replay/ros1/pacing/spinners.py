@@ -69,7 +69,7 @@ __all__ = ["ALLOWANCE_S", "Key", "Spinners", "spin_key"]
 
 ALLOWANCE_S = 0.002
 """CPU seconds a spinner spends with nothing new before it counts as waiting: well above one
-pass of any loop that only polls memory (a ``getState()`` pass is some 0.1 microseconds), and
+pass of any loop that only polls memory (a ``getState()`` pass takes under a microsecond), and
 small beside a tick (50 ms of sim time; the recorder's own work is some 5-8 ms a tick)."""
 _ANCHOR_NS = 300_000
 """How long to let a spinner run before its first reading that moved (its anchor): short, so
