@@ -671,7 +671,9 @@ class Quiescence:
                     return False
             if short > 0:
                 time.sleep(short)  # pacing only: the spinner's CPU time decides
-            elif nap_s > 0 or aside:
+            elif nap_s > 0 or aside or spin:
+                # a spinner or a thread moved aside needs the CPU the asker may share: its
+                # allowance grows while the asker waits for the rest
                 time.sleep(max(nap_s, NAP_S))
 
     def _run_delay(self) -> float:
