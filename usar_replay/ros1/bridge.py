@@ -576,7 +576,8 @@ class Bridge:
         if self.quiet is not None:
             print(
                 f"usar pacing: {self.quiet.samples} samples ({self.quiet.snapshots} waits on "
-                f"one), {self.capped} ticks capped, "
+                f"one, {self.quiet.spun} with {self.quiet.spinners} spinning threads counted "
+                f"as waiting), {self.capped} ticks capped, "
                 f"{self.waited_s:.1f} s waiting for the graph, {self.shutdown.summary()}",
                 flush=True,
             )

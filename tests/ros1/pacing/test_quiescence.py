@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 import pytest
 from proctools import child as start_child
@@ -28,11 +29,16 @@ def test_a_thread_polling_the_clock_must_wake_before_the_graph_is_idle() -> None
 
 
 def test_a_busy_graph_is_not_idle_and_the_cap_ends_the_wait() -> None:
-    child = start_child("while True: pass")
+    # it writes: no spinner (a loop with no call at all counts as waiting: test_spinners.py)
+    child = start_child(
+        "import os\nfd = os.open(os.devnull, os.O_WRONLY)\nwhile True: os.write(fd, b'x')"
+    )
     try:
         quiet = Quiescence(own_tid=threading.get_native_id())
         wait_for(lambda: len(quiet.refresh()) > 1, "the child")
         quiet.refresh(package=[child.pid])
+        io = Path(f"/proc/{child.pid}/io")
+        wait_for(lambda: int(io.read_text().split("syscw:")[1].split()[0]) > 1000, "its loop")
         assert not quiet.wait(0.05)
     finally:
         child.kill()

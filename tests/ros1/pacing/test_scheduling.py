@@ -146,3 +146,21 @@ def test_threads_are_listed_again_only_once_a_pid_was_given_out() -> None:
         child.kill()
         child.wait()
         pin.close()
+
+
+def test_a_thread_moved_aside_as_a_spinner_is_pinned_but_stays_sched_idle() -> None:
+    """The idle check moves a thread that spins with no pausing point to SCHED_IDLE
+    (:mod:`usar_replay.ros1.pacing.spinners`): at real-time priority on the graph's only CPU
+    it would hold that CPU from the thread that sets what it waits for."""
+    if os.geteuid() != 0:
+        pytest.skip("no SCHED_RR without root")
+    child = start_child("import time\ntime.sleep(60)")
+    try:
+        os.sched_setscheduler(child.pid, os.SCHED_IDLE | os.SCHED_RESET_ON_FORK, os.sched_param(0))
+        pin = OneCpu(child.pid)
+        wait_for(lambda: pin.apply() > 0 or child.pid in pin.done, "the child's threads")
+        assert os.sched_getaffinity(child.pid) == {pin.cpu}
+        assert os.sched_getscheduler(child.pid) & ~os.SCHED_RESET_ON_FORK == os.SCHED_IDLE
+    finally:
+        child.kill()
+        child.wait()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import signal
 import threading
+from pathlib import Path
 
 from proctools import child as start_child
 from proctools import wait_for
@@ -18,8 +19,13 @@ from usar_replay.ros1.pacing.watcher import Watcher
 
 def test_the_watcher_answers_for_the_tree_and_leaves_itself_out() -> None:
     watcher = Watcher(os.getpid())
-    busy = start_child("while True: pass")
+    # it writes: a loop with no call at all would count as waiting (test_spinners.py)
+    busy = start_child(
+        "import os\nfd = os.open(os.devnull, os.O_WRONLY)\nwhile True: os.write(fd, b'x')"
+    )
     try:
+        io = Path(f"/proc/{busy.pid}/io")
+        wait_for(lambda: int(io.read_text().split("syscw:")[1].split()[0]) > 1000, "its loop")
         assert watcher.wait(0.2, launcher=busy.pid, launcher_is_package=True) is False
         assert watcher.kids is not None and busy.pid in watcher.kids[os.getpid()]
         assert watcher.proc.pid in watcher.kids[os.getpid()]  # walked, but not sampled

@@ -38,11 +38,13 @@ import os
 import platform
 import resource
 import struct
+import threading
 import time
 from collections.abc import Collection
 from dataclasses import dataclass
 
 from usar_replay.ros1.pacing.sock_diag import SockDiag
+from usar_replay.ros1.pacing.spinners import Key, Spinners, spin_key
 
 __all__ = [
     "NAP_S",
@@ -70,6 +72,12 @@ CONFINED_RECHECK = 32
 """Waits between two checks of :meth:`Quiescence.confined` on an unchanged tree (a thread
 may widen its CPUs or lose its real-time policy at any time; new threads are checked at
 once)."""
+SPIN_CAP_S = 0.1
+"""The shortest cap of a wait while a spinner spins (:mod:`.spinners`): a wait asked with a
+shorter one (the first tick's, 3 ms) would end at its cap before a spinner could spin its
+allowance, on some recordings and not on others."""
+STARVED_MAX_S = 2.0
+"""The most a wait's cap moves on for the asker's own wait for a CPU (:meth:`Quiescence.wait`)."""
 NAP_S = 0.0002
 """Wall time between two samples by default (the asking thread sleeps: on the graph's CPU the
 graph runs then, and in the graph's own process its other threads get the interpreter's lock);
@@ -107,6 +115,10 @@ class ThreadState:
     """A thread of the package or the bridge: when it ran matters. The master's and
     roslaunch's threads only need to be blocked (they wake on their own wall-clock timers, and
     what they do for the graph goes through sockets)."""
+    cpu: int = 0
+    """Its CPU time in ns (schedstat's first field)."""
+    spin: Key | None = None
+    """A runnable package thread's :func:`.spinners.spin_key` (None for any other)."""
 
 
 def children_map(pid: int) -> dict[int, list[int]]:
@@ -212,6 +224,7 @@ class _Thread:
     def __init__(self, pid: int, tid: int) -> None:
         base = f"/proc/{pid}/task/{tid}/"
         self.pid = pid
+        self.tid = tid
         self.role = "infra"
         self.stat = os.open(base + "stat", os.O_RDONLY)
         try:
@@ -225,6 +238,10 @@ class _Thread:
             self.syscall = None
         self.last: ThreadState | None = None
         """The last full reading (which holds while the thread is not run again)."""
+        self.status: int | None = None
+        self.io: int | None = None
+        """``status`` and ``io``, opened when the thread is first seen runnable as the
+        package's (:meth:`spin_key`)."""
         self.sched = b""
         """``schedstat`` at that reading (the thread ran since when it reads otherwise)."""
         self.poll: _Poll | None = None
@@ -233,8 +250,24 @@ class _Thread:
         self.untimed = False
         """The package thread's wait then has no timeout."""
 
+    def spin_key(self) -> Key | None:
+        """:func:`.spinners.spin_key` now (None where the files cannot be read, and for a
+        Python interpreter's thread: see :mod:`.spinners`)."""
+        base = f"/proc/{self.pid}/task/{self.tid}/"
+        try:
+            if os.path.basename(os.readlink(f"/proc/{self.pid}/exe")).startswith("python"):
+                return None
+            if self.status is None:
+                self.status = os.open(base + "status", os.O_RDONLY)
+            if self.io is None:
+                self.io = os.open(base + "io", os.O_RDONLY)
+            status, io = os.pread(self.status, 4096, 0), os.pread(self.io, 512, 0)
+            return spin_key(status, io, os.pread(self.stat, 1024, 0))
+        except OSError:
+            return None
+
     def close(self) -> None:
-        for fd in (self.stat, self.schedstat, self.syscall):
+        for fd in (self.stat, self.schedstat, self.syscall, self.status, self.io):
             if fd is not None:
                 with contextlib.suppress(OSError):
                     os.close(fd)
@@ -264,6 +297,12 @@ class Quiescence:
         """Samples taken (for the bridge's log)."""
         self.snapshots = 0
         """Waits that ended on one sample taken as a snapshot (:meth:`confined`)."""
+        self._own_sched: tuple[int, int] | None = None
+        """The asking thread's id and its ``schedstat``, open (:meth:`_run_delay`)."""
+        self.spinners = Spinners()
+        """The package's threads in a run without a pause (:mod:`.spinners`)."""
+        self.spun = 0
+        """Waits that ended with a spinner counted as waiting."""
         self._confined: bool | None = None
         """:meth:`confined`'s last answer (None: ask again)."""
         self._confined_age = 0
@@ -291,6 +330,10 @@ class Quiescence:
                 os.close(self._loadavg)
             self._loadavg = -1
         self.children.close()
+        if self._own_sched is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._own_sched[1])
+            self._own_sched = None
 
     # -- processes, threads, sockets -------------------------------------------------------------
 
@@ -319,8 +362,10 @@ class Quiescence:
                         role = "node" if pid in package else role
                         if t.role != role:  # read as a thread of its new role from now on
                             t.role, t.last, t.poll, t.untimed = role, None, None, False
-        for tid in set(self._threads) - seen:
+        gone = set(self._threads) - seen
+        for tid in gone:
             self._threads.pop(tid).close()
+        self.spinners.forget(gone)
         for pid in set(self._mem) - set(self._pids):
             with contextlib.suppress(OSError):
                 os.close(self._mem.pop(pid))
@@ -374,7 +419,9 @@ class Quiescence:
                     if t.poll is not None and t.poll.clock is not None:
                         polling = t.poll.now()  # a deadline: nearer now
                         if polling != last.polling:
-                            last = t.last = ThreadState(False, last.runs, polling, last.watched)
+                            last = t.last = ThreadState(
+                                False, last.runs, polling, last.watched, last.cpu
+                            )
                     out[tid] = last
                     if t.untimed:
                         untimed.add(t.pid)
@@ -382,6 +429,7 @@ class Quiescence:
                 t.sched = sched
                 fields = sched.split()
                 runs = int(fields[2]) if len(fields) > 2 else 0
+                cpu = int(fields[0]) if fields else 0
                 text = os.pread(t.syscall, 256, 0) if t.syscall is not None else b""
                 if not text or not (text[:1].isdigit() or text.startswith(b"running")):
                     text = b""  # no syscall file (or -1: not in a call): the state letter
@@ -411,7 +459,9 @@ class Quiescence:
                 polling = t.poll is not None and t.poll.now()
                 if t.untimed:
                     untimed.add(t.pid)
-            out[tid] = t.last = ThreadState(running, runs, polling, t.role != "infra")
+            # a runnable thread of the package: is it in a run without a pause (:mod:`.spinners`)
+            spin = t.spin_key() if running and t.role == "node" else None
+            out[tid] = t.last = ThreadState(running, runs, polling, t.role != "infra", cpu, spin)
             busy = busy or running
         self.samples += 1
         self.untimed = frozenset(untimed)
@@ -549,17 +599,43 @@ class Quiescence:
 
     def wait(self, cap_s: float | None, nap_s: float = NAP_S) -> bool:
         """Wait until the tree is idle (True) or ``cap_s`` wall seconds passed (False),
-        sampling every ``nap_s`` (0: at once again, for a caller on a CPU of its own)."""
-        deadline = None if cap_s is None else time.perf_counter() + cap_s
+        sampling every ``nap_s`` (0: at once again, for a caller on a CPU of its own).
+
+        A package thread in a run without a pause (:mod:`.spinners`) counts as waiting once
+        it has spun its allowance of CPU time since the base (every other thread blocked and
+        not run since, the pollers cycled); while that is all the wait needs, the asker sleeps
+        for the CPU time still missing (wall time, for pacing only: the spinner needs the CPU
+        the asker may share). The cap counts only time the asker could run: its own wait for
+        a CPU (``schedstat``'s run delay, beside a real-time spinner not yet moved aside)
+        moves the cap on, at most :data:`STARVED_MAX_S` a wait, and so does a spinner moved
+        aside in this wait (a fresh cap, once per thread); while a spinner spins the cap is
+        at least :data:`SPIN_CAP_S`."""
+        began = time.perf_counter()
+        deadline = None if cap_s is None else began + cap_s
+        delay = self._run_delay()
+        moved = 0.0
         base: dict[int, ThreadState] | None = None
         alone = self.confined()
         while True:
             before = self._switches() if alone else None
             now = self.threads(alone)
-            if any(s.running for s in now.values()):
+            spin, demoted = self.spinners.update(
+                {tid: (s.cpu, s.spin) for tid, s in now.items() if s.running and s.spin}
+            )
+            if demoted:
+                # no snapshots from here on: a woken SCHED_IDLE thread does not take the CPU
+                # from the asker (:meth:`confined`), and its stale reading would stand
+                alone, self._confined = False, None
+                if cap_s is not None:
+                    deadline = time.perf_counter() + cap_s
+            short = 0.0
+            aside = False  # a thread moved aside is runnable and reacting: let it have the CPU
+            if any(s.running and tid not in spin for tid, s in now.items()):
                 base = None
+                aside = any(now[tid].running for tid in self.spinners.demoted if tid in now)
             elif (
-                before is not None
+                not spin
+                and before is not None
                 and self._switches() == before
                 and not any(s.polling for s in now.values())
                 # no thread made since the tree was found (it would not be in the sample)
@@ -570,21 +646,48 @@ class Quiescence:
                     self.snapshots += 1
                     return True
                 base = None
-            elif base is None or not _still(base, now):
+            elif base is None or not _still(base, now, spin):
                 base = now
+                self.spinners.based({tid: now[tid].cpu for tid in spin})
             elif _pollers_cycled(base, now):
+                short = self.spinners.short_s(spin, {tid: now[tid].cpu for tid in spin})
                 # the sockets last: bytes written while every thread sampled blocked woke a
                 # reader (which the thread samples see run); only bytes no thread will read
                 # until a timer fires (Nagle's small writes, held for an acknowledgement) are
                 # left for this, one dump a wait instead of one a sample
-                if self.sockets_waiting() == 0:
-                    return True
-                base = None
-            if deadline is not None and time.perf_counter() > deadline:
-                self.sockets_waiting()  # :attr:`connected` as of the wait's end all the same
-                return False
-            if nap_s > 0:
-                time.sleep(nap_s)
+                if short <= 0:
+                    if self.sockets_waiting() == 0:
+                        self.spun += bool(spin)
+                        return True
+                    base = None
+            if deadline is not None and (clock := time.perf_counter()) > deadline:
+                if spin and clock - began < SPIN_CAP_S:
+                    deadline = began + SPIN_CAP_S  # a cap shorter than a spinner's allowance
+                starved = min(self._run_delay() - delay, STARVED_MAX_S) - moved
+                if starved > 0.001:
+                    deadline, moved = deadline + starved, moved + starved
+                elif clock > deadline:
+                    self.sockets_waiting()  # :attr:`connected` as of the wait's end all the same
+                    return False
+            if short > 0:
+                time.sleep(short)  # pacing only: the spinner's CPU time decides
+            elif nap_s > 0 or aside or spin:
+                # a spinner or a thread moved aside needs the CPU the asker may share: its
+                # allowance grows while the asker waits for the rest
+                time.sleep(max(nap_s, NAP_S))
+
+    def _run_delay(self) -> float:
+        """Seconds the asking thread has waited for a CPU so far (its ``schedstat``'s second
+        field, the file kept open; 0 where it cannot be read)."""
+        tid = threading.get_native_id()
+        try:
+            if self._own_sched is None or self._own_sched[0] != tid:
+                if self._own_sched is not None:
+                    os.close(self._own_sched[1])
+                self._own_sched = (tid, os.open("/proc/thread-self/schedstat", os.O_RDONLY))
+            return int(os.pread(self._own_sched[1], 128, 0).split()[1]) / 1e9
+        except (OSError, IndexError, ValueError):
+            return 0.0
 
 
 def last_pid(loadavg: int) -> bytes | None:
@@ -605,13 +708,22 @@ def _untimed_wait(call: list[int]) -> bool:
     return (call[2] & 127) in (_FUTEX_WAIT, _FUTEX_WAIT_BITSET)
 
 
-def _still(base: dict[int, ThreadState], now: dict[int, ThreadState]) -> bool:
-    """No watched thread appeared, and none but the pollers of ``base`` ran since."""
+def _still(
+    base: dict[int, ThreadState], now: dict[int, ThreadState], spinning: Collection[int] = ()
+) -> bool:
+    """No watched thread appeared, and none but the pollers of ``base`` ran since, or the
+    ``spinning`` threads (:mod:`.spinners`: runnable at ``base`` and in one run without a pause
+    since, their run counts moved by preemption only)."""
     if any(now[tid].watched for tid in set(now) - set(base)):
         return False
-    return all(
-        s.polling or not s.watched or now.get(tid, s).runs == s.runs for tid, s in base.items()
-    )
+    for tid, s in base.items():
+        if s.running:
+            if tid in spinning:
+                continue
+            return False  # runnable at the base, and it blocked or wrote since
+        if not (s.polling or not s.watched or now.get(tid, s).runs == s.runs):
+            return False
+    return True
 
 
 def _pollers_cycled(base: dict[int, ThreadState], now: dict[int, ThreadState]) -> bool:

@@ -14,7 +14,9 @@ the graph's CPU is the set's last, no other run is given it, and a node that wid
 affinity only reaches the set's other CPUs. Without a set of its own the graph is only pinned
 (no SCHED_RR: it could starve a CPU someone else needs). The policy carries
 SCHED_RESET_ON_FORK, so a node's children and new threads start as ordinary ones until the
-next tick's :meth:`OneCpu.apply` (an RR parent cannot hand RR on to a fork bomb).
+next tick's :meth:`OneCpu.apply` (an RR parent cannot hand RR on to a fork bomb). A thread the
+idle check moved to ``SCHED_IDLE`` (:mod:`.spinners`: it spins with no pausing point) is
+pinned but keeps that policy.
 
 Set from the recorder, which is root outside the sandbox (a sandboxed process may not raise its
 own policy): every thread of the run, the bridge's included, found in the run's cgroup
@@ -47,6 +49,15 @@ _POLICY = os.SCHED_RR | os.SCHED_RESET_ON_FORK
 """SCHED_RR whose processes and threads start as SCHED_OTHER: real-time priority is given by
 the recorder, thread by thread, and never inherited (clearing the flag needs CAP_SYS_NICE,
 which nothing in the sandbox has)."""
+
+
+def _spinner(tid: int) -> bool:
+    """A thread the idle check moved to ``SCHED_IDLE`` (:mod:`.spinners`: it spins with no
+    pausing point; at real-time priority it would hold the graph's CPU): it keeps that."""
+    try:
+        return os.sched_getscheduler(tid) & ~os.SCHED_RESET_ON_FORK == os.SCHED_IDLE
+    except OSError:
+        return False
 
 
 class OneCpu:
@@ -157,7 +168,7 @@ class OneCpu:
                 continue
             try:
                 os.sched_setaffinity(tid, {self.cpu})
-                if not self.refused:
+                if not self.refused and not _spinner(tid):
                     os.sched_setscheduler(tid, policy, os.sched_param(PRIORITY))
             except ProcessLookupError:
                 continue

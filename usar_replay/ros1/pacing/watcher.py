@@ -74,6 +74,10 @@ class Watcher:
         self.samples = 0
         self.snapshots = 0
         """Waits that ended on one sample (:meth:`.Quiescence.confined`)."""
+        self.spun = 0
+        """Waits that ended with a spinner counted as waiting (:mod:`.spinners`)."""
+        self.spinners = 0
+        """Threads moved to ``SCHED_IDLE`` as spinners so far."""
         self.kids: dict[int, list[int]] | None = None
         """The tree's last walk (processes -> their children)."""
 
@@ -128,6 +132,8 @@ class Watcher:
             self.connected = frozenset(got["connected"])
         self.samples = int(got["samples"])
         self.snapshots = int(got.get("snapshots", 0))
+        self.spun = int(got.get("spun", 0))
+        self.spinners = int(got.get("spinners", 0))
         if "kids" in got:
             self.kids = {int(k): v for k, v in got["kids"].items()}
         return bool(got["idle"])
@@ -190,6 +196,9 @@ def serve(sock: socket.socket, root: int, ignore: Collection[int] = ()) -> None:
                 answer["idle"] = quiet.wait(request["cap"], nap_s=nap_s)
                 answer["samples"] = quiet.samples
                 answer["snapshots"] = quiet.snapshots
+                if quiet.spun:
+                    answer["spun"] = quiet.spun
+                    answer["spinners"] = quiet.spinners.moved
                 for key, value in (("untimed", quiet.untimed), ("connected", quiet.connected)):
                     if told.get(key) != value:
                         answer[key] = sorted(value)
