@@ -141,6 +141,8 @@ class JobLimits:
     """ROS 1 ticks that reach their wall cap (past it: ``hung``)."""
     hold_wall_s: float = 30.0
     """Wall seconds the ROS 1 shutdown holds may take together (past it: ``hung``)."""
+    build_folder_mb: int = 2048
+    """A ROS 1 team's build folder, MiB (filling it: ``build_failed``; 0: a plain folder)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -268,11 +268,15 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
     to native code; the time and memory limits do."""
     import dataclasses
 
+    from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
+    from usar_replay.ros1.process import Ros1Options
     from usar_replay.ros1.record import record_ros1
 
     limits = dataclasses.replace(_mission_limits(job), guard=None)
     package = job.target.removeprefix(ROS1_TARGET_PREFIX)
-    return record_ros1(scenario, log, package, settings, watchdog, limits=limits)
+    folder = int(job.limits.get("build_folder_mb", DEFAULT_BUILD_FOLDER_MB))
+    options = Ros1Options(build_folder_mb=folder)
+    return record_ros1(scenario, log, package, settings, watchdog, limits=limits, options=options)
 
 
 def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:

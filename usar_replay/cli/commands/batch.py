@@ -59,6 +59,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--wall-limit", type=float, default=3600.0, metavar="S", help="wall s per run (3600)"
     )
     p.add_argument(
+        "--build-folder",
+        type=int,
+        default=2048,
+        metavar="MIB",
+        help="a ROS 1 team's build folder, MiB, and 100,000 files (2048; 0: no limit)",
+    )
+    p.add_argument(
         "--no-sandbox", action="store_true", help="run missions without bwrap and the guard"
     )
     p.add_argument("--gradescope", action="store_true", help="write TEAM/results.json per team")
@@ -98,6 +105,8 @@ def run(args: argparse.Namespace) -> int:
     for opt, value in positive:
         if not value > 0:
             raise UsageError(f"{opt} {value}: expected a positive number of seconds")
+    if args.build_folder < 0:
+        raise UsageError(f"--build-folder {args.build_folder}: expected MiB >= 0 (0: no limit)")
     if args.mission_memory < 0 or args.cpu_limit < 0 or args.max_log_mib < 0:
         raise UsageError(
             "--mission-memory, --cpu-limit and --max-log-mib: expected 0 (none) or more"
@@ -125,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
         max_holds=args.max_holds,
         max_capped=args.max_capped,
         hold_wall_s=args.hold_wall,
+        build_folder_mb=args.build_folder,
     )
     if args.code_template and not args.code:
         raise UsageError("--code-template: give --code too (it is the code grade's template)")
