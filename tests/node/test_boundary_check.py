@@ -66,6 +66,7 @@ def test_an_honest_tick_comes_back_decoded() -> None:
         (_item("/ground_truth/explorer/pose", msgs.PoseStamped()), "is ground truth"),
         (_item(contract.IMAGE, msgs.CompressedImage()), "is published by the simulator"),
         (_item(contract.FIDUCIALS, msgs.FiducialTransformArray()), "course's detector's output"),
+        (_item(contract.COURSE_VIEW_IMAGE, msgs.CompressedImage()), "is the recorder's"),
         (
             _item(
                 contract.TF,

@@ -89,6 +89,11 @@ class PublishPolicy:
             )
         if topic in self.sim_topics:
             return f"{topic} is published by the simulator; a mission may not publish it"
+        if topic in contract.COURSE_VIEW_TOPICS:
+            return (
+                f"{topic} is the recorder's (the course camera's region its detector searched); "
+                "a mission may not publish it"
+            )
         if not topic.startswith("/"):
             return f"{topic!r} is not an absolute topic name (it must start with '/')"
         return ""
