@@ -20,7 +20,14 @@ import os
 import shutil
 import tempfile
 
-__all__ = ["DEFAULT_RUN_FOLDER_MB", "RunFolder", "mount_tmpfs", "unmount", "unmount_under"]
+__all__ = [
+    "DEFAULT_RUN_FOLDER_MB",
+    "RunFolder",
+    "mount_tmpfs",
+    "tmpfs_full",
+    "unmount",
+    "unmount_under",
+]
 
 DEFAULT_RUN_FOLDER_MB = 512
 """The run folder's default size in MiB (``--run-folder-mb``)."""
@@ -48,6 +55,18 @@ def mount_tmpfs(path: str, size_bytes: int, *, inodes: int = 0) -> bool:
     return bool(done == 0)
 
 
+def tmpfs_full(path: str, size_mb: int, *, min_inodes: int = 0) -> bool:
+    """Has what was written filled the tmpfs of ``size_mb`` MiB at ``path``: less room left
+    than a filler's last write needs, or (``min_inodes``) fewer files than that?"""
+    try:
+        st = os.statvfs(path)
+    except OSError:
+        return False
+    if st.f_bavail * st.f_frsize < min(_FULL_BYTES, size_mb * 1024 * 16):
+        return True
+    return st.f_favail < min_inodes
+
+
 def unmount(path: str) -> None:
     """Unmount ``path`` lazily (a process that still has a file open does not stop it)."""
     libc = _libc()
@@ -69,13 +88,7 @@ class RunFolder:
 
     def full(self) -> bool:
         """Has the run filled its folder? (only a size-limited one can be full)"""
-        if not self.limited:
-            return False
-        try:
-            st = os.statvfs(self.path)
-        except OSError:
-            return False
-        return st.f_bavail * st.f_frsize < min(_FULL_BYTES, self.size_mb * 1024 * 16)
+        return self.limited and tmpfs_full(self.path, self.size_mb)
 
     def close(self, keep: bool = False) -> None:
         """Unmount (lazily: a process that still has a file open does not stop it) and remove

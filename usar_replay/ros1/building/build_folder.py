@@ -19,7 +19,7 @@ import os
 import shutil
 from pathlib import Path
 
-from usar_replay.node.run_folder import mount_tmpfs, unmount
+from usar_replay.node.run_folder import mount_tmpfs, tmpfs_full, unmount
 
 __all__ = ["BUILD_FOLDER_INODES", "DEFAULT_BUILD_FOLDER_MB", "BuildFolder"]
 
@@ -28,7 +28,6 @@ DEFAULT_BUILD_FOLDER_MB = 2048
 some 60 MiB, usar's underlay some 20 MiB."""
 BUILD_FOLDER_INODES = 100_000
 """Files and folders the build may make (the template's build: some 2,000)."""
-_FREE_BYTES = 1 << 20
 _FREE_INODES = 64
 
 
@@ -47,14 +46,7 @@ class BuildFolder:
 
     def full(self) -> bool:
         """Did the build fill its folder (its space or its files)? Only a limited one can."""
-        if not self.limited:
-            return False
-        try:
-            st = os.statvfs(self.ws)
-        except OSError:
-            return False
-        room = st.f_bavail * st.f_frsize
-        return room < min(_FREE_BYTES, self.size_mb * 1024 * 16) or st.f_favail < _FREE_INODES
+        return self.limited and tmpfs_full(str(self.ws), self.size_mb, min_inodes=_FREE_INODES)
 
     def limit_words(self) -> str:
         """The cap as a build_failed line names it."""

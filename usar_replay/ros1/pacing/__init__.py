@@ -14,7 +14,6 @@ The bridge (``ros1.bridge``) sits above this and the build side; nothing here im
 
 from usar_replay.ros1.pacing.graph_start import (
     launch_listing,
-    launch_nodes,
     registered_nodes,
     wait_until_ready,
 )
@@ -32,7 +31,6 @@ __all__ = [
     "SockDiag",
     "descendants",
     "launch_listing",
-    "launch_nodes",
     "registered_nodes",
     "wait_until_ready",
 ]

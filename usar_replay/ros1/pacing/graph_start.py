@@ -22,20 +22,17 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from usar_replay.ros1.launch_output import nodes_command
+from usar_replay.ros1.launch_output import FACTS_PREFIX, nodes_command
 
 __all__ = [
     "FACTS_PREFIX",
     "launch_listing",
-    "launch_nodes",
     "missing_connections",
     "registered_nodes",
     "wait_until_ready",
 ]
 
 
-FACTS_PREFIX = "usar-facts "
-"""The listing's line of facts (:mod:`usar_replay.ros1.launch_output` prints it)."""
 FACTS_CAP = 256 * 1024
 """The most bytes of facts read (the team's launch files decide how many)."""
 
@@ -47,30 +44,6 @@ def launch_listing(
     where it cannot say) and what it configures for usar's stand-ins (the plan's ``facts``:
     the line the listing prints on its stdout, a pipe no other process of the run writes;
     None without one, or past :data:`FACTS_CAP`, or not a JSON object)."""
-    names, lines = _listing(script_prefix, package, launch, env, plan)
-    facts: dict[str, Any] | None = None
-    for line in lines:
-        if line.startswith(FACTS_PREFIX) and len(line) <= FACTS_CAP:
-            try:
-                got = json.loads(line[len(FACTS_PREFIX) :])
-            except (ValueError, RecursionError):
-                got = None
-            facts = got if isinstance(got, dict) else None
-    return names, facts
-
-
-def launch_nodes(
-    script_prefix: str, package: str, launch: str, env: dict[str, str], plan: Path | None = None
-) -> list[str]:
-    """The node names a launch file starts (``roslaunch --nodes``, ``plan`` followed), []
-    where it cannot say."""
-    return _listing(script_prefix, package, launch, env, plan)[0]
-
-
-def _listing(
-    script_prefix: str, package: str, launch: str, env: dict[str, str], plan: Path | None
-) -> tuple[list[str], list[str]]:
-    """(node names, every stdout line) of ``roslaunch --nodes``; ([], []) where it fails."""
     try:
         done = subprocess.run(
             ["bash", "-c", f"{script_prefix} && exec {nodes_command(package, launch, plan)}"],
@@ -82,11 +55,20 @@ def _listing(
             check=False,
         )
     except (OSError, subprocess.TimeoutExpired):
-        return [], []
+        return [], None
     if done.returncode != 0:
-        return [], []
+        return [], None
     lines = done.stdout.splitlines()
-    return sorted(n.strip() for n in lines if n.strip().startswith("/")), lines
+    names = sorted(n.strip() for n in lines if n.strip().startswith("/"))
+    facts: dict[str, Any] | None = None
+    for line in lines:
+        if line.startswith(FACTS_PREFIX) and len(line) <= FACTS_CAP:
+            try:
+                got = json.loads(line[len(FACTS_PREFIX) :])
+            except (ValueError, RecursionError):
+                got = None
+            facts = got if isinstance(got, dict) else None
+    return names, facts
 
 
 def registered_nodes(master: Any, caller: str) -> set[str]:
