@@ -165,7 +165,8 @@ def _applied_tolerances(
 
 
 def _targets(facts: dict[str, Any] | None) -> tuple[TargetReplaced, ...]:
-    """The facts file's replaced targets (the team's file: each field checked and bounded)."""
+    """The replaced targets the bridge reported (from the team's launch files: each field
+    checked and bounded)."""
     rows = (facts or {}).get("targets", [])
     out = []
     for row in rows[:256] if isinstance(rows, list) else []:
@@ -321,7 +322,6 @@ class Ros1Process(MissionProcess):
         # graph's to rewrite: a forged tolerance would widen the rubric's radii)
         applied = _ready_facts(self.ready_info)
         tolerances = _applied_tolerances(applied, self._robots)
-        facts = applied
         info = Ros1Run(
             package=self.package.name,
             path=self.target.path,
@@ -350,7 +350,7 @@ class Ros1Process(MissionProcess):
                 if not s.startswith("mission.") or s in self.options.given_settings
             ),
             goal_tolerances=tuple(GoalTolerance(*row) for row in tolerances),
-            targets_replaced=_targets(facts),
+            targets_replaced=_targets(applied),
             detections_read=self.detections_read,
         )
         kept = [(contract.ROS1_ATTACHMENT, "application/toml", info.to_toml().encode())]

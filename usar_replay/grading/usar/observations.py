@@ -78,8 +78,8 @@ MAX_FRAMES = 16
 bound only keeps memory flat on a log that broadcasts a new name every tick)."""
 OTHER_FRAMES = "(other frames)"
 DETECTION_MEMORY_NS = 30 * 1_000_000_000
-"""How long a detection is remembered for matching broadcasts' stamps: the tf cache time
-(a broadcast older than that could not be looked up in ``map`` anyway)."""
+"""The grader's tf cache time: a broadcast whose parent's transform is older than that cannot
+be looked up in ``map``."""
 
 
 @dataclass(slots=True)
@@ -200,15 +200,11 @@ class FrameBroadcasts:
 
 @dataclass(slots=True)
 class Broadcasts:
-    """The broadcasts attributed to one marker: only those within one camera period after the
-    detection of an image in which the course's detector saw it (a broadcast without one is no
-    evidence of a detection; :func:`only_on_detection` judges it), by child frame name."""
+    """The broadcasts attributed to one marker: only those made within ``detection_recent_s``
+    after a detection of it (a broadcast without one is no evidence of a detection;
+    ``only_on_detection`` judges it), by child frame name."""
 
     frames: dict[str, FrameBroadcasts] = field(default_factory=dict)
-
-    @property
-    def count(self) -> int:
-        return sum(f.count for f in self.frames.values())
 
 
 class Observations:
@@ -290,8 +286,6 @@ class Observations:
         mission, whose nodes read them in its own process, or an older log)."""
         self.fiducial_messages = 0
         """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
-        self.period_ns = math.ceil(1e9 / scenario.camera.rate_hz)
-        """One camera period (the reports say the camera's rate)."""
         self._not_candidates = frozenset((contract.MAP, *contract.sim_frames()))
         self.broadcasts: dict[int, Broadcasts] = {k: Broadcasts() for k in self.markers}
         self.broadcast_count = 0
@@ -579,14 +573,6 @@ class Observations:
         if self.th.time_limit_s is not None:
             return self.th
         return replace(self.th, time_limit_s=float(self.scenario.time_limit_s))
-
-
-def _near_a_detection(
-    transform: msgs.Transform, detections: tuple[msgs.FiducialTransform, ...], within_m: float
-) -> bool:
-    """Does this broadcast put the marker within ``within_m`` of one of ``detections`` (in the
-    camera frame)? Not when there are none."""
-    return any(_apart_m(transform, f.transform) <= within_m for f in detections)
 
 
 def _apart_m(a: msgs.Transform, b: msgs.Transform) -> float:
