@@ -75,8 +75,7 @@ def with_goal_tolerances(
     fallback = getattr(mission, "xy_tolerance", None) if ros1 is None else None
     found: dict[str, float | None] = {}
     for robot in ("explorer", "follower"):
-        own = getattr(ros1, "xy_goal_tolerance", None)
-        value = own(robot) if callable(own) else None
+        value = None if ros1 is None else ros1.xy_goal_tolerance(robot)
         found[robot] = value if value is not None else fallback
     return replace(
         th,

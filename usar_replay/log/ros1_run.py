@@ -263,14 +263,18 @@ def _shown(text: str) -> str:
 
 
 def of(run: Run) -> Ros1Run | None:
-    """The log's ``ros1.toml``; None for a log of a Python mission (or one that has none)."""
+    """The log's ``ros1.toml``; None for a log of a Python mission (or one that has none). An
+    invalid one is said once among the run's problems, however often it is asked for (grading
+    asks for the tolerances, the detections and the start)."""
     text = run.reader.attachments.get(contract.ROS1_ATTACHMENT)
     if text is None:
         return None
     try:
         return Ros1Run.from_toml(text.decode("utf-8"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError, TypeError):
-        run.problems.append(f"the attached {contract.ROS1_ATTACHMENT} is invalid")
+        said = f"the attached {contract.ROS1_ATTACHMENT} is invalid"
+        if said not in run.problems:
+            run.problems.append(said)
         return None
 
 
