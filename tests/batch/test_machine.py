@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.batch import machine
-from usar_replay.node import cpu_sets, kernel_sandbox
+from usar_replay.node import cpu_sets, kernel_pools, kernel_sandbox
 
 
 def test_this_machine_as_ci_has_it() -> None:
@@ -17,9 +17,11 @@ def test_this_machine_as_ci_has_it() -> None:
         "CPU sets",
         "real-time priority",
         "size-limited folders",
+        "kernel pools",
         "ROS 1",
     ]
     assert found["size-limited folders"].ok  # root: each run's and build's tmpfs
+    assert found["kernel pools"].ok, found["kernel pools"].means  # user namespaces, libseccomp
     assert found["ROS 1"].ok, found["ROS 1"].means
     if machine.isolated(list(found.values())):
         assert machine.warning(list(found.values())) == ""
@@ -54,3 +56,13 @@ def test_without_root_no_folder_is_size_limited(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(os, "geteuid", lambda: 1000)
     folders = next(f for f in machine.check() if f.name == "size-limited folders")
     assert not folders.ok and "can fill the disk" in folders.means
+
+
+def test_unbounded_kernel_pools_are_said(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(kernel_pools, "pool_limits_available", lambda: False)
+    monkeypatch.setattr(kernel_pools, "keyring_filter", lambda: None)
+    findings = machine.check()
+    pools = next(f for f in findings if f.name == "kernel pools")
+    assert not pools.ok and "inotify" in pools.said and "keys" in pools.said
+    assert "run one at a time" in pools.means and not machine.isolated(findings)
+    assert "kernel pools" in machine.warning(findings)

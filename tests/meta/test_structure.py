@@ -363,7 +363,6 @@ def test_no_cycles_counting_deferred_imports_too() -> None:
 
 # Modules with no tests/<layer>/test_<module>.py, and where they are tested instead.
 UNTESTED: dict[str, str] = {
-    "ros1/pacing/graph_start.py": "tests/ros1/test_bridge.py: recordings agree from tick 1",
     "batch/engines.py": "tests/batch/test_driver.py runs the local pool and Ray on one class",
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",

@@ -281,6 +281,52 @@ def test_no_message_queue_for_a_run(tmp_path: Path) -> None:
     assert said and said[0].startswith("ATTACK mq_open -1") and said[0].endswith("limit 0 0"), said
 
 
+POOLS = """
+import ctypes
+
+from usar_replay.api import Node
+
+KEYCTL, ADD_KEY = {keyctl}, {add_key}
+
+
+def main() -> None:
+    node = Node("pools")
+    libc = ctypes.CDLL("libc.so.6", use_errno=True)
+    made = 0
+    while made < 200 and libc.inotify_init() >= 0:  # held: never closed
+        made += 1
+    why = ctypes.get_errno()
+    ctypes.set_errno(0)
+    joined = libc.syscall(KEYCTL, 1, None)  # KEYCTL_JOIN_SESSION_KEYRING: a new keyring
+    key_errno = ctypes.get_errno()
+    added = libc.syscall(ADD_KEY, b"user", b"usar", b"x" * 32, 32, -3)  # the session keyring
+    said = f"inotify {{made}} {{why}} keyctl {{joined}} {{key_errno}} add {{added}}"
+    node.get_logger().info("ATTACK " + said)
+"""
+
+
+def _syscall(name: str) -> int:
+    import ctypes
+    import ctypes.util
+
+    lib = ctypes.CDLL(ctypes.util.find_library("seccomp") or "libseccomp.so.2")
+    lib.seccomp_syscall_resolve_name.argtypes = [ctypes.c_char_p]
+    return int(lib.seccomp_syscall_resolve_name(name.encode()))
+
+
+def test_inotify_and_keys_are_bounded_per_run(tmp_path: Path) -> None:
+    """inotify instances and keys are charged to the host user every run shares (issue 44: one
+    run took all 128 of its inotify instances): a run gets its own share of inotify (16) and no
+    key at all, and goes on to its own verdict in a closed log; the host keeps the rest."""
+    import errno
+
+    source = POOLS.format(keyctl=_syscall("keyctl"), add_key=_syscall("add_key"))
+    out, result = _record(tmp_path, source)
+    said = [line for line in _said(out) if line.startswith("ATTACK")]
+    assert said == [f"ATTACK inotify 16 {errno.EMFILE} keyctl -1 {errno.EPERM} add -1"], said
+    assert result.outcome == "max_sim_time", result.outcome_reason  # its own: it never ends
+
+
 def test_a_run_past_its_wall_limit_ends_as_wall_limit(tmp_path: Path) -> None:
     slow = ESCAPE.replace('Node("escape")', 'Node("slow")\n    node.create_timer(0.1, burn)')
     slow += "\n\ndef burn() -> None:\n    sum(range(3_000_000))\n"

@@ -16,7 +16,7 @@ import resource
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.node import cpu_sets, kernel_sandbox
+from usar_replay.node import cpu_sets, kernel_pools, kernel_sandbox
 from usar_replay.ros1.building import debian
 
 __all__ = ["Finding", "check", "isolated", "warning"]
@@ -121,7 +121,7 @@ def _folders() -> Finding:
         return Finding(
             "size-limited folders",
             True,
-            "tmpfs for each run's folder (--run-folder) and each build (--build-folder)",
+            "a tmpfs for each run folder (--run-folder) and build (--build-folder)",
         )
     return Finding(
         "size-limited folders",
@@ -132,9 +132,39 @@ def _folders() -> Finding:
     )
 
 
+def _pools() -> Finding:
+    bounded = kernel_pools.pool_limits_available()
+    refused = kernel_pools.keyring_filter() is not None
+    share = kernel_pools.PoolLimits().inotify_instances
+    host = _read_int("/proc/sys/user/max_inotify_instances")
+    if bounded and refused:
+        return Finding(
+            "kernel pools", True, f"inotify {share} of the host user's {host} a run, no keys"
+        )
+    missing = [
+        *([] if bounded else ["inotify and fanotify (unshare --user failed)"]),
+        *([] if refused else ["keys (no libseccomp2)"]),
+    ]
+    return Finding(
+        "kernel pools",
+        False,
+        f"not bounded per run: {', '.join(missing)}",
+        "one run can take the host user's pool every run shares, and another run's call "
+        "then fails: run one at a time (apt-get install util-linux libseccomp2; allow user "
+        "namespaces)",
+    )
+
+
+def _read_int(path: str) -> int | None:
+    try:
+        return int(Path(path).read_text().strip())
+    except (OSError, ValueError):
+        return None
+
+
 def check() -> list[Finding]:
     """Every part, in the order ``usar doctor`` prints them."""
-    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _folders(), _ros1()]
+    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _folders(), _pools(), _ros1()]
 
 
 def isolated(findings: list[Finding]) -> bool:

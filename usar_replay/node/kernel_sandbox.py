@@ -33,11 +33,13 @@ import shutil
 import subprocess
 import sys
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
+from usar_replay.node import kernel_pools
 from usar_replay.node.cpu_sets import CpuSet, remove_cgroup
+from usar_replay.node.kernel_pools import PoolLimits
 
 __all__ = [
     "INSTALL_HINT",
@@ -88,6 +90,9 @@ class SandboxLimits:
     (v1) or ``memory.max`` (v2), which counts every process of the run and the pages of the
     tmpfs mounts it writes (``/tmp``, ``/dev/shm``, a size-limited run folder). Past it the
     kernel's OOM killer ends a process of the run, and the run is ``out_of_memory``."""
+    pools: PoolLimits = field(default_factory=PoolLimits)
+    """The run's share of the pools the kernel counts per user (inotify, fanotify:
+    :mod:`.kernel_pools`)."""
 
 
 def _bwrap() -> str | None:
@@ -164,6 +169,7 @@ def sandbox_argv(
     info_fd: int | None = None,
     ro_mounts: Sequence[tuple[str, str]] = (),
     work_at: str = "",
+    seccomp_fd: int | None = None,
 ) -> list[str]:
     """The bwrap command line that runs ``argv`` in the sandbox.
 
@@ -198,6 +204,8 @@ def sandbox_argv(
         out.append("--disable-userns")  # no nested namespace to regain capabilities in
     if info_fd is not None:
         out += ["--info-fd", str(info_fd)]
+    if seccomp_fd is not None:
+        out += ["--seccomp", str(seccomp_fd)]
     for path in _SYSTEM_BINDS:
         out += ["--ro-bind-try", path, path]
     for path in _SYSTEM_FILES:
@@ -355,9 +363,17 @@ class KernelSandbox:
         none can be made here (then RLIMIT_AS per process is the only memory limit)."""
         self._info_r, self.info_fd = os.pipe()
         """Pass to :func:`sandbox_argv` and ``Popen(pass_fds=...)``, then call :meth:`started`."""
+        self.seccomp_fd = kernel_pools.keyring_filter_fd()
+        """The seccomp filter that refuses keys (None where libseccomp is missing): pass it to
+        :func:`sandbox_argv` and ``Popen(pass_fds=...)`` as :attr:`info_fd` (:attr:`fds`)."""
         self._pidfd: int | None = None
         self._counters: dict[tuple[str, bytes], int] = {}
         """The cgroup files :meth:`_counter` keeps open, by (cgroup, key)."""
+
+    @property
+    def fds(self) -> tuple[int, ...]:
+        """The descriptors bwrap reads (``Popen(pass_fds=...)``): the info fd and the filter."""
+        return tuple(fd for fd in (self.info_fd, self.seccomp_fd) if fd is not None and fd >= 0)
 
     def started(self) -> None:
         """After bwrap was started: hold a pidfd of the sandbox's first process, so that
@@ -381,8 +397,9 @@ class KernelSandbox:
         the first. (No ``preexec_fn``: Python code between fork and exec can deadlock a
         recorder whose renderer runs threads.) Where it can, bwrap starts from a network
         namespace of its own whose children get connection tables of their own
-        (:func:`own_tables_argv`)."""
-        argv = own_tables_argv(argv)
+        (:func:`own_tables_argv`), and in a user namespace of its own that bounds the run's
+        share of the kernel's per-user pools (:func:`.kernel_pools.pool_limits_argv`)."""
+        argv = own_tables_argv(kernel_pools.pool_limits_argv(argv, self.limits.pools))
         cpuset = self.cpus.path if self.cpus else None
         groups = [g for g in (self.cgroup, self.memory_cgroup, cpuset) if g]
         if not groups:
@@ -468,10 +485,10 @@ class KernelSandbox:
         }
 
     def _close_info(self, write_end_only: bool = False) -> None:
-        ends = ("info_fd",) if write_end_only else ("info_fd", "_info_r")
+        ends = ("info_fd", "seccomp_fd") if write_end_only else ("info_fd", "seccomp_fd", "_info_r")
         for name in ends:
             fd = getattr(self, name)
-            if fd >= 0:
+            if fd is not None and fd >= 0:
                 with contextlib.suppress(OSError):
                     os.close(fd)
                 setattr(self, name, -1)

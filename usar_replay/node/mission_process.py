@@ -353,9 +353,10 @@ class MissionProcess:
                         hidden=hidden,
                         info_fd=self._sandbox.info_fd,
                         ro_mounts=self.limits.read_mounts,
+                        seccomp_fd=self._sandbox.seccomp_fd,
                     )
                 )
-                fds += (self._sandbox.info_fd,)
+                fds += self._sandbox.fds
             try:
                 proc = subprocess.Popen(argv, pass_fds=fds, stdin=subprocess.DEVNULL, env=env)
             except BaseException:

@@ -168,8 +168,9 @@ def run_jailed(
             info_fd=box.info_fd,
             ro_mounts=ro_mounts,
             work_at=workspace_at,
+            seccomp_fd=box.seccomp_fd,
         )
-        fds = (box.info_fd,)
+        fds = box.fds
     argv = box.launch(argv)
     keep = bytearray()
     timed_out = False

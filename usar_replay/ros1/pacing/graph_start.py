@@ -14,7 +14,11 @@ difference between two recordings). So the bridge holds ``/clock`` until
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import select
+import signal
 import subprocess
 import time
 import xmlrpc.client
@@ -36,6 +40,14 @@ __all__ = [
 FACTS_CAP = 256 * 1024
 """The most bytes of facts read (the team's launch files decide how many)."""
 
+LISTING_CAP = 8 * 1024 * 1024
+"""The most bytes of the listing's output read: the team's launch files decide what it prints
+(``$(eval)``, ``<param command>``), and a listing past this says nothing (a launch file's node
+list and facts are some kilobytes; the bridge's memory is not the team's to fill)."""
+
+LISTING_WALL_S = 60.0
+"""Wall seconds the listing may take (roslaunch parses the launch files and ends)."""
+
 
 def launch_listing(
     script_prefix: str, package: str, launch: str, env: dict[str, str], plan: Path | None = None
@@ -43,22 +55,14 @@ def launch_listing(
     """The node names a launch file starts (``roslaunch --nodes``, ``plan`` followed; []
     where it cannot say) and what it configures for usar's stand-ins (the plan's ``facts``:
     the line the listing prints on its stdout, a pipe no other process of the run writes;
-    None without one, or past :data:`FACTS_CAP`, or not a JSON object)."""
-    try:
-        done = subprocess.run(
-            ["bash", "-c", f"{script_prefix} && exec {nodes_command(package, launch, plan)}"],
-            env=env,
-            stdin=subprocess.DEVNULL,
-            capture_output=True,
-            text=True,
-            timeout=60,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired):
+    None without one, or past :data:`FACTS_CAP`, or not a JSON object). A listing that fails,
+    prints more than :data:`LISTING_CAP` or runs past :data:`LISTING_WALL_S` says neither."""
+    out = _bounded_output(
+        ["bash", "-c", f"{script_prefix} && exec {nodes_command(package, launch, plan)}"], env
+    )
+    if out is None:
         return [], None
-    if done.returncode != 0:
-        return [], None
-    lines = done.stdout.splitlines()
+    lines = out.decode("utf-8", "replace").splitlines()
     names = sorted(n.strip() for n in lines if n.strip().startswith("/"))
     facts: dict[str, Any] | None = None
     for line in lines:
@@ -69,6 +73,45 @@ def launch_listing(
                 got = None
             facts = got if isinstance(got, dict) else None
     return names, facts
+
+
+def _bounded_output(argv: Sequence[str], env: dict[str, str]) -> bytes | None:
+    """``argv``'s stdout, read as it comes and never past :data:`LISTING_CAP` bytes or
+    :data:`LISTING_WALL_S` (then its process group is killed); None past either, or on a
+    failed start or a non-zero exit."""
+    try:
+        proc = subprocess.Popen(
+            argv,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,
+        )
+    except OSError:
+        return None
+    assert proc.stdout is not None
+    data = bytearray()
+    deadline = time.monotonic() + LISTING_WALL_S
+    fd = proc.stdout.fileno()
+    ok = True
+    try:
+        while True:
+            ready, _, _ = select.select([fd], [], [], max(0.0, deadline - time.monotonic()))
+            block = os.read(fd, 65536) if ready else None
+            if block is None or len(data) + len(block) > LISTING_CAP:
+                ok = False
+                break
+            if not block:
+                break
+            data += block
+    finally:
+        if not ok:
+            with contextlib.suppress(OSError):
+                os.killpg(proc.pid, signal.SIGKILL)
+        proc.stdout.close()
+        code = proc.wait()
+    return bytes(data) if ok and code == 0 else None
 
 
 def registered_nodes(master: Any, caller: str) -> set[str]:
