@@ -15,8 +15,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="say what this machine gives a run (sandbox, cgroups, CPU sets, ROS 1)",
         description=(
             "Check what a run gets here: bubblewrap's sandbox, cgroup v1 or v2 and which "
-            "controllers usar may write, CPU sets, real-time priority, Debian's ROS 1 "
-            "packages; for each part missing, what it means for a run's grade. Exit 0 when "
+            "controllers usar may write, CPU sets, real-time priority, size-limited folders, "
+            "the kernel's per-user pools, Debian's ROS 1 packages; for each part missing, what it means for a run's grade. Exit 0 when "
             "a run gets all of its isolation, 1 when it is partial."
         ),
     )
