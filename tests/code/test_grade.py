@@ -39,6 +39,7 @@ def test_a_procedural_package_loses_the_oop_and_unused_code_lines(tmp_path: Path
     assert by["unused_functions"].measured == 3
     assert by["unused_functions"].evidence.startswith("src/main.cpp:6 helper_two")
     assert by["commented_block"].measured == 6
+    assert by["commented_block"].points == 0  # 6 lines: the worst real package's block
     assert by["commented_block"].evidence == "src/main.cpp:18"
     assert by["doc_coverage"].points == 0
 
