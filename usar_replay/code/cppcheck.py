@@ -1,6 +1,6 @@
 """Unused functions, unread variables and lint findings, from cppcheck's XML.
 
-Why cppcheck: on 21 real packages its ``unusedFunction`` check found, in one package, 27 real
+Why cppcheck: on issue 45's 21 packages its ``unusedFunction`` check found, in one package, 27 real
 unused getters and setters (the handout: "Get rid of unused code"), and its style checks are
 about the code, not its whitespace (cpplint's findings were 84-99% whitespace). It runs on a copy
 of the sources in :mod:`usar_replay.code.tools`' sandbox and limits, without

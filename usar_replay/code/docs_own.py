@@ -1,6 +1,6 @@
 """Does the committed Doxygen HTML document *this* package's current sources?
 
-Why more than "``doc/html`` exists": on 21 real packages one team's committed ``doc/html`` and
+Why more than "``doc/html`` exists": on issue 45's 21 packages one team's committed ``doc/html`` and
 Doxyfile documented another team's sources (its history: a clone of another team's repository,
 then its C++ replaced). A files-exist check gives that team the points. Here the HTML is read
 (its file names, capped bytes of its text) and must name what the package holds now: at least

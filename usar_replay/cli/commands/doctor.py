@@ -16,8 +16,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         description=(
             "Check what a run gets here: bubblewrap's sandbox, cgroup v1 or v2 and which "
             "controllers usar may write, CPU sets, real-time priority, size-limited folders, "
-            "the kernel's per-user pools, Debian's ROS 1 packages; for each part missing, what it means for a run's grade. Exit 0 when "
-            "a run gets all of its isolation, 1 when it is partial."
+            "the kernel's per-user pools, Debian's ROS 1 packages; for each part missing, "
+            "what it means for a run's grade. Exit 0 when a run gets all of its isolation, "
+            "1 when it is partial."
         ),
     )
     p.set_defaults(func=run)
