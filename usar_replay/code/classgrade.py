@@ -12,12 +12,13 @@ every line 0, the reason said), never the end of the class.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from usar_replay.code import similarity
+from usar_replay.code.compile import Compiled
 from usar_replay.code.grade import Options, PackageGrade, grade, refused
 from usar_replay.code.rubric import Rubric
 from usar_replay.code.sources import Submission, read_submission
@@ -116,11 +117,19 @@ def grade_teams(
     *,
     jobs: int = 1,
     threshold: float = similarity.THRESHOLD,
+    built: Mapping[str, Compiled] | None = None,
 ) -> ClassCode:
-    """:func:`grade_class` of teams already named (``usar batch``'s, by its own names)."""
+    """:func:`grade_class` of teams already named (``usar batch``'s, by its own names);
+    ``built``: each team's own build, as the batch's demo ran it (:attr:`Options.built`)."""
     opts = options or Options()
+    builds = built or {}
+
+    def one(team: str, folder: Path) -> tuple[PackageGrade, Submission | None]:
+        mine = replace(opts, built=builds[team]) if team in builds else opts
+        return _one(team, folder, rubric, template, mine)
+
     with ThreadPoolExecutor(max(1, jobs)) as pool:
-        done = list(pool.map(lambda t: _one(t[0], t[1], rubric, template, opts), found))
+        done = list(pool.map(lambda t: one(*t), found))
     pairs: list[similarity.Pair] = []
     subs = [s for _, s in done if s is not None]
     if len(subs) > 1:
