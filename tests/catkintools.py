@@ -41,3 +41,39 @@ def package(folder: Path, name: str, configure: str = "", script: str = "") -> P
         node.write_text("#!/usr/bin/python3\n" + textwrap.dedent(script), encoding="utf-8")
         node.chmod(0o755)
     return folder
+
+
+NODE_CPP = """#include <ros/ros.h>
+
+int main(int argc, char** argv) {{
+  ros::init(argc, argv, "{name}");
+  ros::NodeHandle nh;{body}
+  return 0;
+}}
+"""
+"""A C++ node that starts and exits (``body``: lines of the team's, a warning or an error)."""
+
+
+def cxx_package(folder: Path, name: str, body: str = "", cmake: str = "") -> Path:
+    """A catkin package ``name`` in ``folder`` with one C++ node, ``src/main.cpp`` (the node
+    of :data:`NODE_CPP` with ``body`` in it), its ``CMakeLists.txt`` with ``cmake`` (CMake
+    code) before the node's target, and a launch file starting it."""
+    package_xml(folder, name)
+    xml = folder / "package.xml"
+    xml.write_text(xml.read_text().replace("</package>", "<depend>roscpp</depend></package>"))
+    (folder / "CMakeLists.txt").write_text(
+        f"cmake_minimum_required(VERSION 3.0.2)\nproject({name})\n"
+        "find_package(catkin REQUIRED COMPONENTS roscpp)\ncatkin_package()\n"
+        f"{textwrap.dedent(cmake)}\ninclude_directories(${{catkin_INCLUDE_DIRS}})\n"
+        f"add_executable({name}_node src/main.cpp)\n"
+        f"target_link_libraries({name}_node ${{catkin_LIBRARIES}})\n",
+        encoding="utf-8",
+    )
+    (folder / "src").mkdir()
+    (folder / "src" / "main.cpp").write_text(NODE_CPP.format(name=name, body=body))
+    (folder / "launch").mkdir()
+    (folder / "launch" / f"{name}.launch").write_text(
+        f'<launch><node pkg="{name}" type="{name}_node" name="n" output="screen"/></launch>\n',
+        encoding="utf-8",
+    )
+    return folder

@@ -133,3 +133,76 @@ def test_a_code_template_without_code_is_a_usage_error(
     assert main([*args, "--code", "--code-template", str(tmp_path / "none")]) == 2
     assert "--code-template " in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_runs_record_keeps_what_its_build_said(tmp_path: Path) -> None:
+    """compiler_record (what run_one writes) and demo_builds (what the code grade reads): the
+    first world by name with one; a hand-edited entry is not one."""
+    from usar_replay.batch.code_grade import COMPILER, compiler_record, demo_builds
+    from usar_replay.batch.plan import RUN_FORMAT
+    from usar_replay.code.compile import Compiled
+    from usar_replay.pipeline.record import BuildLog
+
+    root = "/ros1/ws/src/p"
+    warned = BuildLog(f"{root}/src/a.cpp:2:5: warning: unused [-Wunused]\n", root, False, ("-W",))
+    assert compiler_record("cached", warned, "") == {
+        "compiles": True, "warnings": 1, "where": "src/a.cpp:2", "problem": "",
+        "note": "the demo's catkin_make (-W added)",
+    }  # fmt: skip
+    refused = compiler_record("failed", None, "the mission build failed: a link leaving it")
+    assert refused is not None and refused["compiles"] is False
+    assert refused["note"] == "the demo's build failed: the mission build failed: a link leaving it"
+    assert compiler_record("", None, "") is None  # nothing built (a Python mission)
+    team = tmp_path / "t"
+    team.mkdir()
+    record = {"format": RUN_FORMAT, COMPILER: compiler_record("cached", warned, "")}
+    (team / "b.run.json").write_text(json.dumps(record))
+    (team / "a.run.json").write_text(json.dumps({"format": RUN_FORMAT, COMPILER: {"x": 1}}))
+    (team / "c.run.json").write_text(json.dumps({**record, COMPILER: {"compiles": "yes"}}))
+    got = demo_builds(tmp_path, ["t", "none"], ["c", "b", "a"])
+    assert got == {"t": Compiled(True, 1, "src/a.cpp:2", note="the demo's catkin_make (-W added)")}
+
+
+@needs
+@pytest.mark.usefixtures("module_build_cache")  # the builds in a cache of this module's own
+def test_usar_batch_code_scores_the_demos_own_build(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The real path: ``usar batch --code`` builds each C++ package for its demo (catkin_make,
+    -Wall -Wextra added) and the code grade reads that build: a warning in the team's own file
+    is builds_clean false with its place, a clean build true, a failed build compiles false;
+    the code grade is out of 60."""
+    from catkintools import cxx_package
+    from conftest import one_room
+
+    from usar_replay.cli.main import main
+    from usar_replay.world.scenario_toml import save
+
+    subs = tmp_path / "subs"
+    cxx_package(subs / "clean", "clean")
+    cxx_package(subs / "warned", "warned", "\n  int unused = 3;")
+    cxx_package(subs / "broken", "broken", "\n  return nope;")
+    world = tmp_path / "room.toml"
+    save(one_room(), world)
+    out = tmp_path / "out"
+    args = ["batch", str(subs), "-o", str(out), "--scenario", str(world), "--code", "--quiet"]
+    code = main([*args, "--max-sim-time", "2"])
+    said = capsys.readouterr()
+    assert code == 0, said.out + said.err
+    doc = json.loads((out / CODE_JSON).read_text())
+    packages = {p["team"]: p for p in doc["packages"]}
+    lines = {t: {x["id"]: x for x in p["lines"]} for t, p in packages.items()}
+    assert {t: p["max_points"] for t, p in packages.items()} == {
+        "broken": 60, "clean": 60, "warned": 60
+    }  # fmt: skip
+    clean, warned, broken = (packages[t]["metrics"] for t in ("clean", "warned", "broken"))
+    assert (clean["compiles"], clean["builds_clean"], clean["compiler_warnings"]) == (True, True, 0)
+    assert lines["clean"]["builds_clean"]["points"] == 3
+    assert lines["clean"]["builds_clean"]["note"] == "the demo's catkin_make (-Wall -Wextra added)"
+    assert (warned["compiles"], warned["builds_clean"]) == (True, False)
+    assert warned["compiler_warnings"] >= 1
+    assert lines["warned"]["builds_clean"]["evidence"] == "src/main.cpp:6"
+    assert lines["warned"]["builds_clean"]["points"] == 0
+    assert (broken["compiles"], broken["builds_clean"]) == (False, False)
+    assert lines["broken"]["builds_clean"]["evidence"] == "src/main.cpp:6"
+    assert json.loads((out / "broken" / "room.run.json").read_text())["outcome"] == "build_failed"

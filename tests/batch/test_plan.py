@@ -12,6 +12,7 @@ import pytest
 
 from usar_replay.batch import plan as p
 from usar_replay.core.errors import UsageError
+from usar_replay.core.folder_walk import linked
 
 
 def _subs(root: Path) -> Path:
@@ -74,6 +75,27 @@ def test_an_unreadable_folder_is_a_bad_submission_and_names_must_differ(tmp_path
         p.discover(_empty(tmp_path / "none"))
     with pytest.raises(UsageError, match="not a directory"):
         p.discover(root / "team" / "pipe")
+
+
+def test_a_team_that_is_a_link_is_a_bad_submission_never_read(tmp_path: Path) -> None:
+    """A link in the submissions folder (to a folder or a ``.py`` file) could lead anywhere on
+    the machine: that team's ``bad_submission``, in the words ``usar code`` uses."""
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "team").mkdir(parents=True)
+    (elsewhere / "team" / "mission.py").write_text("def main(): pass\n", encoding="utf-8")
+    root = tmp_path / "subs"
+    root.mkdir()
+    (root / "linked").symlink_to(elsewhere / "team")
+    (root / "solo.py").symlink_to(elsewhere / "team" / "mission.py")
+    (root / "dangling").symlink_to(tmp_path / "nothing")  # neither a folder nor a .py: skipped
+    subs = {s.team: s for s in p.discover(root)}
+    assert sorted(subs) == ["linked", "solo"]
+    for team, name in (("linked", "linked"), ("solo", "solo.py")):
+        sub = subs[team]
+        assert (sub.problem_outcome, sub.target, sub.sha256) == ("bad_submission", "", "")
+        assert sub.problem == f"unusable submission: {linked([name])}"
+        assert sub.path == root.resolve() / name  # the link itself, never where it leads
+    assert "linked is a link: usar reads only real folders" in subs["linked"].problem
 
 
 def _empty(path: Path) -> Path:

@@ -12,6 +12,7 @@ from usar_replay.code.classgrade import grade_class, teams
 from usar_replay.code.rubric import default_rubric
 from usar_replay.code.template import read_template
 from usar_replay.core.errors import UsageError
+from usar_replay.core.folder_walk import linked
 
 
 def _class(root: Path) -> Path:
@@ -61,3 +62,28 @@ def test_a_class_where_one_team_has_no_package_is_still_a_class(tmp_path: Path) 
     codetools.alpha(repo / "catkin_ws" / "src" / "final_project")
     (repo / "docs").mkdir()
     assert teams([str(repo)]) == [("repo", repo)]
+
+
+def test_a_linked_team_folder_is_its_verdict_in_the_batchs_words(tmp_path: Path) -> None:
+    """A class folder's team that is a link is never read through (it could lead anywhere):
+    that team's verdict, saying so in the words ``usar batch`` uses; a path given on the
+    command line is the grader's own, read where it leads."""
+    real = tmp_path / "real"
+    codetools.alpha(real / "elsewhere")
+    root = tmp_path / "class"
+    codetools.alpha(root / "alpha")
+    codetools.beta(root / "beta")
+    (root / "linked").symlink_to(real / "elsewhere")
+    assert [n for n, _ in teams([str(root)])] == ["alpha", "beta", "linked"]
+    done = grade_class([str(root)], default_rubric())
+    bad = next(g for g in done.grades if g.team == "linked")
+    assert bad.verdict == "unreadable" and bad.points == 0
+    assert bad.findings == (linked(["linked"]),)
+    assert bad.findings[0].startswith("linked is a link: usar reads only real folders")
+    assert teams([str(root / "linked")]) == [("elsewhere", (real / "elsewhere").resolve())]
+    only_links = tmp_path / "links"
+    only_links.mkdir()
+    (only_links / "a").symlink_to(root / "alpha")
+    (only_links / "b").symlink_to(root / "beta")
+    with pytest.raises(UsageError, match=r"links: a, b are links: usar reads only real folders"):
+        teams([str(only_links)])

@@ -6,8 +6,9 @@ import shutil
 
 import pytest
 
-from usar_replay.code.compile import compile_check, parse_output
+from usar_replay.code.compile import compile_check, diagnostics, from_build, parse_output
 from usar_replay.code.sources import Source
+from usar_replay.ros1.building.workspace import WARNING_FLAGS
 
 needs = pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++")
 
@@ -39,3 +40,44 @@ def test_the_compilers_lines_are_read() -> None:
 def test_without_gxx_it_says_what_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("PATH", "/nonexistent")
     assert compile_check([]).problem == "g++ is not installed: apt-get install g++"
+
+
+ROOT = "/ros1/ws/src/pkg"
+BUILD = f"""[ 50%] Building CXX object pkg/CMakeFiles/node.dir/src/main.cpp.o
+In file included from {ROOT}/src/main.cpp:2:
+{ROOT}/include/pkg/robot.h:4:7: warning: unused variable 'a' [-Wunused-variable]
+/usr/include/ros/node_handle.h:10:1: warning: a system header's [-Wdeprecated]
+/ros1/ws/devel/include/pkg/Msg.h:7:1: warning: a generated header's [-Wunused-parameter]
+{ROOT}/src/main.cpp:9:3: warning: unused variable 'b' [-Wunused-variable]
+{ROOT}/src/main.cpp:9:3: note: declared here
+{ROOT}/src/../src/explorer.cpp:3:12: warning: unused parameter 'c' [-Wunused-parameter]
+[100%] Linking CXX executable /ros1/ws/devel/lib/pkg/node
+"""
+
+
+def test_a_builds_warnings_are_those_of_the_packages_own_files() -> None:
+    """A system header's and a generated header's lines are not the team's; the places are in
+    file and line order (a parallel make prints its units in any order)."""
+    got = from_build(BUILD, ROOT, False, WARNING_FLAGS)
+    assert (got.compiles, got.clean, got.warnings) == (True, False, 3)
+    assert got.where == "include/pkg/robot.h:4; src/explorer.cpp:3; src/main.cpp:9"
+    assert got.note == "the demo's catkin_make (-Wall -Wextra added)"
+    shuffled = "\n".join(reversed(BUILD.splitlines()))
+    assert from_build(shuffled, ROOT, False, WARNING_FLAGS) == got
+    clean = from_build("[100%] Built target node\n", ROOT + "/", False, WARNING_FLAGS)
+    assert (clean.compiles, clean.clean, clean.where) == (True, True, "")
+    own = from_build("", ROOT, False, ())
+    assert "its own flags (its CMake files ask for -Werror)" in own.note
+    assert [d.where for d in diagnostics(BUILD, ROOT)] == [
+        "include/pkg/robot.h:4", "src/main.cpp:9", "src/explorer.cpp:3"
+    ]  # as printed, the path made plain
+
+
+def test_a_failed_build_does_not_compile_and_says_where() -> None:
+    broken = f"{ROOT}/src/main.cpp:3:10: fatal error: nope.h: No such file or directory\n"
+    got = from_build(BUILD + broken, ROOT, True, WARNING_FLAGS)
+    assert (got.compiles, got.clean, got.where) == (False, False, "src/main.cpp:3")
+    assert got.note == "the demo's catkin_make (-Wall -Wextra added) failed"
+    cmake = "CMake Error at pkg/CMakeLists.txt:3 (find_package):\n  Could not find nope\n"
+    assert from_build(cmake, ROOT, True, WARNING_FLAGS).where == "CMakeLists.txt:3"
+    assert from_build("make: *** [all] Error 2\n", ROOT, True, ()).where == ""

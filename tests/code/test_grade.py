@@ -8,7 +8,8 @@ from pathlib import Path
 import codetools
 import pytest
 
-from usar_replay.code.grade import Options, grade, refused
+from usar_replay.code.compile import Compiled
+from usar_replay.code.grade import Options, PackageGrade, grade, refused
 from usar_replay.code.rubric import default_rubric
 from usar_replay.code.sources import read_submission
 from usar_replay.code.template import read_template
@@ -67,6 +68,28 @@ def test_compile_is_measured_when_asked(tmp_path: Path) -> None:
     g = grade(read_submission(pkg), default_rubric(), options=Options(compile=True))
     assert (g.metrics["compiles"], g.metrics["builds_clean"]) == (True, False)
     assert g.metrics["compiler_warnings"] >= 1
+
+
+def test_the_demos_build_is_scored_instead_when_given(tmp_path: Path) -> None:
+    """``usar batch --code``: the build's answer is the line's, with its note; out of 60."""
+    sub = read_submission(codetools.alpha(tmp_path / "a"))
+    warned = Compiled(True, 2, "src/main.cpp:9; src/x.cpp:3", note="the demo's catkin_make")
+    g = grade(sub, default_rubric(), options=Options(built=warned))
+    line = {s.line.id: s for s in g.lines}["builds_clean"]
+    assert (line.points, line.measured, line.evidence) == (0.0, False, warned.where)
+    assert line.note == "the demo's catkin_make" and g.max_points == 60
+    assert (g.metrics["compiles"], g.metrics["compiler_warnings"]) == (True, 2)
+
+    def built(c: Compiled) -> PackageGrade:
+        return grade(sub, default_rubric(), options=Options(built=c))
+
+    clean = built(Compiled(True, 0, ""))
+    assert clean.points == clean.max_points == 60
+    broken = built(Compiled(False, 0, "CMakeLists.txt:3"))
+    assert broken.metrics["compiles"] is False and broken.max_points == 60
+    unknown = built(Compiled(None, 0, "", "not built"))
+    assert unknown.max_points == 57
+    assert {s.line.id: s for s in unknown.lines}["builds_clean"].note == "not built"
 
 
 def test_a_refused_team_scores_zero_and_says_why() -> None:

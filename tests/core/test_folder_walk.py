@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.core.errors import UnusableSubmission
-from usar_replay.core.folder_walk import MAX_FILE_BYTES, shown, stream, walk
+from usar_replay.core.folder_walk import MAX_FILE_BYTES, linked, shown, stream, walk
 
 
 def _folder(root: Path) -> Path:
@@ -76,3 +76,12 @@ def test_stream_reads_the_file_the_walk_saw(tmp_path: Path) -> None:
     (root / "CMakeLists.txt").write_text("project(longer)\n", encoding="utf-8")
     with pytest.raises(UnusableSubmission, match=r"CMakeLists.txt: changed while it was read"):
         stream(entries[0], chunks.append)
+
+
+def test_a_linked_team_is_told_in_one_line_what_to_do() -> None:
+    assert linked(["team_x"]) == (
+        "team_x is a link: usar reads only real folders, never through a link; copy it in its "
+        "place (cp -rL) and grade again"
+    )
+    many = linked([f"t{i}" for i in range(6)])
+    assert many.startswith("t0, t1, t2, t3 and 2 more are links:") and "copy each" in many

@@ -245,10 +245,11 @@ def grade_class(
     if code:
         from dataclasses import replace
 
-        from usar_replay.batch.code_grade import grade_code
+        from usar_replay.batch.code_grade import demo_builds, grade_code
 
         teams = [(s.team, s.path) for s in plan.submissions]
-        grades = replace(grades, code=grade_code(teams, out, code_template, code_jobs))
+        builds = demo_builds(out, [t for t, _ in teams], [w.name for w in plan.worlds])
+        grades = replace(grades, code=grade_code(teams, out, code_template, code_jobs, builds))
     write_text(out / SUMMARY_CSV, to_csv(grades), overwrite=True)
     summary.table = to_table(grades)
     write_text(out / SUMMARY_TXT, summary.table + "\n", overwrite=True)

@@ -41,6 +41,7 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
 from usar_replay.core.errors import UnclearStart, UsageError
+from usar_replay.core.folder_walk import linked, shown
 from usar_replay.ros1 import start
 from usar_replay.ros1.building.workspace import NoPackage, SeveralPackages, find_package
 from usar_replay.world.world_key import WorldKey
@@ -310,7 +311,9 @@ def _folder_target(folder: Path) -> tuple[str, str, str, str]:
 def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
     """The teams of a submissions folder, sorted by name: each ``.py`` file and each sub-folder
     (its ``mission.py``, or the ``[mission] target`` of its ``usar.toml``). Names starting with
-    ``.`` or ``_`` are skipped; a folder without a mission is a team with a :attr:`problem`."""
+    ``.`` or ``_`` are skipped; a folder without a mission is a team with a :attr:`problem`, and
+    so is an entry that is a link (``bad_submission``: never read through, as ``usar code``
+    refuses it)."""
     root = Path(submissions_dir)
     if not root.is_dir():
         raise UsageError(f"{root}: not a directory; give the folder of submissions")
@@ -328,23 +331,27 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
         team = team_name(raw)
         outcome = "no_mission"
         how = source = ""
-        try:  # first: nothing else of a folder is read before it is known to be safe to read
-            digest = submission_digest(entry.resolve())
-        except (UnusableSubmission, OSError) as err:
-            reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
-            target, problem, digest = "", f"unusable submission: {reason}", ""
-            outcome = "bad_submission"
+        path = entry.resolve()
+        if entry.is_symlink():  # never read through: it could lead anywhere (usar code agrees)
+            path = root.resolve() / entry.name
+            problem = f"unusable submission: {linked([shown(entry.name)])}"
+            target, digest, outcome = "", "", "bad_submission"
         else:
-            if entry.is_dir():
-                target, problem, how, source = _folder_target(entry)
+            try:  # first: nothing else of a folder is read before it is known to be safe to read
+                digest = submission_digest(path)
+            except (UnusableSubmission, OSError) as err:
+                reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
+                target, problem, digest = "", f"unusable submission: {reason}", ""
+                outcome = "bad_submission"
+            else:
+                if entry.is_dir():
+                    target, problem, how, source = _folder_target(entry)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(
-            Submission(team, entry.resolve(), target, digest, problem, outcome, how, source)
-        )
+        subs.append(Submission(team, path, target, digest, problem, outcome, how, source))
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
     return subs

@@ -306,6 +306,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
     graded = None
     build = ""  # a ROS 1 package's build: "cached", "catkin_make 12.3 s" (not the log's)
     pacing = ""  # a ROS 1 run's holds and capped ticks (the capped ones are not the log's)
+    compiler: dict[str, Any] | None = None  # what its build's compiler said, for --code
     try:
         if job.target.startswith(ROS1_TARGET_PREFIX):
             try:
@@ -328,6 +329,10 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
             outcome, reason = result.outcome, result.outcome_reason
             sim_s = result.sim_duration_s
             build, pacing = result.build, result.pacing
+            if job.target.startswith(ROS1_TARGET_PREFIX):
+                from usar_replay.batch.code_grade import compiler_record
+
+                compiler = compiler_record(build, result.build_log, reason)
     except WallLimit:
         wall = float(job.limits["wall_s"])
         outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"
@@ -349,6 +354,8 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
         "pacing": pacing,
         "wall_s": round(wall_s, 3),
     }
+    if compiler is not None:
+        rec["compiler"] = compiler
     return rec, graded
 
 

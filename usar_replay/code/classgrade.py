@@ -6,24 +6,29 @@ exactly one) catkin package is one team, found as ``--ros1`` finds it; a path th
 is a class folder (two or more of its sub-folders hold a package), each non-hidden sub-folder
 a team. A team whose folder cannot be read (a
 FIFO, a link out, a file over the caps, no package) is that team's verdict (``unreadable``,
-every line 0, the reason said), never the end of the class.
+every line 0, the reason said), never the end of the class. A class folder's entry that is a
+link to a folder is never read through (it could lead anywhere: ``usar batch`` refuses it in
+the same words, :func:`usar_replay.core.folder_walk.linked`): that team's verdict, or, when
+every team is one, a usage error saying so; a path given on the command line is the
+grader's own and is read where it leads.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from usar_replay.code import similarity
+from usar_replay.code.compile import Compiled
 from usar_replay.code.grade import Options, PackageGrade, grade, refused
 from usar_replay.code.rubric import Rubric
 from usar_replay.code.sources import Submission, read_submission
 from usar_replay.code.template import NO_TEMPLATE, Template
 from usar_replay.core.errors import NoPackage, SeveralPackages, UsageError, UsarError
-from usar_replay.core.folder_walk import shown
+from usar_replay.core.folder_walk import linked, shown
 from usar_replay.ros1.building.workspace import find_package
 
 __all__ = ["ClassCode", "grade_class", "grade_teams", "teams"]
@@ -36,15 +41,16 @@ class ClassCode:
     threshold: float
 
 
-def _sub_folders(path: Path) -> list[Path]:
+def _sub_folders(path: Path) -> tuple[list[Path], list[Path]]:
+    """The real sub-folders of ``path`` not starting with ``.`` or ``_``, and its entries of
+    those names that are links to folders (never looked into)."""
     try:
         with os.scandir(path) as it:
-            return sorted(
-                Path(e.path) for e in it
-                if e.is_dir(follow_symlinks=False) and not e.name.startswith((".", "_"))
-            )  # fmt: skip
+            found = [e for e in it if not e.name.startswith((".", "_")) and e.is_dir()]
     except OSError as err:
         raise UsageError(f"{path}: cannot be read ({err.strerror})") from None
+    real = sorted(Path(e.path) for e in found if not e.is_symlink())
+    return real, sorted(Path(e.path) for e in found if e.is_symlink())
 
 
 def _holds_package(folder: Path) -> bool:
@@ -64,21 +70,25 @@ def teams(paths: Sequence[str]) -> list[tuple[str, Path]]:
         path = Path(raw)
         if not path.is_dir():
             raise UsageError(f"{raw}: no such folder; give package folders or a class folder")
-        subs = [] if (path / "package.xml").is_file() else _sub_folders(path)
+        if path.is_symlink():  # the grader's own path: read where it leads
+            path = path.resolve()
+        subs, links = ([], []) if (path / "package.xml").is_file() else _sub_folders(path)
         if sum(1 for s in subs if _holds_package(s)) >= 2:
-            found = subs  # a class folder: each sub-folder is a team (one without: its verdict)
+            found = subs + links  # a class folder: each entry a team (one without: its verdict)
         else:
             try:
                 find_package(path)
                 found = [path]
             except SeveralPackages:
-                found = subs
+                found = subs + links
             except NoPackage:
-                found = subs if len(paths) == 1 else [path]
+                found = subs + links if len(paths) == 1 else [path]
+        if found and found == links:
+            raise UsageError(f"{raw}: {linked([shown(p.name) for p in links])}")
         if not found:
             raise UsageError(f"{raw}: no catkin package in it; give package folders")
         for folder in found:
-            name = shown(folder.resolve().name)
+            name = shown((folder if folder.is_symlink() else folder.resolve()).name)
             if name in out and out[name] != folder:
                 name = f"{name}-{len(out)}"
             out[name] = folder
@@ -87,6 +97,8 @@ def teams(paths: Sequence[str]) -> list[tuple[str, Path]]:
 
 def _one(team: str, folder: Path, rubric: Rubric, template: Template, options: Options
          ) -> tuple[PackageGrade, Submission | None]:  # fmt: skip
+    if folder.is_symlink():  # a class folder's entry (teams() resolved the paths given)
+        return refused(team, str(folder), linked([shown(folder.name)]), rubric), None
     try:
         sub = read_submission(folder, team)
     except UsarError as err:
@@ -116,11 +128,19 @@ def grade_teams(
     *,
     jobs: int = 1,
     threshold: float = similarity.THRESHOLD,
+    built: Mapping[str, Compiled] | None = None,
 ) -> ClassCode:
-    """:func:`grade_class` of teams already named (``usar batch``'s, by its own names)."""
+    """:func:`grade_class` of teams already named (``usar batch``'s, by its own names);
+    ``built``: each team's own build, as the batch's demo ran it (:attr:`Options.built`)."""
     opts = options or Options()
+    builds = built or {}
+
+    def one(team: str, folder: Path) -> tuple[PackageGrade, Submission | None]:
+        mine = replace(opts, built=builds[team]) if team in builds else opts
+        return _one(team, folder, rubric, template, mine)
+
     with ThreadPoolExecutor(max(1, jobs)) as pool:
-        done = list(pool.map(lambda t: _one(t[0], t[1], rubric, template, opts), found))
+        done = list(pool.map(lambda t: one(*t), found))
     pairs: list[similarity.Pair] = []
     subs = [s for _, s in done if s is not None]
     if len(subs) > 1:

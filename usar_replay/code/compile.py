@@ -7,13 +7,19 @@ machine's ``catkin_make`` would show with them on), the package's ``include/`` a
 ROS headers on the include path, and usar's built messages (``fiducial_msgs``, which Debian
 lacks) when the ROS 1 build has made them. A header that is nowhere (a package Debian does not
 have) leaves the answer ``None``, said, rather than a false "does not compile".
+
+In ``usar batch --code`` the package is built anyway, by the demo's catkin_make (with the same
+``-Wall -Wextra``: :data:`usar_replay.ros1.building.workspace.WARNING_FLAGS`), so
+:func:`from_build` reads that build's output the same way instead: the compiler's lines about
+the package's own files, nothing measured twice.
 """
 
 from __future__ import annotations
 
+import posixpath
 import re
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -21,13 +27,26 @@ from pathlib import Path, PurePosixPath
 from usar_replay.code.sources import Source
 from usar_replay.code.tools import ToolLimits, missing, run_tool, write_copy
 
-__all__ = ["Compiled", "compile_check", "message_includes", "parse_output"]
+__all__ = [
+    "Compiled",
+    "Diagnostic",
+    "compile_check",
+    "diagnostics",
+    "from_build",
+    "message_includes",
+    "parse_output",
+]
 
 _UNITS = frozenset({".cpp", ".cc", ".cxx"})
-_DIAG = re.compile(
-    r"^src/(?P<file>[^:\n]+):(?P<line>\d+):\d+: (?P<kind>warning|error|fatal error): (?P<msg>.*)$",
-    re.MULTILINE,
+_DIAG = (
+    r"^{root}/(?P<file>[^:\n]+):(?P<line>\d+):\d+: "
+    r"(?P<kind>warning|error|fatal error): (?P<msg>.*)$"
 )
+"""gcc's and clang's line about a file under ``root`` (a regular expression's text)."""
+_CMAKE_ERROR = r"^CMake Error at (?:{root}/|{name}/)(?P<file>[^:\n]+):(?P<line>\d+)"
+"""CMake's error in one of the package's files (named from the workspace's ``src/``)."""
+_EVIDENCE = 4
+"""``file:line`` places a build's evidence names."""
 _NO_HEADER = re.compile(r"fatal error: ([\w/.+-]+): No such file or directory")
 
 
@@ -36,21 +55,51 @@ class Compiled:
     compiles: bool | None
     warnings: int
     where: str
-    """``file:line`` of the first error, else of the first warning ('' when clean)."""
+    """``file:line`` of the first error, else of the first warning ('' when clean); of a
+    build's (:func:`from_build`), the first few, ``; `` between them."""
     problem: str = ""
+    note: str = ""
+    """How it was measured, when not by :func:`compile_check` (the line's note)."""
 
     @property
     def clean(self) -> bool | None:
         return None if self.compiles is None else self.compiles and self.warnings == 0
 
 
+@dataclass(frozen=True, slots=True)
+class Diagnostic:
+    """A compiler's line about one of the package's files."""
+
+    file: str
+    """Relative to the package's folder (``src/explorer.cpp``)."""
+    line: int
+    kind: str
+    """``warning``, ``error`` or ``fatal error``."""
+    message: str
+
+    @property
+    def where(self) -> str:
+        return f"{self.file}:{self.line}"
+
+
+def diagnostics(output: str, root: str = "src") -> list[Diagnostic]:
+    """The compiler's warnings and errors in ``output`` about files under the folder ``root``
+    (as the compiler named it: a system header, or a header generated elsewhere, is not the
+    package's), in the order printed."""
+    pattern = re.compile(_DIAG.format(root=re.escape(root.rstrip("/"))), re.MULTILINE)
+    return [
+        Diagnostic(posixpath.normpath(m["file"]), int(m["line"]), m["kind"], m["msg"])
+        for m in pattern.finditer(output)
+    ]
+
+
 def parse_output(output: str) -> tuple[int, int, str, str]:
     """(errors, warnings, first error's or warning's ``file:line``, a missing header or '')."""
     errors = warnings = 0
     first_error = first_warning = ""
-    for m in _DIAG.finditer(output):
-        where = f"{m['file']}:{m['line']}"
-        if m["kind"] == "warning":
+    for d in diagnostics(output):
+        where = d.where
+        if d.kind == "warning":
             warnings += 1
             first_warning = first_warning or where
         else:
@@ -58,6 +107,35 @@ def parse_output(output: str) -> tuple[int, int, str, str]:
             first_error = first_error or where
     header = _NO_HEADER.search(output)
     return errors, warnings, first_error or first_warning, header.group(1) if header else ""
+
+
+def _places(found: Iterable[tuple[str, int]]) -> str:
+    """The first few ``file:line`` of ``found`` in file and line order (a parallel make prints
+    its units' lines in any order; the evidence is the same whichever came first)."""
+    return "; ".join(f"{f}:{n}" for f, n in sorted(set(found))[:_EVIDENCE])
+
+
+def from_build(output: str, root: str, failed: bool, flags: Sequence[str]) -> Compiled:
+    """The package's catkin_make, read as :func:`compile_check` reads g++: ``output`` as it
+    printed it, ``root`` the package's folder as it saw it, ``failed`` whether it failed,
+    ``flags`` the warning flags it was given. A build that succeeded compiles, clean when no
+    warning names a file of the package (under ``root``); one that failed does not, with the
+    places of its errors (the compiler's, else CMake's in the package's files)."""
+    found = diagnostics(output, root)
+    warnings = [d for d in found if d.kind == "warning"]
+    how = (
+        f"the demo's catkin_make ({' '.join(flags)} added)"
+        if flags
+        else "the demo's catkin_make, its own flags (its CMake files ask for -Werror)"
+    )
+    if not failed:
+        return Compiled(True, len(warnings), _places((d.file, d.line) for d in warnings), note=how)
+    errors = [(d.file, d.line) for d in found if d.kind != "warning"]
+    if not errors:
+        name = re.escape(PurePosixPath(root).name)
+        cmake = re.compile(_CMAKE_ERROR.format(root=re.escape(root), name=name), re.MULTILINE)
+        errors = [(m["file"], int(m["line"])) for m in cmake.finditer(output)]
+    return Compiled(False, len(warnings), _places(errors), note=f"{how} failed")
 
 
 def message_includes() -> list[Path]:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.code.comments import commented_out
-from usar_replay.code.compile import compile_check
+from usar_replay.code.compile import Compiled, compile_check
 from usar_replay.code.cppcheck import UNREAD, UNUSED, findings
 from usar_replay.code.deliverables import deliverables
 from usar_replay.code.docs_own import docs_own
@@ -46,6 +46,9 @@ class Options:
     """Run the syntax-only build (~4 s of CPU a file: off by default)."""
     includes: tuple[Path, ...] = ()
     """Extra include folders for it (usar's built messages)."""
+    built: Compiled | None = None
+    """The package's own build, as ``usar batch`` ran it for the demo
+    (:func:`usar_replay.code.compile.from_build`): scored instead of a syntax-only build."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -161,14 +164,18 @@ def grade(
     if fmt.problem:
         notes["format_changed_share"] = fmt.problem
 
-    if options.compile:
+    built = options.built
+    if built is None and options.compile:
         built = compile_check(srcs, options.includes)
+    if built is not None:
         metrics["compiles"] = built.compiles
         metrics["builds_clean"] = built.clean
         metrics["compiler_warnings"] = built.warnings if built.compiles is not None else None
         evidence["builds_clean"] = built.where
         if built.problem:
             notes["builds_clean"] = notes["compiles"] = built.problem
+        elif built.note:
+            notes["builds_clean"] = built.note
     else:
         metrics.update(compiles=None, builds_clean=None, compiler_warnings=None)
         notes["builds_clean"] = "not measured: add --compile (a syntax-only build, ~4 s a file)"

@@ -36,6 +36,7 @@ __all__ = [
     "MAX_TOTAL_BYTES",
     "SKIP_DIRS",
     "Entry",
+    "linked",
     "shown",
     "stream",
     "walk",
@@ -50,6 +51,18 @@ MAX_FILES = 20_000
 SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
 """Folders left out unread (caches, version control), as are hidden names and ``.pyc``."""
 _CHUNK = 1024 * 1024
+
+
+def linked(names: list[str]) -> str:
+    """What a team's entry that is a link is told (one line; ``usar batch`` and ``usar code``
+    say the same): a class folder's team is read only as a real folder (or file), never
+    through a link, which could lead anywhere on the machine. ``names``: shown names."""
+    first = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+    one = len(names) == 1
+    return (
+        f"{first} {'is a link' if one else 'are links'}: usar reads only real folders, never "
+        f"through a link; copy {'it' if one else 'each'} in its place (cp -rL) and grade again"
+    )
 
 
 def shown(name: str | bytes) -> str:

@@ -65,6 +65,7 @@ from usar_replay.world.scenario_toml import to_toml
 
 __all__ = [
     "OUTCOMES",
+    "BuildLog",
     "Progress",
     "RecordResult",
     "default_output",
@@ -86,6 +87,21 @@ OUTCOMES = {
     "build_failed": "the ROS 1 package did not build (catkin_make)",
 }
 """How a run can end (``usar.status`` ``outcome``), with the words people read."""
+
+
+@dataclass(frozen=True, slots=True)
+class BuildLog:
+    """A ROS 1 package's catkin_make as it ran for this recording (built now or found in the
+    build cache): what ``usar batch --code`` scores "builds without warnings" from."""
+
+    output: str
+    """Its output (stdout and stderr), paths as the build saw them."""
+    root: str
+    """The package's folder as the build saw it: compiler lines under it are the team's."""
+    failed: bool
+    """catkin_make failed (or went past a limit)."""
+    flags: tuple[str, ...] = ()
+    """The warning flags usar added (``-Wall -Wextra``; none for a package asking ``-Werror``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,6 +147,9 @@ class RecordResult:
     pacing: str = ""
     """A ROS 1 run's shutdown holds and capped ticks (``2 shutdown holds, 0 capped ticks``);
     '' for a Python mission."""
+    build_log: BuildLog | None = None
+    """A ROS 1 package's catkin_make output; None for a Python mission, or a package whose
+    build never ran catkin_make (a folder it refuses)."""
     stored_on: str = contract.MARKER_POSES
     """The topics the stored markers were read from; where they were looked for, when none."""
 

@@ -7,7 +7,8 @@ line), the folder is one catkin package, the launch file or executable exists in
 
 The package is built before the recording starts (so the run's wall time and real-time factor
 are the run's alone, and the build's time is reported apart: :attr:`RecordResult.build`); a
-build that fails is still a log, whose outcome is ``build_failed``.
+build that fails is still a log, whose outcome is ``build_failed``. catkin_make's output comes
+back with the result (:attr:`RecordResult.build_log`), for ``usar batch --code``.
 """
 
 from __future__ import annotations
@@ -21,10 +22,11 @@ from typing import Any
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
-from usar_replay.pipeline.record import Progress, RecordResult, record, with_latency
+from usar_replay.pipeline.record import BuildLog, Progress, RecordResult, record, with_latency
 from usar_replay.ros1 import start
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import (
+    BuildFailed,
     Built,
     Package,
     cached_build,
@@ -95,9 +97,13 @@ def record_ros1(
             return made[-1]
 
         note = "cached" if built.cached else f"catkin_make {built.seconds:.1f} s"
+        log = BuildLog(built.output, built.source_root, False, built.flags)
     except MissionEnded as failed:
         process = functools.partial(_failed_build, failed)
         note = "failed"
+        log = None
+        if isinstance(failed, BuildFailed):
+            log = BuildLog(failed.output, failed.root, True, failed.flags)
     try:
         result = record(
             scenario,
@@ -112,7 +118,7 @@ def record_ros1(
         if holder is not None and not opts.keep_workspace:
             remove_tree(holder)
     pacing = f"{made[0].holds} shutdown holds, {made[0].capped} capped ticks" if made else ""
-    return dataclasses.replace(result, build=note, pacing=pacing)
+    return dataclasses.replace(result, build=note, pacing=pacing, build_log=log)
 
 
 def _failed_build(failed: MissionEnded, *_args: Any, **_kwargs: Any) -> Any:

@@ -168,3 +168,22 @@ def test_a_missing_report_tool_is_said_too(
         "flags partial"
     ]
     assert len(err[0]) <= 100
+
+
+def test_a_class_of_linked_team_folders_says_they_are_links(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Team folders that are links are never read through: one line saying so and what to do
+    (exit 2, as any usage error), the words ``usar batch`` gives such a team."""
+    real = _class(tmp_path / "real")
+    links = tmp_path / "class"
+    links.mkdir()
+    for team in ("alpha", "beta"):
+        (links / team).symlink_to(real / team)
+    assert main(["code", str(links)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"usar: error: {links}: alpha, beta are links: usar reads only real folders, never "
+        "through a link; copy each in its place (cp -rL) and grade again"
+    )
+    assert "\n" not in err

@@ -12,10 +12,19 @@ import re
 from pathlib import Path
 
 import pytest
+from catkintools import cxx_package
 from conftest import one_room
 
 from usar_replay.cli.main import main
 from usar_replay.log.run import open_run
+from usar_replay.ros1.building.workspace import (
+    WARNING_FLAGS,
+    BuildFailed,
+    cached_build,
+    find_package,
+    private_build,
+    remove_tree,
+)
 from usar_replay.world.scenario_toml import save
 
 NODE = """
@@ -113,3 +122,40 @@ def test_a_missing_find_package_component_says_what_to_change(
     hint = "hint: add fiducial_msgs to find_package(catkin REQUIRED COMPONENTS ...) and package.xml"
     assert hint in text.splitlines(), text
     assert open_run(out).outcome == "build_failed"
+
+
+UNUSED = "\n  int unused = 3;"
+"""A line of the team's that ``-Wall`` warns about (``main.cpp:6``)."""
+
+
+def test_the_builds_output_is_kept_with_its_cache_entry(tmp_path: Path) -> None:
+    """The build is given -Wall -Wextra and its output is kept: a cache hit says what the build
+    said, and a build of its own (no cache) the same of the package's own files."""
+    pkg = find_package(cxx_package(tmp_path / "warned", "warned", UNUSED))
+    first = cached_build(pkg, fixed=True)
+    assert not first.cached and first.flags == WARNING_FLAGS
+    assert first.source_root == "/ros1/ws/src/warned"
+    said = f"{first.source_root}/src/main.cpp:6:7: warning: unused variable"
+    assert said in first.output, first.output
+    hit = cached_build(pkg, fixed=True)
+    assert hit.cached and (hit.output, hit.flags) == (first.output, first.flags)
+    own, holder = private_build(pkg, fixed=True)
+    try:
+        assert said in own.output and own.flags == WARNING_FLAGS
+    finally:
+        remove_tree(holder)
+
+
+def test_a_package_asking_for_werror_is_built_with_its_own_flags(tmp_path: Path) -> None:
+    """-Wall added to -Werror would fail a build that builds on a course machine."""
+    folder = cxx_package(tmp_path / "strict", "strict", UNUSED, "add_compile_options(-Werror)")
+    built = cached_build(find_package(folder))
+    assert built.flags == () and "warning:" not in built.output
+
+
+def test_a_failed_build_keeps_its_output(tmp_path: Path) -> None:
+    pkg = find_package(cxx_package(tmp_path / "broken", "broken", "\n  return nope;"))
+    with pytest.raises(BuildFailed) as failed:
+        cached_build(pkg, fixed=True)
+    assert failed.value.verdict == "build_failed" and failed.value.flags == WARNING_FLAGS
+    assert f"{failed.value.root}/src/main.cpp:6:10: error: " in failed.value.output

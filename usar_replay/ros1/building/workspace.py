@@ -29,6 +29,13 @@ absolute paths, a node's ``__FILE__`` in its ``/rosout`` lines) depends on the h
 catkin_make runs as Debian's own program with a clean environment (``PATH=/usr/bin:/bin``,
 ``PYTHON_EXECUTABLE=/usr/bin/python3``): a virtual environment's or pyenv's ``python3`` on the
 PATH has no ``catkin_pkg``, and catkin would pick it up.
+
+Why a package's build is given ``-Wall -Wextra`` (:data:`WARNING_FLAGS`, the initial
+``CMAKE_CXX_FLAGS``, so the package's own flags come after them and win) and its output is
+kept (:attr:`Built.output`, with the cache entry for a cached build): ``usar batch --code``
+scores "builds without warnings" from the demo's own build (:mod:`usar_replay.code.compile`).
+Warning options change no generated code; a package whose CMake files ask for ``-Werror``
+(which would turn them into a failed build) is built with its own flags alone.
 """
 
 from __future__ import annotations
@@ -64,6 +71,8 @@ from usar_replay.ros1.building.jail import BuildLimits, run_jailed
 
 __all__ = [
     "FIDUCIAL_MSGS",
+    "WARNING_FLAGS",
+    "BuildFailed",
     "BuildLimits",
     "Built",
     "NoPackage",
@@ -79,6 +88,7 @@ __all__ = [
     "remove_tree",
     "sandboxed",
     "underlay",
+    "warning_flags",
 ]
 
 FIDUCIAL_MSGS = standins.FIDUCIAL_MSGS
@@ -91,7 +101,25 @@ _SKIP = frozenset({"build", "devel", "install", ".git", "__pycache__", "log", "l
 """Folders never read from a package: catkin's outputs (committed in many student
 repositories), version control, caches."""
 _RECORD = "built.json"
-"""Beside ``ws/``: the manifest of the built workspace and its build time (usar's alone)."""
+"""Beside ``ws/``: the manifest of the built workspace, its build time and catkin_make's output
+(usar's alone)."""
+WARNING_FLAGS = ("-Wall", "-Wextra")
+"""What a package's build is given (``CMAKE_CXX_FLAGS``), unless it asks for ``-Werror``: the
+warnings ``usar code --compile`` turns on."""
+_WERROR = re.compile(r"-Werror(?![=\w-])|COMPILE_WARNING_AS_ERROR")
+"""Warnings made errors in a CMake file (``-Werror=x`` makes only that one an error)."""
+
+
+class BuildFailed(MissionEnded):
+    """``build_failed`` from a catkin_make that ran: :attr:`output` as it printed it (paths as
+    the build saw them), :attr:`root` the package's folder there, :attr:`flags` the warning
+    flags usar added."""
+
+    def __init__(self, detail: str, output: str, root: str, flags: tuple[str, ...]) -> None:
+        super().__init__("build_failed", detail)
+        self.output = output
+        self.root = root
+        self.flags = flags
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,6 +146,16 @@ class Built:
     (:data:`usar_replay.ros1.building.layout.WORKSPACE`, its underlays at theirs); '': at its
     host path
     (built without a kernel sandbox)."""
+    output: str = ""
+    """catkin_make's output (stdout and stderr) as the build printed it, paths as the build saw
+    them (:attr:`source_root`); a cached build's as it was kept with the entry."""
+    flags: tuple[str, ...] = ()
+    """The warning flags usar added to the build (:data:`WARNING_FLAGS`, or none)."""
+
+    @property
+    def source_root(self) -> str:
+        """The package's folder as its build saw it: compiler lines under it are the team's."""
+        return f"{self.run_workspace}/src/{self.package.name}"
 
     @property
     def setup(self) -> Path:
@@ -301,6 +339,22 @@ def sandboxed() -> bool:
     return ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
 
 
+def warning_flags(folder: Path) -> tuple[str, ...]:
+    """:data:`WARNING_FLAGS` for the package in ``folder`` (usar's copy of it), or () when one
+    of its CMake files (``CMakeLists.txt``, ``*.cmake``) asks for ``-Werror``: with it, more
+    warnings would make a build fail that builds on a course machine."""
+    for path in sorted(folder.rglob("*")):
+        if path.name != "CMakeLists.txt" and path.suffix != ".cmake":
+            continue
+        try:
+            text = path.read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            continue
+        if _WERROR.search(text):
+            return ()
+    return WARNING_FLAGS
+
+
 def _catkin_make(
     ws: Path,
     name: str,
@@ -309,18 +363,22 @@ def _catkin_make(
     limits: BuildLimits,
     jobs: int,
     at: str = "",
-) -> None:
+    flags: tuple[str, ...] = (),
+) -> str:
     """Run catkin_make in ``ws`` (its ``src/`` filled) in the build's sandbox, where it appears
     at ``at`` and its underlays at :func:`~usar_replay.ros1.building.layout.underlay_at`
     (``at`` '': all
-    at their host paths); raise ``build_failed`` with the errors (paths as the student's) and
-    a hint, or return."""
+    at their host paths), with ``flags`` as the initial ``CMAKE_CXX_FLAGS``; raise
+    :class:`BuildFailed` with the errors (paths as the student's) and a hint, or return its
+    output as printed (paths as the build saw them)."""
     sandbox = sandboxed()
     if at and not sandbox:
         raise ValueError(f"a build at {at} needs the kernel sandbox")
     inside = Path(at) if at else ws
     seen = [layout.underlay_at(i) for i in range(len(underlays))] if at else underlays
     cmd = ["catkin_make", "-C", str(inside), "-DPYTHON_EXECUTABLE=/usr/bin/python3", f"-j{jobs}"]
+    if flags:  # the cache's initial value: the package's CMakeLists.txt appends to it
+        cmd.insert(4, "-DCMAKE_CXX_FLAGS=" + " ".join(flags))
     if underlays:  # as on a course machine: the underlay sourced, then catkin_make
         cmd = [
             "/bin/bash",
@@ -342,31 +400,44 @@ def _catkin_make(
         workspace_at=at,
         ro_mounts=layout.mounts(underlays) if at else (),
     )
+    root = str(inside / "src" / name)
     output = buildmsg.student_paths(done.output, inside / "src" / name, user)
     if done.limit:
-        raise MissionEnded(
-            "build_failed", f"{buildmsg.errors(output)}\nthe build of {name} exceeded {done.limit}"
+        raise BuildFailed(
+            f"{buildmsg.errors(output)}\nthe build of {name} exceeded {done.limit}",
+            done.output,
+            root,
+            flags,
         )
     if done.code != 0:
         said = buildmsg.hint(output, name)
-        raise MissionEnded(
-            "build_failed",
+        raise BuildFailed(
             f"catkin_make failed (exit {done.code}) for package {name}:\n"
             + buildmsg.errors(output)
             + (f"\n{said}" if said else "")
             + f"\ncatkin_make failed for package {name}",
+            done.output,
+            root,
+            flags,
         )
+    return done.output
 
 
-def _seal(ws: Path, entry: Path, seconds: float) -> None:
+def _seal(ws: Path, entry: Path, seconds: float, output: str, flags: tuple[str, ...]) -> None:
     """After the sandbox is gone: check ``ws`` (``build_failed`` when it holds a link out of it
-    or a special file), freeze it, and write its manifest beside it."""
+    or a special file), freeze it, and write its manifest beside it, with catkin_make's
+    output and the warning flags it was given (a cached build's output is the one it had)."""
     try:
         tree.check(ws)
     except tree.TreeRefused as err:
         raise MissionEnded("build_failed", str(err)) from err
     tree.freeze(ws)
-    record = {"seconds": round(seconds, 1), "files": tree.manifest(ws)}
+    record = {
+        "seconds": round(seconds, 1),
+        "files": tree.manifest(ws),
+        "output": output,
+        "flags": list(flags),
+    }
     tree.write_new(entry / _RECORD, json.dumps(record, sort_keys=True))
 
 
@@ -378,11 +449,13 @@ def build(
     jobs: int = 2,
     limits: BuildLimits | None = None,
     at: str = "",
+    warnings: bool = False,
 ) -> Built:
     """Copy ``pkg`` into ``entry/ws/src`` (a new folder) and build it on ``underlays``; in the
     sandbox at ``at`` (:data:`usar_replay.ros1.building.layout.WORKSPACE`, the underlays at
     theirs) or,
-    with ``at`` '', at its host path.
+    with ``at`` '', at its host path; ``warnings``: with :func:`warning_flags` (a team's
+    package; usar's underlay is built without).
 
     ``entry`` is usar's: only ``entry/ws`` is writable by the build. A failure raises
     :class:`MissionEnded` ``build_failed`` with the compiler's errors."""
@@ -397,9 +470,10 @@ def build(
         src.mkdir()
         _copy(pkg, src / pkg.name)
         _toplevel(src)
+        flags = warning_flags(src / pkg.name) if warnings else ()
         start = time.perf_counter()  # for the build time shown to people only
         try:
-            _catkin_make(ws, pkg.name, pkg.path, underlays, limits, jobs, at)
+            output = _catkin_make(ws, pkg.name, pkg.path, underlays, limits, jobs, at, flags)
         except MissionEnded as err:
             if folder.full():
                 raise MissionEnded(
@@ -418,8 +492,8 @@ def build(
     finally:
         folder.close()
     seconds = time.perf_counter() - start
-    _seal(ws, entry, seconds)
-    return Built(ws, pkg, seconds, underlays=underlays, at=at)
+    _seal(ws, entry, seconds, output, flags)
+    return Built(ws, pkg, seconds, underlays=underlays, at=at, output=output, flags=flags)
 
 
 def cache_root() -> Path:
@@ -482,11 +556,13 @@ def _reuse(entry: Path, pkg: Package, underlays: tuple[Path, ...]) -> Built | No
         with os.fdopen(fd, "r", encoding="utf-8") as f:
             record = json.load(f)
         files = {str(k): str(v) for k, v in record["files"].items()}
+        output = str(record["output"])
+        flags = tuple(str(f) for f in record["flags"])
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return None
+        return None  # an entry without its output: rebuilt, so a hit says what a build says
     if tree.verify(entry / "ws", files):
         return None
-    return Built(entry / "ws", pkg, 0.0, cached=True, underlays=underlays)
+    return Built(entry / "ws", pkg, 0.0, True, underlays, output=output, flags=flags)
 
 
 def _cached(root: Path, key: str, pkg: Package, make: Callable[[Path], Built]) -> Built:
@@ -557,12 +633,18 @@ def cached_build(
     h = hashlib.sha256()
     h.update(package_sha256(pkg).encode())
     _usar_key(h, fixed)
+    h.update(" ".join(WARNING_FLAGS).encode())  # its output is kept: the flags it was built with
     key = f"{pkg.name}-{h.hexdigest()[:20]}"
     at = layout.WORKSPACE if fixed else ""
     made = _cached(
-        root, key, pkg, lambda entry: build(pkg, entry, underlays=under, limits=limits, at=at)
+        root,
+        key,
+        pkg,
+        lambda entry: build(pkg, entry, underlays=under, limits=limits, at=at, warnings=True),
     )
-    return Built(made.workspace, pkg, made.seconds, made.cached, under, at)
+    return Built(
+        made.workspace, pkg, made.seconds, made.cached, under, at, made.output, made.flags
+    )
 
 
 def private_build(
@@ -576,7 +658,8 @@ def private_build(
     at = layout.WORKSPACE if fixed else ""
     holder = Path(tempfile.mkdtemp(prefix="usar-ros1-build-"))
     try:
-        return build(pkg, holder / "entry", underlays=under, limits=limits, at=at), holder
+        built = build(pkg, holder / "entry", underlays=under, limits=limits, at=at, warnings=True)
+        return built, holder
     except BaseException:
         remove_tree(holder)
         raise
