@@ -202,7 +202,11 @@ def test_usar_batch_code_scores_the_demos_own_build(
     assert (warned["compiles"], warned["builds_clean"]) == (True, False)
     assert warned["compiler_warnings"] >= 1
     assert lines["warned"]["builds_clean"]["evidence"] == "src/main.cpp:6"
-    assert lines["warned"]["builds_clean"]["points"] == 0
+    n = warned["compiler_warnings"]  # graded: full without a warning, none at 13
+    assert lines["warned"]["builds_clean"]["points"] == round(3 * (13 - n) / 13, 2) < 3
     assert (broken["compiles"], broken["builds_clean"]) == (False, False)
+    assert broken["compiler_warnings"] is None  # not counted: it does not compile
     assert lines["broken"]["builds_clean"]["evidence"] == "src/main.cpp:6"
+    assert lines["broken"]["builds_clean"]["points"] == 0
+    assert lines["broken"]["builds_clean"]["note"].startswith("does not compile")
     assert json.loads((out / "broken" / "room.run.json").read_text())["outcome"] == "build_failed"

@@ -76,7 +76,7 @@ def test_the_demos_build_is_scored_instead_when_given(tmp_path: Path) -> None:
     warned = Compiled(True, 2, "src/main.cpp:9; src/x.cpp:3", note="the demo's catkin_make")
     g = grade(sub, default_rubric(), options=Options(built=warned))
     line = {s.line.id: s for s in g.lines}["builds_clean"]
-    assert (line.points, line.measured, line.evidence) == (0.0, False, warned.where)
+    assert (line.points, line.measured, line.evidence) == (2.54, 2, warned.where)  # 3 * 11/13
     assert line.note == "the demo's catkin_make" and g.max_points == 60
     assert (g.metrics["compiles"], g.metrics["compiler_warnings"]) == (True, 2)
 
@@ -87,6 +87,8 @@ def test_the_demos_build_is_scored_instead_when_given(tmp_path: Path) -> None:
     assert clean.points == clean.max_points == 60
     broken = built(Compiled(False, 0, "CMakeLists.txt:3"))
     assert broken.metrics["compiles"] is False and broken.max_points == 60
+    gone = {s.line.id: s for s in broken.lines}["builds_clean"]
+    assert (gone.points, gone.note) == (0.0, "does not compile")  # no warnings: not clean
     unknown = built(Compiled(None, 0, "", "not built"))
     assert unknown.max_points == 57
     assert {s.line.id: s for s in unknown.lines}["builds_clean"].note == "not built"

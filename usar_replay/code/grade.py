@@ -35,7 +35,7 @@ missing or that a header is found nowhere."""
 _CODE_METRICS = frozenset(
     {"doc_coverage", "commented_out_lines", "largest_commented_block", "unused_functions",
      "unread_variables", "lint_findings", "classes", "main_lines", "format_changed_share",
-     "docs_html", "builds_clean"}
+     "docs_html", "builds_clean", "compiler_warnings"}
 )  # fmt: skip
 """The metrics of the code itself (not the deliverables, not the report)."""
 
@@ -165,26 +165,33 @@ def grade(
         notes["format_changed_share"] = fmt.problem
 
     built = options.built
+    not_compiled = False
     if built is None and options.compile:
         built = compile_check(srcs, options.includes)
     if built is not None:
         metrics["compiles"] = built.compiles
         metrics["builds_clean"] = built.clean
-        metrics["compiler_warnings"] = built.warnings if built.compiles is not None else None
-        evidence["builds_clean"] = built.where
+        # counted only where it compiles: a package that does not compile is no clean one
+        metrics["compiler_warnings"] = built.warnings if built.compiles else None
+        evidence["builds_clean"] = evidence["compiler_warnings"] = built.where
+        said = built.problem or built.note
         if built.problem:
-            notes["builds_clean"] = notes["compiles"] = built.problem
-        elif built.note:
-            notes["builds_clean"] = built.note
+            notes["compiles"] = built.problem
+        if built.compiles is False:  # its line scores 0 (failed below), never "not measured"
+            not_compiled = True
+            said = "does not compile" + (f"; {said}" if said else "")
+        if said:
+            notes["builds_clean"] = notes["compiler_warnings"] = said
     else:
         metrics.update(compiles=None, builds_clean=None, compiler_warnings=None)
         notes["builds_clean"] = "not measured: add --compile (a syntax-only build, ~4 s a file)"
+        notes["compiler_warnings"] = notes["builds_clean"]
 
     rep = report(sub, template.pdf_sha256)
     metrics["report_pages"] = rep.pages
     failed = frozenset(
         m for m, note in notes.items() if note.startswith(_TOOLS) and _ON_FILES.search(note)
-    )
+    ) | ({"compiler_warnings"} if not_compiled else set())
     if not srcs:  # nothing to measure is not clean code: every code line scores 0
         for m in _CODE_METRICS:
             metrics[m] = None
