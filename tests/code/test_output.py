@@ -37,3 +37,17 @@ def test_the_outputs(tmp_path: Path) -> None:
     text = to_text(done.grades, done.similar, done.threshold)
     assert all(len(line) <= 100 for line in text.splitlines())
     assert "0.91  alpha ~ copy" in text
+
+
+def test_a_line_without_a_value_says_why_beside_its_place(tmp_path: Path) -> None:
+    """A package that does not compile: its warnings line shows the note and the error's place,
+    not a bare place that reads as a warning's."""
+    from usar_replay.code.compile import Compiled
+    from usar_replay.code.grade import Options, grade
+    from usar_replay.code.sources import read_submission
+
+    sub = read_submission(codetools.alpha(tmp_path / "a"))
+    broken = Compiled(False, 0, "src/main.cpp:6")
+    g = grade(sub, default_rubric(), options=Options(built=broken))
+    line = next(x for x in to_text([g], [], 0.6).splitlines() if " builds_clean" in x)
+    assert line.split() == ["0/3", "builds_clean", "does", "not", "compile:", "src/main.cpp:6"]

@@ -137,6 +137,8 @@ def to_text(grades: Sequence[PackageGrade], similar: Sequence[Pair], threshold: 
             pts = "  -  " if s.points is None else f"{s.points:5.4g}"
             shown = "" if s.measured is None else f" = {s.measured}"
             tail = s.evidence or s.note
+            if s.measured is None and s.note and s.evidence:  # why there is no value, and where
+                tail = f"{s.note}: {s.evidence}"
             out.append(_cut(f"  {pts}/{s.line.points:<4g} {s.line.id}{shown}  {tail}"))
         for f in g.findings:
             out.append(_cut(f"  finding: {f}"))
