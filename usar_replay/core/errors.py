@@ -18,6 +18,7 @@ __all__ = [
     "IncompleteLog",
     "MissingTopic",
     "MissionEnded",
+    "BuildFailed",
     "DetectError",
     "MissingRos1",
     "UnusableSubmission",
@@ -79,6 +80,19 @@ class MissionEnded(UsarError):
         super().__init__(f"the mission {verdict.replace('_', ' ')}: {first}")
         self.verdict = verdict
         self.detail = detail
+
+
+class BuildFailed(MissionEnded):
+    """``build_failed`` from a catkin_make that ran: :attr:`output` as it printed it (paths as
+    the build saw them), :attr:`root` the package's folder there, :attr:`flags` the warning
+    flags usar added (``usar batch --code`` scores the build's warnings from them). (Raised by
+    :mod:`usar_replay.ros1.building.workspace`, which re-exports it.)"""
+
+    def __init__(self, detail: str, output: str, root: str, flags: tuple[str, ...]) -> None:
+        super().__init__("build_failed", detail)
+        self.output = output
+        self.root = root
+        self.flags = flags
 
 
 class DetectError(UsarError):

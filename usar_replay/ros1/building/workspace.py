@@ -59,6 +59,7 @@ import usar_replay.ros1.building.message as buildmsg
 import usar_replay.ros1.building.standins as standins
 import usar_replay.ros1.building.tree as tree
 from usar_replay.core.errors import (
+    BuildFailed,
     MissionEnded,
     NoPackage,
     SeveralPackages,
@@ -108,18 +109,6 @@ WARNING_FLAGS = ("-Wall", "-Wextra")
 warnings ``usar code --compile`` turns on."""
 _WERROR = re.compile(r"-Werror(?![=\w-])|COMPILE_WARNING_AS_ERROR")
 """Warnings made errors in a CMake file (``-Werror=x`` makes only that one an error)."""
-
-
-class BuildFailed(MissionEnded):
-    """``build_failed`` from a catkin_make that ran: :attr:`output` as it printed it (paths as
-    the build saw them), :attr:`root` the package's folder there, :attr:`flags` the warning
-    flags usar added."""
-
-    def __init__(self, detail: str, output: str, root: str, flags: tuple[str, ...]) -> None:
-        super().__init__("build_failed", detail)
-        self.output = output
-        self.root = root
-        self.flags = flags
 
 
 @dataclass(frozen=True, slots=True)
