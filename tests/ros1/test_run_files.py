@@ -103,3 +103,25 @@ def test_the_replaced_nodes_are_read_as_the_launch_files_nodes(tmp_path: Path) -
         ("/explorer/spawn", "gazebo_ros", "spawn_model"),
     ]
     assert run_files.launch_nodes(tmp_path) == []  # a file of its own
+
+
+def test_rosgraphs_latest_symlink_race_line_is_left_out(tmp_path: Path) -> None:
+    """rospy prints this line when another process renewed ``ROS_LOG_DIR/latest`` at the same
+    moment (rosgraph's race: one recording of a class had it, the Ray engine's did not, and
+    it names the host's folder): a node's output is kept without it, all else as written."""
+    out = tmp_path / run_files.OUTPUT_DIR
+    out.mkdir()
+    race = (
+        "INFO: cannot create a symlink to latest log directory: [Errno 2] No such file or "
+        f"directory: '{tmp_path}/ros_log/latest'\n"
+    )
+    (out / "explorer.out").write_text(race + "[INFO] [/explorer]: explorer up\n")
+    (out / "follower.out").write_text(
+        "[INFO] [/follower]: up\nINFO: cannot create a symlink to latest log directory\n"
+        "my INFO: cannot create a symlink to latest log directory\n"
+    )
+    assert run_files.node_outputs(tmp_path) == [
+        ("explorer", b"[INFO] [/explorer]: explorer up\n"),
+        ("follower", b"[INFO] [/follower]: up\nmy INFO: cannot create a symlink to latest log "
+                     b"directory\n"),
+    ]  # fmt: skip

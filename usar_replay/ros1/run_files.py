@@ -128,10 +128,19 @@ def _read(dir_fd: int, name: str, head: int, tail: int) -> tuple[bytes, bytes, i
         return first, f.read(tail), size
 
 
+_LATEST_RACE = re.compile(rb"^INFO: cannot create a symlink to latest log directory[^\n]*\n?", re.M)
+"""rosgraph's own line (``roslogging.renew_latest_logdir``), printed by a rospy process when
+another one (roslaunch, a node starting beside it) renewed ``ROS_LOG_DIR/latest`` between its
+``lexists`` and its ``remove``: a race of rosgraph's, which process loses it the machine's
+timing decides (one recording had it, the next did not), and the line names the host's run
+folder. It says nothing of the team's code, so a node's output is kept without it."""
+
+
 def _output_text(first: bytes, last: bytes, size: int) -> bytes:
+    left_out = size - len(first) - len(last)
+    first, last = _LATEST_RACE.sub(b"", first), _LATEST_RACE.sub(b"", last)
     if not last:
         return first
-    left_out = size - len(first) - len(last)
     note = (
         f"\n[usar: {left_out} bytes of this node's output left out here; the log keeps its "
         f"first {OUTPUT_HEAD // 1024} KiB and its last {OUTPUT_TAIL // 1024} KiB]\n"
