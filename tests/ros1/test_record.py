@@ -173,13 +173,17 @@ def test_view_shows_the_stored_pose_array(recorded: tuple[Path, str]) -> None:
     assert abs(rows.items[0][0] - 1.994) < 0.01 and abs(rows.items[0][1] - 0.401) < 0.01
 
 
+@pytest.mark.slow
 def test_the_log_does_not_depend_on_where_the_build_is_kept(
     recorded: tuple[Path, str], tmp_path: Path
 ) -> None:
     """The same package recorded again from another build-cache root, in a private build folder
     (a batch's, with a random name): the /rosout lines are the same bytes, because the build
     and the run see the workspace at the sandbox's fixed paths (docs/ros1.md), never the host's
-    (a C++ node's ``file`` field is its ``__FILE__``)."""
+    (a C++ node's ``file`` field is its ``__FILE__``). Slow (a second build and run, some 50 s
+    of the fast suite's 15 minutes): the fast suite's
+    ``tests/e2e/test_class_folder.py::test_engines_agree_for_a_ros1_team`` holds the same, two
+    private build folders of two output folders giving one log sha256."""
     from usar_replay.core.settings import RunSettings
     from usar_replay.node.kernel_sandbox import bwrap_available
     from usar_replay.ros1.process import Ros1Options
