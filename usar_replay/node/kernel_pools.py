@@ -48,6 +48,7 @@ __all__ = [
     "keyring_filter_fd",
     "pool_limits_argv",
     "pool_limits_available",
+    "succeeds",
 ]
 
 KEY_CALLS = ("add_key", "request_key", "keyctl")
@@ -98,6 +99,24 @@ def _script(limits: PoolLimits) -> str:
     return "; ".join([*lines, 'exec "$@"'])
 
 
+def succeeds(argv: Sequence[str], timeout_s: float = 10.0) -> bool:
+    """Whether ``argv`` runs to exit 0 within ``timeout_s``, its output discarded: the probe
+    of what a machine allows (namespaces, settings) before a run relies on it (here, below
+    :mod:`.kernel_sandbox`, which uses it too and names it)."""
+    try:
+        done = subprocess.run(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            timeout=timeout_s,
+            check=False,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return done.returncode == 0
+
+
 @functools.cache
 def pool_limits_available() -> bool:
     """Whether :func:`pool_limits_argv` can bound a run here (``unshare`` present, user
@@ -106,17 +125,7 @@ def pool_limits_available() -> bool:
     if unshare is None:
         return False
     probe = "echo 1 > /proc/sys/user/max_inotify_instances"
-    try:
-        done = subprocess.run(
-            [unshare, "--user", "--map-root-user", "/bin/sh", "-c", probe],
-            stdin=subprocess.DEVNULL,
-            capture_output=True,
-            timeout=10,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return done.returncode == 0
+    return succeeds([unshare, "--user", "--map-root-user", "/bin/sh", "-c", probe])
 
 
 def pool_limits_argv(argv: Sequence[str], limits: PoolLimits | None = None) -> list[str]:

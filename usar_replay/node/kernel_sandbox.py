@@ -39,7 +39,7 @@ from typing import Literal
 
 from usar_replay.node import kernel_pools
 from usar_replay.node.cpu_sets import CpuSet, remove_cgroup
-from usar_replay.node.kernel_pools import PoolLimits
+from usar_replay.node.kernel_pools import PoolLimits, succeeds
 
 __all__ = [
     "INSTALL_HINT",
@@ -295,23 +295,6 @@ _OWN_TABLES = (
 )
 """Hash tables of their own for the network namespaces created below (Linux 6.1+): 1024 TCP
 buckets, ample for a ROS graph's hundred connections; 256 UDP ones, the kernel's least."""
-
-
-def succeeds(argv: Sequence[str], timeout_s: float = 10.0) -> bool:
-    """Whether ``argv`` runs to exit 0 within ``timeout_s``, its output discarded: the probe
-    of what a machine allows (namespaces, settings) before a run relies on it."""
-    try:
-        done = subprocess.run(
-            argv,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            timeout=timeout_s,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return done.returncode == 0
 
 
 @functools.cache
