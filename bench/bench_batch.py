@@ -11,7 +11,7 @@ one, and the logs' digests are compared across engines (they must be equal).
 
 ``--ros1``: the class is two copies of the course's ROS 1 package (examples/ros1/usar_course)
 on the one-room world instead, graded with 1 and N local workers: each run has a CPU set of
-its own (usar_replay/node/cpu_sets.py), so N workers on N free CPUs use N CPUs. The build is
+its own (usar_replay/sandbox/cpu_sets.py), so N workers on N free CPUs use N CPUs. The build is
 done once before the timings (its cache is shared), and the throughput ratio is printed.
 """
 

@@ -69,8 +69,8 @@ def bench_executor(n: int = 20_000) -> float:
 
 def bench_boundary(n: int = 2_000, image_bytes: int = 25_000) -> float:
     """µs per tick through a mission process whose nodes do nothing (CDR both ways + IPC)."""
-    from usar_replay.node.mission_process import MissionProcess
-    from usar_replay.node.mission_target import resolve_target
+    from usar_replay.process.mission_process import MissionProcess
+    from usar_replay.process.mission_target import resolve_target
 
     target = resolve_target(str(ROOT / "bench" / "_idle_mission.py"))
     wire = [(t, m.__msgtype__, cdr.encode(m)) for t, m in _tick(1_000_000_000, image_bytes)]

@@ -43,8 +43,8 @@ from pathlib import Path
 from usar_replay.core.settings import RecordSettings, RunSettings
 from usar_replay.grading.grade import grade_file
 from usar_replay.log.run import open_run
-from usar_replay.node.mission_process import MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline import record as python_record
+from usar_replay.process.mission_process import MissionLimits, uses_kernel_sandbox
 from usar_replay.ros1.building import workspace as build_mod
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1

@@ -1,4 +1,4 @@
-"""What the kernel sandbox (usar_replay/node/kernel_sandbox.py) costs: per run (starting the mission
+"""What the kernel sandbox (sandbox/kernel_sandbox.py) costs: per run (starting the mission
 process) and per tick (the process boundary, and a short one-room recording), with and without
 bwrap. Printed, never asserted.
 
@@ -26,9 +26,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
 from usar_replay.core import cdr, contract, msgs  # noqa: E402
-from usar_replay.node.kernel_sandbox import bwrap_available  # noqa: E402
-from usar_replay.node.mission_process import MissionLimits, MissionProcess  # noqa: E402
-from usar_replay.node.mission_target import resolve_target  # noqa: E402
+from usar_replay.process.mission_process import MissionLimits, MissionProcess  # noqa: E402
+from usar_replay.process.mission_target import resolve_target  # noqa: E402
+from usar_replay.sandbox.kernel_sandbox import bwrap_available  # noqa: E402
 
 MODES = {"bare": "off", "bwrap": "required"}
 

@@ -358,7 +358,7 @@ def test_sandbox_refuses_other_files_and_processes(tmp_path: Path) -> None:
     (own / "mine.txt").write_text("mine")
     (other / "theirs.txt").write_text("theirs")
     script = f"""
-from usar_replay.node.audit_guard import GuardPolicy
+from usar_replay.sandbox.audit_guard import GuardPolicy
 GuardPolicy(read_roots=({str(own)!r},), write_roots=({str(work)!r},),
               deny_roots=({str(tmp_path)!r},), own_roots=({str(own)!r},)).install()
 import os, subprocess

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.batch import machine
-from usar_replay.node import cpu_sets, kernel_pools, kernel_sandbox
+from usar_replay.sandbox import cpu_sets, kernel_pools, kernel_sandbox
 
 
 def test_this_machine_as_ci_has_it() -> None:

@@ -27,7 +27,7 @@ NOT_USAR_ERRORS = {
         "TimeoutException": "tf2's",
     },
     "node/node.py": {"ParameterNotDeclared": "rclpy's exception, raised in mission code"},
-    "node/audit_guard.py": {
+    "sandbox/audit_guard.py": {
         "GuardViolation": "raised in the mission's own code (a PermissionError)"
     },
     "node/boundary_check.py": {
@@ -92,7 +92,7 @@ def test_every_usar_error_is_defined_in_core_errors() -> None:
 @pytest.mark.parametrize(
     ("module", "name"),
     [
-        ("usar_replay.node.mission_process", "MissionEnded"),
+        ("usar_replay.process.mission_process", "MissionEnded"),
         ("usar_replay.world.detect", "DetectError"),
         ("usar_replay.ros1.building.debian", "MissingRos1"),
     ],

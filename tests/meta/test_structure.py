@@ -41,21 +41,28 @@ LAYERS: dict[str, frozenset[str]] = {
     "world": frozenset({"core"}),
     "log": frozenset({"core", "world"}),
     "sim": frozenset({"core", "world"}),
+    "sandbox": frozenset({"core"}),
     "node": frozenset({"core", "world"}),
     "api": frozenset({"core", "world", "node"}),
     "missions": frozenset({"core", "world", "node", "api"}),
+    "process": frozenset({"core", "world", "sandbox", "node"}),
     "grading": frozenset({"core", "world", "log"}),
-    "pipeline": frozenset({"core", "world", "log", "sim", "node", "grading"}),
-    "ros1": frozenset({"core", "world", "log", "sim", "node", "grading", "pipeline"}),
+    "pipeline": frozenset({"core", "world", "log", "sim", "sandbox", "node", "process", "grading"}),
+    "ros1": frozenset(
+        {"core", "world", "log", "sim", "sandbox", "node", "process", "grading", "pipeline"}
+    ),
     "viewer": frozenset({"core", "world", "log", "grading"}),
-    "code": frozenset({"core", "node", "ros1"}),
+    "code": frozenset({"core", "sandbox", "ros1"}),
     "batch": frozenset(
-        {"core", "world", "log", "sim", "node", "grading", "pipeline", "ros1", "code"}
+        {
+            *("core", "world", "log", "sim", "sandbox", "node", "process", "grading"),
+            *("pipeline", "ros1", "code"),
+        }
     ),
     "cli": frozenset(
         {
-            *("core", "world", "log", "sim", "node", "api", "grading", "pipeline", "ros1"),
-            *("viewer", "code", "batch"),
+            *("core", "world", "log", "sim", "sandbox", "node", "process", "api", "grading"),
+            *("pipeline", "ros1", "viewer", "code", "batch"),
         }
     ),
 }
@@ -65,9 +72,11 @@ PURPOSE = {
     "world": "the world as data and the course's infrastructure (scenario, planner, detector)",
     "log": "the MCAP file (reading, writing, the opened run, info, recover)",
     "sim": "the pybullet simulator and its camera",
-    "node": "the node API and the mission process",
+    "sandbox": "confining untrusted code (bubblewrap, cgroups v1/v2, CPU sets, run folder, guard)",
+    "node": "the rclpy-shaped node API",
     "api": "the one import for mission authors",
     "missions": "the built-in missions, written on the node API",
+    "process": "the mission process: usar's handle on it, its own side, the wire protocol",
     "grading": "rubrics, grades and their reports",
     "pipeline": "record and replay",
     "ros1": "a course's ROS 1 catkin package run against usar's world (build, bridge)",
@@ -77,7 +86,7 @@ PURPOSE = {
     "cli": "the usar command",
 }
 # Layers a mission process loads: they must not import a heavy back end, even indirectly.
-LIGHT_LAYERS = ("core", "world", "node", "api", "missions")
+LIGHT_LAYERS = ("core", "world", "sandbox", "node", "api", "missions", "process")
 HEAVY = ("pybullet", "mcap", "rerun")
 # The one layer that may import each heavy back end.
 HEAVY_HOME = {"pybullet": "sim", "mcap": "log", "rerun": "viewer"}
@@ -142,16 +151,16 @@ STRING_NAME = re.compile(rf"{PACKAGE}(\.\w+)+(:\w+)?")
 
 # Upward ties through a string that are not dependencies, each with why.
 STRING_TIES: dict[tuple[str, str], str] = {
-    ("usar_replay.node.worker", "usar_replay.api"): (
+    ("usar_replay.process.worker", "usar_replay.api"): (
         "preloaded in the mission process before the audit guard is on (numpy's import needs "
         "ctypes); the mission's own code is what imports the api"
     ),
     ("usar_replay.world.assignment", "usar_replay.missions.usar"): (
-        "an assignment's default mission as a module:function path (data): the node layer's "
+        "an assignment's default mission as a module:function path (data): the process layer's "
         "loader imports it inside the mission process"
     ),
     ("usar_replay.world.assignment", "usar_replay.missions.ros2_final"): (
-        "an assignment's default mission as a module:function path (data): the node layer's "
+        "an assignment's default mission as a module:function path (data): the process layer's "
         "loader imports it inside the mission process"
     ),
     ("usar_replay.log.run", "usar_replay.missions.usar"): (
@@ -367,8 +376,8 @@ UNTESTED: dict[str, str] = {
     "batch/run_one.py": "the job a batch engine runs: tests/batch/test_driver.py grades classes",
     "cli/commands/batch.py": "tests/batch/test_driver.py runs `usar batch`",
     "cli/commands/replay.py": "tests/e2e/test_tour.py and tests/e2e/test_examples.py run it",
-    "node/worker.py": (
-        "the mission's side: tests/node/test_mission_process.py (handshake, verdicts), "
+    "process/worker.py": (
+        "the mission's side: tests/process/test_mission_process.py (handshake, verdicts), "
         "tests/node/test_node.py (crash, hang, memory)"
     ),
     "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",

@@ -104,7 +104,7 @@ def test_a_tick_without_a_frame_is_sent_before_the_outputs_in_flight_are_read(
     tick in flight (the mission takes it up at once); one with a frame waits for them (the
     outputs may switch the course's detector). The log is the one the plain order gives."""
     from usar_replay.core import contract
-    from usar_replay.node.mission_process import MissionProcess
+    from usar_replay.process.mission_process import MissionProcess
 
     events: list[tuple[str, int, bool]] = []
     send, receive = MissionProcess.send, MissionProcess.receive

@@ -32,12 +32,12 @@ from conftest import one_room
 from usar_replay.cli import main as cli
 from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
-from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.mission_process import MissionEnded, MissionLimits
+from usar_replay.process.mission_process import MissionEnded, MissionLimits
 from usar_replay.ros1.building import tree
 from usar_replay.ros1.building.workspace import BuildLimits, cached_build, find_package
 from usar_replay.ros1.process import Ros1Options
 from usar_replay.ros1.record import record_ros1
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -290,7 +290,7 @@ def test_the_build_runs_in_the_runs_memory_and_cpu_set(tmp_path: Path) -> None:
         "the build of spread exceeded its memory limit for all its processes "
         "(256 MiB: --run-memory)"
     ), said
-    from usar_replay.node import cpu_sets
+    from usar_replay.sandbox import cpu_sets
 
     if len(cpu_sets.usable_cpus()) < 2:
         return

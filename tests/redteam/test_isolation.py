@@ -5,7 +5,7 @@ The course example package (``examples/ros1/usar_course``) is recorded on the on
 alone (``usar record --ros1``), then graded by ``usar batch --jobs 2`` twice: beside a copy of
 itself, and beside a Python team that burns CPU (a thread that spins and asks for every CPU,
 and a busy timer callback). Every message of every one of the package's logs must be the same
-bytes at the same log time: each run has its own CPU set (usar_replay/node/cpu_sets.py), the
+bytes at the same log time: each run has its own CPU set (usar_replay/sandbox/cpu_sets.py), the
 graph's real-time priority never leaves it, and pacing follows the graph, not the machine.
 
 Needs bubblewrap, Debian's ROS 1 and root (the CPU sets). Every run stops at
@@ -24,9 +24,9 @@ from clitools import run_batch, usar
 from conftest import one_room
 
 from usar_replay.log import bag
-from usar_replay.node import cpu_sets
-from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.ros1.building import debian
+from usar_replay.sandbox import cpu_sets
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 from usar_replay.world.scenario_toml import save
 
 ROOT = Path(__file__).resolve().parents[2]

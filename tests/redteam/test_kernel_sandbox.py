@@ -1,7 +1,7 @@
 """Red team: missions that attack the recorder, the batch and other teams, against the sandbox.
 
-Each attack of issue #21 that the kernel sandbox (usar_replay/node/kernel_sandbox.py) and the guard
-(usar_replay/node/audit_guard.py) answer is a tiny mission here. The ``record`` tests run the
+Each attack of issue #21 that the kernel sandbox (sandbox/kernel_sandbox.py) and the guard
+(usar_replay/sandbox/audit_guard.py) answer is a tiny mission here. The ``record`` tests run the
 mission with the kernel sandbox alone (``usar record`` has no guard), so they show what bwrap
 contains even when Python-level checks are bypassed; the batch test grades a class of attackers
 between two identical honest teams with both layers on, and shows that every attacker gets a verdict
@@ -28,9 +28,9 @@ from conftest import one_room
 
 from usar_replay.cli import main as cli
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.mission_process import MissionLimits
 from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.process.mission_process import MissionLimits
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -363,7 +363,7 @@ def _batch_attacks(out: Path, subs: Path, room: Path) -> dict[str, str]:
                 dir_fd=os.open({str(room.parent)!r}, os.O_RDONLY)))
         attempt("subs", lambda: os.listdir({str(subs)!r}))
         attempt("proc", lambda: open("/proc/1/environ", "rb").read())
-        attempt("tamper", lambda: setattr(sys.modules["usar_replay.node.audit_guard"],
+        attempt("tamper", lambda: setattr(sys.modules["usar_replay.sandbox.audit_guard"],
                 "_PROCESS_EVENTS", frozenset()) or os.fork())
         """,
     }

@@ -34,10 +34,10 @@ from usar_replay.core import contract, msgs
 from usar_replay.core.settings import RunSettings
 from usar_replay.grading.grade import GradeReport, grade_file
 from usar_replay.log.run import open_run
-from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.pipeline.record import RecordResult, record
 from usar_replay.pipeline.replay import replay
 from usar_replay.ros1.building import debian
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 from usar_replay.world.ros2_world import ros2_final_world
 from usar_replay.world.scenario import Scenario
 from usar_replay.world.scenario_toml import save

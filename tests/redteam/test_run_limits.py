@@ -28,17 +28,17 @@ from proctools import wait_for
 from usar_replay.core import msgs
 from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
-from usar_replay.node import cpu_sets
-from usar_replay.node.kernel_sandbox import (
+from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.process.mission_process import MissionLimits
+from usar_replay.ros1.pacing.scheduling import OneCpu
+from usar_replay.sandbox import cpu_sets
+from usar_replay.sandbox.kernel_sandbox import (
     KernelSandbox,
     SandboxLimits,
     bwrap_available,
     python_binds,
     sandbox_argv,
 )
-from usar_replay.node.mission_process import MissionLimits
-from usar_replay.pipeline.record import RecordResult, record
-from usar_replay.ros1.pacing.scheduling import OneCpu
 
 _OK, _WHY = bwrap_available()
 pytestmark = pytest.mark.skipif(
@@ -178,7 +178,7 @@ import sys
 from multiprocessing.connection import Connection
 
 from usar_replay.api import Node
-from usar_replay.node.protocol import FrameKind, outputs_frame, ready_frame, unpack
+from usar_replay.process.protocol import FrameKind, outputs_frame, ready_frame, unpack
 
 
 def main() -> None:

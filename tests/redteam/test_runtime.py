@@ -21,9 +21,9 @@ from conftest import one_room
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.log.run import open_run
-from usar_replay.node.kernel_sandbox import bwrap_available
-from usar_replay.node.mission_process import MissionLimits
 from usar_replay.pipeline.record import record
+from usar_replay.process.mission_process import MissionLimits
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 
 ROOT = Path(__file__).resolve().parents[2]
 _OK, _WHY = bwrap_available()
@@ -38,7 +38,7 @@ import struct, sys
 from multiprocessing.connection import Connection
 
 from usar_replay.api import Node
-from usar_replay.node.protocol import ready_frame
+from usar_replay.process.protocol import ready_frame
 
 
 def main() -> None:

@@ -185,9 +185,9 @@ def test_the_log_does_not_depend_on_where_the_build_is_kept(
     ``tests/e2e/test_class_folder.py::test_engines_agree_for_a_ros1_team`` holds the same, two
     private build folders of two output folders giving one log sha256."""
     from usar_replay.core.settings import RunSettings
-    from usar_replay.node.kernel_sandbox import bwrap_available
     from usar_replay.ros1.process import Ros1Options
     from usar_replay.ros1.record import record_ros1
+    from usar_replay.sandbox.kernel_sandbox import bwrap_available
 
     if not bwrap_available()[0]:
         pytest.skip("only a sandboxed run is path-independent (no bubblewrap here)")

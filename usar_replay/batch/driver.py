@@ -133,9 +133,9 @@ def plan_class(
 
 def require_sandbox() -> None:
     """Refuse to grade untrusted code without the kernel sandbox
-    (usar_replay.node.kernel_sandbox): a :class:`UsageError` (exit 2) that says how to get it, or to
+    (sandbox.kernel_sandbox): a :class:`UsageError` (exit 2) that says how to get it, or to
     go without on purpose."""
-    from usar_replay.node.kernel_sandbox import INSTALL_HINT, bwrap_available
+    from usar_replay.sandbox.kernel_sandbox import INSTALL_HINT, bwrap_available
 
     ok, why = bwrap_available()
     if not ok:

@@ -30,8 +30,8 @@ from usar_replay.batch.plan import RunJob, RunResult, read_json
 from usar_replay.batch.run_state import clean_environment
 from usar_replay.core.errors import UsageError
 from usar_replay.core.safe_text import team_lines
-from usar_replay.node import cpu_sets
-from usar_replay.node.run_folder import unmount_under
+from usar_replay.sandbox import cpu_sets
+from usar_replay.sandbox.run_folder import unmount_under
 
 __all__ = ["Engine", "LocalEngine", "RayEngine", "execute", "make_engine", "share_cpus"]
 
@@ -149,7 +149,7 @@ class Engine(Protocol):
 def share_cpus(jobs: int, free: int, usable: int) -> tuple[int, int]:
     """(runs at a time, CPUs per run) for ``--jobs`` on ``free`` CPUs no other usar run holds
     out of ``usable`` ones (0: no CPU sets here, nothing claimed). Each run gets a CPU set of its
-    own (:mod:`usar_replay.node.cpu_sets`), so a batch never runs more runs at once than there
+    own (:mod:`usar_replay.sandbox.cpu_sets`), so a batch never runs more runs at once than there
     are free CPUs (one at a time, waiting for a set, when none is free now), and splits them
     evenly: on 2 CPUs ``--jobs 2`` is one each, ``--jobs 1`` two for the one run."""
     if usable <= 0:

@@ -16,8 +16,8 @@ import resource
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.node import cpu_sets, kernel_pools, kernel_sandbox
 from usar_replay.ros1.building import debian
+from usar_replay.sandbox import cpu_sets, kernel_pools, kernel_sandbox
 
 __all__ = ["Finding", "check", "isolated", "warning"]
 

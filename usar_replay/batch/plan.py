@@ -124,8 +124,8 @@ class JobLimits:
     wall_s: float = 3600.0
     """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
     sandbox: bool = True
-    """Run the mission in the kernel sandbox (usar_replay.node.kernel_sandbox) with the audit
-    guard (usar_replay.node.audit_guard) on; ``usar batch --no-sandbox`` turns both off."""
+    """Run the mission in the kernel sandbox (usar_replay.sandbox.kernel_sandbox) with the audit
+    guard (usar_replay.sandbox.audit_guard) on; ``usar batch --no-sandbox`` turns both off."""
     max_log_mib: int = 2048
     """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
     grade_s: float = 600.0

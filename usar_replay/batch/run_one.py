@@ -41,7 +41,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.outfiles import write_text
-from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB
+from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
@@ -218,8 +218,7 @@ def _start(job: RunJob, log: Path) -> dict[str, str]:
 
 
 def _mission_limits(job: RunJob) -> Any:
-    from usar_replay.node.audit_guard import GuardPolicy
-    from usar_replay.node.mission_process import (
+    from usar_replay.process.mission_process import (
         DEFAULT_HOLD_WALL_S,
         DEFAULT_MAX_CAPPED,
         DEFAULT_MAX_HOLDS,
@@ -227,7 +226,8 @@ def _mission_limits(job: RunJob) -> Any:
         DEFAULT_RUN_MEMORY_MB,
         MissionLimits,
     )
-    from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB
+    from usar_replay.sandbox.audit_guard import GuardPolicy
+    from usar_replay.sandbox.run_folder import DEFAULT_RUN_FOLDER_MB
 
     lim = job.limits
     guard = None

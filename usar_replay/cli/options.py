@@ -19,7 +19,7 @@ from usar_replay.core.errors import UsageError
 if TYPE_CHECKING:
     from usar_replay.core.settings import RunSettings, Thresholds
     from usar_replay.grading.verdict import GradeReport
-    from usar_replay.node.mission_process import MissionLimits
+    from usar_replay.process.mission_process import MissionLimits
     from usar_replay.world.scenario import Scenario
     from usar_replay.world.world_key import WorldKey
 
@@ -171,7 +171,7 @@ def run_settings(args: argparse.Namespace, base: RunSettings) -> RunSettings:
 
 
 def limits(args: argparse.Namespace) -> MissionLimits:
-    from usar_replay.node.mission_process import MissionLimits
+    from usar_replay.process.mission_process import MissionLimits
 
     if not (args.tick_timeout > 0):
         raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
@@ -212,7 +212,7 @@ def check_run_limits(args: argparse.Namespace) -> None:
 
 def grader_paths(args: argparse.Namespace) -> tuple[str, ...]:
     """Every file the grader passed in (the world, its key, the settings, the thresholds, the
-    output): the sandboxed mission never reads one, wherever it lies (usar_replay.node.hide)."""
+    output): the sandboxed mission never reads one, wherever it lies (usar_replay.sandbox.hide)."""
     names = ("scenario", "world_key", "settings", "thresholds", "out", "json", "junit", "csv")
     return tuple(str(getattr(args, n)) for n in names if getattr(args, n, None))
 

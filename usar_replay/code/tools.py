@@ -4,7 +4,7 @@ team's files: on a copy, in the kernel sandbox when there is one, with limits, o
 Why: the tools are trusted programs, their input is not. doxygen, cppcheck and clang-format
 have had crashes and unbounded loops on crafted input, and a team's ``Doxyfile`` could name
 any path. So a tool runs on a copy of the team's files in a fresh folder (the only folder it
-may write), in :mod:`usar_replay.node.kernel_sandbox`'s bubblewrap sandbox when it works here
+may write), in :mod:`usar_replay.sandbox.kernel_sandbox`'s bubblewrap sandbox when it works here
 (no network, the system read-only, uid 65534, no capabilities; ``USAR_SANDBOX=off`` turns it
 off), always with a wall-clock limit and rlimits set by ``prlimit`` before it starts (address
 space, CPU seconds, file size, open files, no core files). Past a limit the run says which: a team's
@@ -77,7 +77,7 @@ def missing(tool: str) -> str:
 def sandboxed() -> bool:
     """Does a tool run in the kernel sandbox here (bubblewrap works, ``USAR_SANDBOX`` is not
     ``off``)?"""
-    from usar_replay.node import kernel_sandbox
+    from usar_replay.sandbox import kernel_sandbox
 
     if os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
         return False
@@ -131,7 +131,7 @@ def run_tool(
     box = sandboxed() if sandbox is None else sandbox
     cmd = [*_prlimit(lim), *argv]
     if box:
-        from usar_replay.node import kernel_sandbox
+        from usar_replay.sandbox import kernel_sandbox
 
         cmd = kernel_sandbox.sandbox_argv(
             cmd, ro_binds=list(ro_binds), work_dir=str(work), env=_ENV

@@ -70,7 +70,7 @@ class MissingTopic(LogError):
 class MissionEnded(UsarError):
     """The mission process ended the run: ``verdict`` is ``crashed``, ``hung``,
     ``out_of_memory`` or ``refused``; ``detail`` is the user's traceback or the reason.
-    (Raised by :mod:`usar_replay.node.mission_process`, which re-exports it.)"""
+    (Raised by :mod:`usar_replay.process.mission_process`, which re-exports it.)"""
 
     exit_code = 4
 
@@ -127,7 +127,7 @@ class ProtocolMismatch(MissionEnded):
     wire protocol than the recorder's: two installations of usar mixed, or a mission that
     writes to usar's socket itself. Either way the run ends as ``refused`` with this reason (a
     mission can forge any frame, so this is a verdict like any other, never an error outside
-    the run). (Raised by :mod:`usar_replay.node.protocol`.)"""
+    the run). (Raised by :mod:`usar_replay.process.protocol`.)"""
 
     def __init__(self, detail: str) -> None:
         super().__init__("refused", detail)

@@ -4,9 +4,9 @@ The loop is the design's data flow, sim -> messages -> mission -> messages -> si
 only. At each control tick (``record.control_hz``) the simulator's messages (``/tf``, a camera frame
 when one is due, odometry; ``/tf_static`` and ``/map`` at the first tick) are written to the log as
 the ``sim`` publisher and handed, as the same CDR bytes, to the mission process
-(:mod:`usar_replay.node.mission_process`) as one tick; whatever the mission publishes is written at
-the same sim time as the ``mission`` publisher, and its ``cmd_vel``s go to the simulator before the
-next physics step. Ground truth is written as the ``recorder`` publisher and never reaches the
+(:mod:`~usar_replay.process.mission_process`) as a tick; whatever the mission publishes is written
+at the same sim time as the ``mission`` publisher, and its ``cmd_vel``s go to the simulator before
+the next physics step. Ground truth is written as the ``recorder`` publisher and never reaches the
 mission. Because the mission sees exactly the logged bytes, a replay from the log reproduces its
 outputs bit for bit.
 
@@ -44,15 +44,15 @@ from usar_replay.grading.stored_markers import StoredMarkers
 from usar_replay.grading.verdict import FoundMarker
 from usar_replay.log import bag
 from usar_replay.log.run import MissionInfo
-from usar_replay.node.mission_process import (
+from usar_replay.pipeline.course_detector import CourseDetector, course_view, mission_inputs
+from usar_replay.pipeline.status_line import NodeLines
+from usar_replay.process.mission_process import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
     hide_from_mission,
 )
-from usar_replay.node.mission_target import MissionTarget, resolve_target
-from usar_replay.pipeline.course_detector import CourseDetector, course_view, mission_inputs
-from usar_replay.pipeline.status_line import NodeLines
+from usar_replay.process.mission_target import MissionTarget, resolve_target
 from usar_replay.sim.camera import encode_image
 from usar_replay.sim.course_view import CourseCamera
 from usar_replay.sim.simulator import SimRobot, Simulator

@@ -4,7 +4,7 @@ The recorded *inputs* (everything the simulator published: ``/tf_static``, ``/ma
 odometry, ``CameraInfo``, camera frames, and the course detector's ``/fiducial_transforms``, which
 replay re-runs on the recorded frames, compares with the recorded ones and hands to the mission:
 :mod:`usar_replay.pipeline.course_detector`) are handed, tick by tick and as the very bytes that
-were logged, to a fresh mission process (:mod:`usar_replay.node.mission_process`), the same code
+were logged, to a fresh mission process (:mod:`usar_replay.process.mission_process`), the same code
 path as live. Every message it publishes is compared with the recorded one on the same topic at the
 same sim time: the same CDR bytes. The report gives counts per topic, the first divergence (topic,
 sim time, field, both values) and a sha256 digest of the replayed outputs (:func:`outputs_digest`
@@ -48,14 +48,14 @@ from usar_replay.core.safe_text import safe
 from usar_replay.core.settings import RunSettings
 from usar_replay.log import bag
 from usar_replay.log.run import Run, open_run
-from usar_replay.node.mission_process import (
+from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.process.mission_process import (
     MissionEnded,
     MissionLimits,
     MissionProcess,
     hide_from_mission,
 )
-from usar_replay.node.mission_target import MissionTarget, resolve_target
-from usar_replay.pipeline.course_detector import CourseDetector, mission_inputs
+from usar_replay.process.mission_target import MissionTarget, resolve_target
 from usar_replay.sim.course_view import CourseCamera
 from usar_replay.world.assignment import of as assignment_of
 

@@ -2,7 +2,7 @@
 
 ``python -m usar_replay.ros1.bridge FD CONFIG.json``, started by
 :class:`usar_replay.ros1.process.Ros1Process` (in its own network namespace where possible).
-To the recorder it speaks the mission process's tick protocol (:mod:`usar_replay.node.protocol`)
+To the recorder it speaks the mission process's tick protocol (:mod:`usar_replay.process.protocol`)
 on socket FD; to the student's graph it is what the course's ``multiple_robots.launch`` starts:
 
 * a private ROS master on a port of its own, the parameters as the course's launch sets them
@@ -65,8 +65,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from usar_replay.core import contract, msgs
-from usar_replay.node import kernel_sandbox
-from usar_replay.node.protocol import (
+from usar_replay.process.protocol import (
     FLAG_CAPPED,
     FLAG_DETECTIONS_READ,
     FLAG_HELD,
@@ -76,7 +75,7 @@ from usar_replay.node.protocol import (
     text_frame,
     unpack,
 )
-from usar_replay.node.wire_io import send_within
+from usar_replay.process.wire_io import send_within
 from usar_replay.ros1 import launch_filter, nav_params, run_files
 from usar_replay.ros1.amcl import AmclPose
 from usar_replay.ros1.building import standins
@@ -93,6 +92,7 @@ from usar_replay.ros1.pacing.shutdown_watch import ShutdownWatch, node_pids
 from usar_replay.ros1.pacing.watcher import Watcher
 from usar_replay.ros1.receiving import Inbox
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
+from usar_replay.sandbox import kernel_sandbox
 
 if TYPE_CHECKING:
     from usar_replay.ros1.publishing import Publishing
@@ -133,7 +133,7 @@ class Bridge:
     ) -> None:
         self.conn = conn
         # every write to the recorder ends by this deadline: a socket nobody reads (a node that
-        # took it) must not block the bridge for good (usar_replay.node.wire_io)
+        # took it) must not block the bridge for good (usar_replay.process.wire_io)
         self.write_timeout_s = float(setup.get("tick_timeout_s", 10.0))
         self.config = config
         self.parameters: dict[str, Any] = setup["parameters"]
@@ -182,7 +182,7 @@ class Bridge:
         """Ticks whose wall cap ran out before the graph went idle (a repeatability warning)."""
         self.holds = 0
         """Ticks held for a shutdown; both counts go to the recorder with each tick's outputs
-        (:data:`usar_replay.node.protocol.FLAG_HELD`, ``FLAG_CAPPED``), which budgets them."""
+        (:data:`usar_replay.process.protocol.FLAG_HELD`, ``FLAG_CAPPED``), which budgets them."""
         self.waited_s = 0.0
         """Wall seconds spent waiting for the graph to go idle (the bridge's log says)."""
         self._master: Any = None

@@ -18,7 +18,7 @@ import functools
 import shutil
 from collections.abc import Sequence
 
-from usar_replay.node.kernel_sandbox import succeeds
+from usar_replay.sandbox.kernel_sandbox import succeeds
 
 __all__ = ["isolated_command", "netns_available"]
 

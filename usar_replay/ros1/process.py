@@ -1,12 +1,12 @@
 """The recorder's side of a ROS 1 run: the bridge process takes the mission process's place.
 
-:class:`Ros1Process` is a :class:`usar_replay.node.mission_process.MissionProcess` whose process is
-the bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the same socket, the same
-tick protocol, the same checks on what comes back (a student's ``/tf`` that moves a simulator frame
-is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that dies is ``crashed``
-with its output, one that stops answering is ``hung``). The package was built before
-(:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay read-only,
-in the kernel sandbox at the fixed paths they were built at
+:class:`Ros1Process` is a :class:`~usar_replay.process.mission_process.MissionProcess` whose
+process is the bridge (:mod:`usar_replay.ros1.bridge`) instead of a Python mission: the same
+socket, the same tick protocol, the same checks on what comes back (a student's ``/tf`` that moves
+a simulator frame is ``refused``, a non-finite ``cmd_vel`` too), the same verdicts (a graph that
+dies is ``crashed`` with its output, one that stops answering is ``hung``). The package was built
+before (:mod:`usar_replay.ros1.record`); the run mounts the built workspace and usar's underlay
+read-only, in the kernel sandbox at the fixed paths they were built at
 (:mod:`usar_replay.ros1.building.layout`).
 """
 
@@ -32,10 +32,9 @@ from usar_replay.log.ros1_run import (
     Ros1Run,
     TargetReplaced,
 )
-from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
-from usar_replay.node.mission_target import MissionTarget
-from usar_replay.node.protocol import Wire
-from usar_replay.node.run_folder import RunFolder
+from usar_replay.process.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
+from usar_replay.process.mission_target import MissionTarget
+from usar_replay.process.protocol import Wire
 from usar_replay.ros1 import run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
 from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
@@ -45,6 +44,7 @@ from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
 from usar_replay.ros1.pacing import watcher
 from usar_replay.ros1.pacing.scheduling import OneCpu
+from usar_replay.sandbox.run_folder import RunFolder
 
 __all__ = ["Ros1Options", "Ros1Process", "build_limits_for", "ros1_target"]
 

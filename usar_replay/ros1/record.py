@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.core.settings import RunSettings
-from usar_replay.node.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
 from usar_replay.pipeline.record import BuildLog, Progress, RecordResult, record, with_latency
+from usar_replay.process.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
 from usar_replay.ros1 import start
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import (

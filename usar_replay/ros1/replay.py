@@ -27,8 +27,8 @@ from usar_replay.core.errors import MissionEnded, UsageError
 from usar_replay.core.safe_text import safe_line
 from usar_replay.log import ros1_run
 from usar_replay.log.run import Run
-from usar_replay.node.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
-from usar_replay.node.mission_target import MissionTarget
+from usar_replay.process.mission_process import MissionLimits, MissionProcess, uses_kernel_sandbox
+from usar_replay.process.mission_target import MissionTarget
 from usar_replay.ros1 import nav_params
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import Package, cached_build, find_package, package_sha256

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.cli.main import main
-from usar_replay.node import cpu_sets
+from usar_replay.sandbox import cpu_sets
 
 
 def test_doctor_says_each_part(capsys: pytest.CaptureFixture[str]) -> None:

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.node.kernel_sandbox import bwrap_available
 from usar_replay.ros1.building.jail import BuildLimits, _prlimit, run_jailed
+from usar_replay.sandbox.kernel_sandbox import bwrap_available
 
 ENV = {"PATH": "/usr/bin:/bin", "LANG": "C"}
 

@@ -18,8 +18,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from usar_replay.core.settings import RunSettings
-    from usar_replay.node.mission_process import MissionLimits
     from usar_replay.pipeline.record import Progress, RecordResult
+    from usar_replay.process.mission_process import MissionLimits
     from usar_replay.world.scenario import Scenario
 
 __all__ = ["add_parser", "run"]

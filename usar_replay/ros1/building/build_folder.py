@@ -19,7 +19,7 @@ import os
 import shutil
 from pathlib import Path
 
-from usar_replay.node.run_folder import mount_tmpfs, tmpfs_full, unmount
+from usar_replay.sandbox.run_folder import mount_tmpfs, tmpfs_full, unmount
 
 __all__ = ["BUILD_FOLDER_INODES", "DEFAULT_BUILD_FOLDER_MB", "BuildFolder"]
 

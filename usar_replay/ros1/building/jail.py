@@ -2,11 +2,11 @@
 
 Why: a package's ``CMakeLists.txt`` runs whatever it likes at build time (``execute_process``),
 so the build is the team's code as much as its nodes are. It runs as a run does
-(:mod:`usar_replay.node.kernel_sandbox`): uid 65534 with no capabilities, no network, the system and
-Debian's ROS read-only, only its own workspace writable, a pids cgroup and rlimits (address
-space, CPU seconds per process, file size, open files, no core files) set by ``prlimit`` before
-catkin starts, and a wall-clock limit. usar reads its output from a pipe and writes nothing into
-the workspace: a file the build could replace with a link is never opened by usar.
+(:mod:`~usar_replay.sandbox.kernel_sandbox`): uid 65534 with no capabilities, no network, the
+system and Debian's ROS read-only, only its own workspace writable, a pids cgroup and rlimits
+(address space, CPU seconds per process, file size, open files, no core files) set by ``prlimit``
+before catkin starts, and a wall-clock limit. usar reads its output from a pipe and writes nothing
+into the workspace: a file the build could replace with a link is never opened by usar.
 
 Past a limit the build is ``build_failed`` with the limit named (:attr:`BuildOutcome.limit`).
 """
@@ -23,7 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.node import cpu_sets, kernel_sandbox
+from usar_replay.sandbox import cpu_sets, kernel_sandbox
 
 __all__ = ["BUILD_WALL_S", "BuildLimits", "BuildOutcome", "run_jailed"]
 
@@ -70,7 +70,7 @@ class BuildOutcome:
 
 
 def _prlimit(limits: Mapping[str, int]) -> list[str]:
-    """``prlimit`` options for :meth:`usar_replay.node.kernel_sandbox.KernelSandbox.rlimits`."""
+    """``prlimit`` options for :meth:`usar_replay.sandbox.kernel_sandbox.KernelSandbox.rlimits`."""
     out = ["/usr/bin/prlimit"]
     for name, value in limits.items():
         if value <= 0 and name != "CORE":

@@ -9,7 +9,7 @@ machine or another batch engine, and ``usar replay`` elsewhere would report a di
 
 So, in the sandbox's own mount namespace, the build and the run see the package's workspace at
 :data:`WORKSPACE` and usar's underlay (``fiducial_msgs``) at :data:`UNDERLAY`, whatever host
-folders hold them (:func:`usar_replay.node.kernel_sandbox.sandbox_argv`'s ``ro_mounts`` and
+folders hold them (:func:`usar_replay.sandbox.kernel_sandbox.sandbox_argv`'s ``ro_mounts`` and
 ``work_at``). A workspace built there works only mounted there, so the layout is part of the
 build cache's key (:data:`VERSION`). Without a kernel sandbox (no bubblewrap, or
 ``USAR_SANDBOX=off``) there is no mount namespace: the build and the run use the host's paths,

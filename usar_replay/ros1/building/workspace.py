@@ -322,7 +322,7 @@ def sandboxed() -> bool:
     """Does a build run in the kernel sandbox here? (bubblewrap works, ``USAR_SANDBOX`` is not
     ``off``): only then can it be built at :mod:`~usar_replay.ros1.building.layout`'s fixed
     paths."""
-    from usar_replay.node import kernel_sandbox
+    from usar_replay.sandbox import kernel_sandbox
 
     ok, _ = kernel_sandbox.bwrap_available()
     return ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"

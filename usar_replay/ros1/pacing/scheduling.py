@@ -9,7 +9,7 @@ the same every run. SCHED_RR (priority 1, the kernel's long round-robin slice) i
 plain SCHED_FIFO livelocked once at start-up in the issue's probes, so not that. Real-time
 priority also keeps two CPU hogs beside the run from starving it.
 
-Real-time priority stays inside the run's own CPU set (:mod:`usar_replay.node.cpu_sets`):
+Real-time priority stays inside the run's own CPU set (:mod:`usar_replay.sandbox.cpu_sets`):
 the graph's CPU is the set's last, no other run is given it, and a node that widens its
 affinity only reaches the set's other CPUs. Without a set of its own the graph is only pinned
 (no SCHED_RR: it could starve a CPU someone else needs). The policy carries

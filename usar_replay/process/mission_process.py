@@ -6,17 +6,17 @@ simulator, the scenario's marker list or ground truth; its crash, hang or memory
 *its* process, and usar records a verdict (``crashed``, ``hung``, ``out_of_memory``,
 ``refused``) in the log instead of crashing itself. Live (``usar record``) and in replay the
 same code path runs: :class:`MissionProcess` hands the process one tick at a time and gets back
-what the mission published, as frames of :mod:`usar_replay.node.protocol`. Outputs come back
+what the mission published, as frames of :mod:`usar_replay.process.protocol`. Outputs come back
 as (topic, type, CDR) triples that are decoded with usar's own schemas and checked against the
 :class:`PublishPolicy` again (:mod:`~usar_replay.node.boundary_check`): nothing from the mission
 process is ever unpickled.
 
-Where: in the kernel sandbox (bubblewrap, :mod:`usar_replay.node.kernel_sandbox`) by default,
+Where: in the kernel sandbox (bubblewrap, :mod:`usar_replay.sandbox.kernel_sandbox`) by default,
 with the mission's file's folder read-only, a private work dir as its working directory, no
 network, no view of any usar process and a handful of environment variables; the socket to the
 parent is the one thing it shares with usar (see :attr:`MissionLimits.kernel_sandbox`). Inside
-it, the audit guard (:mod:`usar_replay.node.audit_guard`, :attr:`MissionLimits.guard`) watches
-what the mission's Python code opens. What runs there is :mod:`usar_replay.node.worker`, or
+it, the audit guard (:mod:`usar_replay.sandbox.audit_guard`, :attr:`MissionLimits.guard`) watches
+what the mission's Python code opens. What runs there is :mod:`usar_replay.process.worker`, or
 another program that speaks the protocol (:meth:`MissionProcess.command`: the ROS 1 bridge).
 
 Wall-clock limits only decide verdicts; they never reach a message.
@@ -42,16 +42,17 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissionEnded, ProtocolMismatch, UsageError
-from usar_replay.node import cpu_sets, hide, kernel_sandbox, protocol
-from usar_replay.node.audit_guard import GuardPolicy
 from usar_replay.node.boundary_check import MAX_FRAME_BYTES, BoundaryCheck, OutputRefused
 from usar_replay.node.executor import PublishPolicy
-from usar_replay.node.kernel_sandbox import KernelSandbox, SandboxLimits
-from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
-from usar_replay.node.mission_target import MissionTarget
-from usar_replay.node.protocol import FrameKind, Wire
-from usar_replay.node.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
-from usar_replay.node.wire_io import send_within
+from usar_replay.process import protocol
+from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
+from usar_replay.process.mission_target import MissionTarget
+from usar_replay.process.protocol import FrameKind, Wire
+from usar_replay.process.wire_io import send_within
+from usar_replay.sandbox import cpu_sets, hide, kernel_sandbox
+from usar_replay.sandbox.audit_guard import GuardPolicy
+from usar_replay.sandbox.kernel_sandbox import KernelSandbox, SandboxLimits
+from usar_replay.sandbox.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
 
 __all__ = [
     "DEFAULT_HOLD_WALL_S",
@@ -97,9 +98,9 @@ class MissionLimits:
     process is killed and the run is ``hung`` (a batch sets it: see usar_replay.batch.plan)."""
     guard: GuardPolicy | None = None
     """The audit guard's policy: files, processes and network the mission's Python code may not
-    touch (usar_replay.node.audit_guard); None: no guard."""
+    touch (usar_replay.sandbox.audit_guard); None: no guard."""
     kernel_sandbox: str = "auto"
-    """The kernel sandbox (usar_replay.node.kernel_sandbox): ``auto`` uses it when bwrap works
+    """The kernel sandbox (usar_replay.sandbox.kernel_sandbox): ``auto`` uses it when bwrap works
     here (else one warning on stderr, and the environment variable ``USAR_SANDBOX=off`` turns
     it off), ``required`` refuses to start without it (a batch), ``off`` never uses it."""
     read_roots: tuple[str, ...] = ()
@@ -112,14 +113,14 @@ class MissionLimits:
     hidden: tuple[str, ...] = ()
     """Files and folders the sandboxed mission may not read even when they lie in a readable
     folder (the log being written or replayed, and every file the grader passed in: the
-    world, the world key, the settings, the thresholds, the output; :mod:`~usar_replay.node.hide`
+    world, the world key, the settings, the thresholds, the output; :mod:`~usar_replay.sandbox.hide`
     also finds their other hard-linked names)."""
     work_dir: str = ""
     """The sandboxed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
     max_log_mib: int = DEFAULT_MAX_LOG_MIB
     """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
-    (:mod:`usar_replay.node.log_budget`)."""
+    (:mod:`usar_replay.process.log_budget`)."""
     run_memory_mb: int = DEFAULT_RUN_MEMORY_MB
     """Memory of the whole run in the kernel sandbox, MiB (0: none): every process of it and
     the files it writes to its tmpfs mounts (its memory cgroup); past it: ``out_of_memory``."""
@@ -127,7 +128,7 @@ class MissionLimits:
     """Processes and threads of the run together (its pids cgroup); reaching it: ``refused``."""
     run_folder_mb: int = DEFAULT_RUN_FOLDER_MB
     """Size of the run's writable folder, MiB (a tmpfs; 0: a plain folder); filling it:
-    ``refused`` (:mod:`usar_replay.node.run_folder`)."""
+    ``refused`` (:mod:`usar_replay.sandbox.run_folder`)."""
     max_holds: int = DEFAULT_MAX_HOLDS
     """Ticks the ROS 1 bridge may hold for a node's shutdown (each up to 6 s of wall time);
     past it the run is ``hung`` (0: no budget)."""
@@ -141,7 +142,7 @@ class MissionLimits:
     wall_s: float = 0.0
     """Wall seconds for the whole run, start-up included (0: none); past it: ``wall_limit``."""
     cpus: int = 0
-    """CPUs of the run's own CPU set (:mod:`usar_replay.node.cpu_sets`; 0: two when free, else
+    """CPUs of the run's own CPU set (:mod:`usar_replay.sandbox.cpu_sets`; 0: two when free, else
     one). A batch gives each run its share."""
 
 
@@ -369,10 +370,10 @@ class MissionProcess:
 
     def command(self, fd: int) -> list[str]:
         """The command that serves the tick protocol on socket ``fd``: here a fresh interpreter
-        running :mod:`usar_replay.node.worker`. Another front end (the ROS 1 bridge,
+        running :mod:`usar_replay.process.worker`. Another front end (the ROS 1 bridge,
         :mod:`usar_replay.ros1.process`) starts its own program here; :attr:`kernel_sandbox` is
         already decided when this is asked."""
-        return [sys.executable, "-m", "usar_replay.node.worker", str(fd)]
+        return [sys.executable, "-m", "usar_replay.process.worker", str(fd)]
 
     def _wait_ready(self) -> None:
         """The process's first frame: ready, of this protocol version (else it ends here)."""
@@ -560,7 +561,7 @@ class MissionProcess:
     def _send_frame(self, frame: bytes, timeout_s: float, doing: str) -> None:
         """Write one frame to the process within ``timeout_s`` wall seconds, or end it as
         ``hung``: a process that stops reading its socket must not block the recorder in a
-        write (:mod:`usar_replay.node.wire_io`)."""
+        write (:mod:`usar_replay.process.wire_io`)."""
         if not send_within(self._conn, frame, timeout_s):
             self._proc.kill()
             self._proc.wait()

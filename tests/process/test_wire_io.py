@@ -1,4 +1,4 @@
-"""node/wire_io: a frame written on a real socket pair, read back by ``recv_bytes``, or cut off
+"""process/wire_io: a frame written on a real socket pair, read back by ``recv_bytes``, or cut off
 by its deadline when nobody reads."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from multiprocessing.connection import Connection
 
 import pytest
 
-from usar_replay.node.wire_io import _header, send_within
+from usar_replay.process.wire_io import _header, send_within
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""node/run_folder: the run's folder is a size-limited tmpfs, and a full one is noticed."""
+"""sandbox/run_folder: the run's folder is a size-limited tmpfs, and a full one is noticed."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.node.run_folder import RunFolder, unmount_under
+from usar_replay.sandbox.run_folder import RunFolder, unmount_under
 
 
 def test_a_run_folder_has_a_total_size_and_says_when_it_is_full() -> None:

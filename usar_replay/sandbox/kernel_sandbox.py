@@ -1,7 +1,7 @@
 """The kernel sandbox a mission process runs in: bubblewrap (``bwrap``) namespaces and limits.
 
 Why: a mission is untrusted code (a team's, graded against a world it must not see). The
-in-process audit guard (:mod:`usar_replay.node.audit_guard`) sees only what Python code does; a C
+in-process audit guard (:mod:`usar_replay.sandbox.audit_guard`) sees only what Python code does; a C
 extension, ``_posixsubprocess`` or ``/proc/<pid>/mem`` walk past it. In its own user, PID,
 IPC, UTS, mount, network and cgroup namespaces, as uid 65534 with no capabilities, the process
 sees only what is mounted for it: the Python install, the packages, its own submission (all
@@ -37,9 +37,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from usar_replay.node import kernel_pools
-from usar_replay.node.cpu_sets import CpuSet, remove_cgroup
-from usar_replay.node.kernel_pools import PoolLimits, succeeds
+from usar_replay.sandbox import kernel_pools
+from usar_replay.sandbox.cpu_sets import CpuSet, remove_cgroup
+from usar_replay.sandbox.kernel_pools import PoolLimits, succeeds
 
 __all__ = [
     "INSTALL_HINT",
@@ -178,7 +178,7 @@ def sandbox_argv(
     the whole environment (bwrap starts from an empty one); ``hidden``: existing files and
     folders (real paths) under a mounted folder that the process must not read (the log being
     written, the grader's files next to the mission's file: /dev/null is mounted over a file,
-    an empty read-only tmpfs over a folder; :mod:`usar_replay.node.hide` finds them);
+    an empty read-only tmpfs over a folder; :mod:`usar_replay.sandbox.hide` finds them);
     ``network``: ``none`` and ``loopback`` both give a network namespace of its own, whose
     loopback reaches only processes in the same sandbox (a ROS graph started in it); nothing
     outside is reachable either way. ``info_fd``: where bwrap writes the sandbox's first

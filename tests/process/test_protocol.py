@@ -11,8 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from usar_replay.core.errors import MissionEnded, ProtocolMismatch
-from usar_replay.node import protocol
-from usar_replay.node.protocol import FrameKind
+from usar_replay.process import protocol
+from usar_replay.process.protocol import FrameKind
 
 # the frame kinds' bytes are the protocol: a change here is a new PROTOCOL_VERSION
 KIND_BYTES = {

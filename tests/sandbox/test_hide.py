@@ -1,4 +1,4 @@
-"""node/hide: the grader's files found by what they are (real paths, hard links) in real
+"""sandbox/hide: the grader's files found by what they are (real paths, hard links) in real
 folders, so the sandbox can hide them."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.core.errors import UsageError
-from usar_replay.node import hide
+from usar_replay.sandbox import hide
 
 
 def _mission(root: Path) -> Path:

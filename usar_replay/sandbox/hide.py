@@ -3,7 +3,7 @@
 Why: a mission's folder is mounted read-only for it (a Python mission may import modules kept
 beside it), and a grader often keeps the world, the world key, the settings, the thresholds or
 the output right there. The sandbox then mounts ``/dev/null`` over each such file and an empty
-read-only folder over each such folder (:func:`usar_replay.node.kernel_sandbox.sandbox_argv`), so
+read-only folder over each such folder (:func:`usar_replay.sandbox.kernel_sandbox.sandbox_argv`), so
 the mission sees its own files and never one the grader passed in.
 
 Found by what they are, not by the name given: a path is resolved (symlinks, ``..``), and a

@@ -2,7 +2,7 @@
 
 Why a module of its own: the recorder resolves the target (a :class:`UsageError` before any
 work; the source's sha256 goes into the log, so the log says exactly which code ran), and the
-mission process (:mod:`usar_replay.node.worker`) loads it, in the kernel sandbox, from the same
+mission process (:mod:`usar_replay.process.worker`) loads it, in the kernel sandbox, from the same
 :class:`MissionTarget`. A target is a reference mission's name (``builtin``, an assignment's), a
 ``.py`` file (``team7/mission.py``, optionally ``:function``) or ``module:function``.
 """

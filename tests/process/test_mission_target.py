@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from usar_replay.core.errors import UsageError
-from usar_replay.node.mission_target import FILE_MODULE, MissionTarget, load, resolve_target
+from usar_replay.process.mission_target import FILE_MODULE, MissionTarget, load, resolve_target
 
 
 def _sha(path: Path) -> str:

@@ -1,4 +1,4 @@
-"""node/audit_guard: the audit-hook guard installed in a fresh interpreter (it cannot be
+"""sandbox/audit_guard: the audit-hook guard installed in a fresh interpreter (it cannot be
 removed), which then tries what a mission might: each attempt's outcome is printed and checked
 here. Real files in tmp_path; no mocks."""
 
@@ -11,7 +11,7 @@ from pathlib import Path
 
 PROBE = r"""
 import json, os, socket, subprocess, sys
-from usar_replay.node.audit_guard import GuardPolicy, GuardViolation
+from usar_replay.sandbox.audit_guard import GuardPolicy, GuardViolation
 
 mine, work, other = sys.argv[1:4]
 policy = GuardPolicy(read_roots=(mine,), write_roots=(work,), deny_roots=(other,))

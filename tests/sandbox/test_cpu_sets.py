@@ -1,4 +1,4 @@
-"""node/cpu_sets: each run claims CPUs no other usar run holds, through a real cpuset cgroup."""
+"""sandbox/cpu_sets: each run claims CPUs no other usar run holds, through a real cpuset cgroup."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from usar_replay.node import cpu_sets
-from usar_replay.node.kernel_sandbox import KernelSandbox, SandboxLimits
+from usar_replay.sandbox import cpu_sets
+from usar_replay.sandbox.kernel_sandbox import KernelSandbox, SandboxLimits
 
 needs_cpusets = pytest.mark.skipif(
     not cpu_sets.usable_cpus(), reason="no writable cgroup v1 cpuset hierarchy here (not root?)"

@@ -1,8 +1,8 @@
-"""node/log_budget: a run's message bytes counted tick by tick against its budget."""
+"""process/log_budget: a run's message bytes counted tick by tick against its budget."""
 
 from __future__ import annotations
 
-from usar_replay.node.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
+from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
 
 MIB = 1024 * 1024
 

@@ -1,4 +1,4 @@
-"""node/kernel_pools: the run's share of the kernel's per-user pools, run for real in bwrap.
+"""sandbox/kernel_pools: the run's share of the kernel's per-user pools, run for real in bwrap.
 inotify instances stop at the run's bound (where bwrap alone goes past it), keys are refused,
 and the filter is libseccomp's BPF. (The attack from a ROS 1 team: tests/redteam.)"""
 
@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.node import kernel_pools
-from usar_replay.node.kernel_pools import PoolLimits
-from usar_replay.node.kernel_sandbox import (
+from usar_replay.sandbox import kernel_pools
+from usar_replay.sandbox.kernel_pools import PoolLimits
+from usar_replay.sandbox.kernel_sandbox import (
     KernelSandbox,
     SandboxLimits,
     bwrap_available,

@@ -20,10 +20,10 @@ import pytest
 
 from usar_replay.core import cdr, contract, msgs
 from usar_replay.core.errors import MissionEnded, ProtocolMismatch
-from usar_replay.node import protocol
-from usar_replay.node.kernel_sandbox import KernelSandbox, bwrap_available
-from usar_replay.node.mission_process import MissionLimits, MissionProcess, hide_from_mission
-from usar_replay.node.mission_target import MissionTarget, resolve_target
+from usar_replay.process import protocol
+from usar_replay.process.mission_process import MissionLimits, MissionProcess, hide_from_mission
+from usar_replay.process.mission_target import MissionTarget, resolve_target
+from usar_replay.sandbox.kernel_sandbox import KernelSandbox, bwrap_available
 
 _OK, _WHY = bwrap_available()
 
@@ -237,11 +237,11 @@ def test_every_wrong_answer_to_a_tick_is_a_verdict(
 
 
 def _worker(setup: dict[str, Any]) -> tuple[bytes, int]:
-    """Run ``python -m usar_replay.node.worker`` on a socket: (its first frame, its exit code)."""
+    """Run ``python -m usar_replay.process.worker`` on a socket: (first frame, exit code)."""
     parent, child = socket.socketpair()
     with child:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "usar_replay.node.worker", str(child.fileno())],
+            [sys.executable, "-m", "usar_replay.process.worker", str(child.fileno())],
             pass_fds=(child.fileno(),),
             stdin=subprocess.DEVNULL,
         )
@@ -291,4 +291,4 @@ def test_the_worker_answers_a_setup_of_another_version_with_its_own_and_runs_not
 def test_command_is_the_worker_by_default(tmp_path: Path) -> None:
     with _start(_mission(tmp_path, ECHO)) as proc:
         argv: Sequence[str] = proc.command(5)
-    assert list(argv) == [sys.executable, "-m", "usar_replay.node.worker", "5"]
+    assert list(argv) == [sys.executable, "-m", "usar_replay.process.worker", "5"]

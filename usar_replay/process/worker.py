@@ -1,12 +1,12 @@
 """The mission process's own side: what runs in the kernel sandbox, loading the user's code and
 serving ticks until told to stop.
 
-``python -m usar_replay.node.worker FD``, started by
-:class:`usar_replay.node.mission_process.MissionProcess`: read the setup (a pickle from the
+``python -m usar_replay.process.worker FD``, started by
+:class:`usar_replay.process.mission_process.MissionProcess`: read the setup (a pickle from the
 parent, which is trusted) from socket FD, set the limits on itself, preload what usar needs
-before the audit guard goes on, load the target (:mod:`usar_replay.node.mission_target`), run
+before the audit guard goes on, load the target (:mod:`usar_replay.process.mission_target`), run
 its ``main()``, say it is ready, then answer each tick frame with the outputs frame of the
-mission's callbacks (:mod:`usar_replay.node.protocol`). Every failure is reported as a frame
+mission's callbacks (:mod:`usar_replay.process.protocol`). Every failure is reported as a frame
 with the user's traceback (``crashed``, ``out_of_memory``, ``refused``), never raised.
 
 A crash's traceback is the user's own: the frames of their code are shown, usar's plumbing in
@@ -28,22 +28,26 @@ from typing import Any
 
 from usar_replay.core import cdr
 from usar_replay.core.finite import NonFiniteValue
-from usar_replay.node import kernel_sandbox, protocol
 from usar_replay.node.boundary_check import MAX_MESSAGE_BYTES, OutputRefused, PublishRefused
 from usar_replay.node.executor import Executor, PublishPolicy
-from usar_replay.node.mission_target import MissionTarget, load
-from usar_replay.node.protocol import FrameKind
+from usar_replay.process import protocol
+from usar_replay.process.mission_target import MissionTarget, load
+from usar_replay.process.protocol import FrameKind
+from usar_replay.sandbox import kernel_sandbox
 
 __all__ = ["main"]
 
-_USAR_DIR = str(Path(__file__).resolve().parent)
+# usar's plumbing a mission's call passes through: the node API, this process, the sandbox
+_USAR_DIRS = tuple(
+    str(Path(__file__).resolve().parents[1] / layer) + "/" for layer in ("node", "process", "sandbox")
+)
 
 
 def _user_traceback(exc: BaseException) -> str:
     """The traceback with usar's own frames left out (the last frame is kept: it says where
     the error was raised, e.g. the publish that was refused)."""
     tb = traceback.extract_tb(exc.__traceback__)
-    keep = [f for i, f in enumerate(tb) if not f.filename.startswith(_USAR_DIR) or i == len(tb) - 1]
+    keep = [f for i, f in enumerate(tb) if not f.filename.startswith(_USAR_DIRS) or i == len(tb) - 1]
     lines = ["Traceback (most recent call last):\n", *traceback.format_list(keep)]
     lines += traceback.format_exception_only(type(exc), exc)
     return "".join(lines)
@@ -158,7 +162,7 @@ def _serve(conn: multiprocessing.connection.Connection, executor: Executor) -> N
 
 
 def main(argv: Sequence[str]) -> None:
-    """``python -m usar_replay.node.worker FD``: read the setup from the socket FD, then serve."""
+    """``python -m usar_replay.process.worker FD``: read the setup from socket FD, then serve."""
     import signal
 
     # Ctrl-C, a closed terminal or `kill` of the group reach this process too: the recorder

@@ -1,4 +1,4 @@
-"""node/kernel_sandbox: the bubblewrap command line, run for real on a shell script: who it
+"""sandbox/kernel_sandbox: the bubblewrap command line, run for real on a shell script: who it
 runs as, what it sees, where it may write, what is hidden, and the run's limits. (The attacks
 on it, from a mission: tests/redteam/test_kernel_sandbox.py.)"""
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.node.kernel_sandbox import (
+from usar_replay.sandbox.kernel_sandbox import (
     SANDBOX_UID,
     KernelSandbox,
     SandboxLimits,
@@ -192,7 +192,7 @@ def test_the_sandboxs_network_namespace_has_connection_tables_of_its_own(
     children get TCP and UDP hash tables of their own (1024 and 256 buckets), so a socket dump
     in the sandbox walks its own few connections, not the host's table; the host's setting is
     left as it was. Elsewhere the command is bwrap's own."""
-    from usar_replay.node.kernel_sandbox import own_tables_argv, own_tables_available
+    from usar_replay.sandbox.kernel_sandbox import own_tables_argv, own_tables_available
 
     if not bwrap_available()[0]:
         pytest.skip("no bwrap here")

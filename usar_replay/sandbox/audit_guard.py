@@ -13,7 +13,7 @@ extension, a bug in the interpreter or code that rebuilds a module the guard pat
 from ``sys.modules`` and loading the shared library again by hand, or walking memory with
 ctypes objects it already holds) does not pass through them, and nothing inside one process can
 stop code in that process from undoing what was done to it. The boundary is the kernel sandbox
-(:mod:`usar_replay.node.kernel_sandbox`), which every mission runs in by default; this guard is
+(:mod:`usar_replay.sandbox.kernel_sandbox`), which every mission runs in by default; this guard is
 the second layer: it turns honest mistakes and casual snooping into a clear ``PermissionError``.
 
 What it closes besides plain ``open``: paths relative to a directory descriptor (``dir_fd=``:

@@ -1,14 +1,14 @@
 """The mission wire protocol: the frames usar and a mission process exchange on their socket.
 
 Why a module of its own: three programs speak it (the recorder's side,
-:class:`usar_replay.node.mission_process.MissionProcess`; the Python mission process,
-:mod:`usar_replay.node.worker`; and the ROS 1 bridge, :mod:`usar_replay.ros1.bridge`), and the
+:class:`usar_replay.process.mission_process.MissionProcess`; the Python mission process,
+:mod:`usar_replay.process.worker`; and the ROS 1 bridge, :mod:`usar_replay.ros1.bridge`), and the
 bytes must mean the same to all three. Nothing from the mission process is ever unpickled: the
 parent parses these frames itself (only the parent -> child setup, sent first, is a pickle, which
 is safe in that direction).
 
 Each frame is one ``multiprocessing.connection`` message (a 4-byte big-endian length, then the
-payload; :mod:`usar_replay.node.wire_io` writes it with a deadline). The payload's first byte is
+payload; :mod:`usar_replay.process.wire_io` writes it with a deadline). The payload's first byte is
 its :class:`FrameKind`:
 
 * ``T`` (tick, parent -> child) and ``O`` (outputs, child -> parent) carry messages::
