@@ -38,16 +38,16 @@ from usar_replay.sandbox import kernel_sandbox
 __all__ = ["main"]
 
 # usar's plumbing a mission's call passes through: the node API, this process, the sandbox
-_USAR_DIRS = tuple(
-    str(Path(__file__).resolve().parents[1] / layer) + "/" for layer in ("node", "process", "sandbox")
-)
+_PACKAGE = Path(__file__).resolve().parents[1]
+_USAR_DIRS = tuple(f"{_PACKAGE / layer}/" for layer in ("node", "process", "sandbox"))
 
 
 def _user_traceback(exc: BaseException) -> str:
     """The traceback with usar's own frames left out (the last frame is kept: it says where
     the error was raised, e.g. the publish that was refused)."""
     tb = traceback.extract_tb(exc.__traceback__)
-    keep = [f for i, f in enumerate(tb) if not f.filename.startswith(_USAR_DIRS) or i == len(tb) - 1]
+    last = len(tb) - 1
+    keep = [f for i, f in enumerate(tb) if not f.filename.startswith(_USAR_DIRS) or i == last]
     lines = ["Traceback (most recent call last):\n", *traceback.format_list(keep)]
     lines += traceback.format_exception_only(type(exc), exc)
     return "".join(lines)
