@@ -15,7 +15,7 @@ import os
 import sys
 import textwrap
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -230,19 +230,24 @@ def grade_class(
     code: bool = False,
     code_template: str | None = None,
     code_jobs: int = 1,
+    on_result: Callable[[RunResult], None] | None = None,
 ) -> BatchSummary:
     """Execute the plan's runs, then write ``summary.csv``, ``summary.txt`` and (``gradescope``)
     each team's ``results.json``; with ``code``, each team's code submission graded beside its
-    demo (:mod:`usar_replay.batch.code_grade`). KeyboardInterrupt propagates after the running
-    runs are cut off (their logs closed, no manifest entry: the next batch redoes them)."""
+    demo (:mod:`usar_replay.batch.code_grade`); ``on_result`` is told of each run as it ends
+    (``usar gradescope`` writes its results file then). KeyboardInterrupt propagates after the
+    running runs are cut off (their logs closed, no manifest entry: the next batch redoes
+    them)."""
     summary = BatchSummary(plan)
     with _Progress(plan, quiet, stream or sys.stderr) as progress:
 
-        def on_result(r: RunResult) -> None:
+        def ended(r: RunResult) -> None:
             summary.results.append(r)
             progress(r)
+            if on_result is not None:
+                on_result(r)
 
-        engine.run(plan.jobs, on_result)
+        engine.run(plan.jobs, ended)
     full = {w.name: max_points(w.scenario_toml) for w in plan.worlds}
     grades = collect(plan, full)
     out = plan.out_root

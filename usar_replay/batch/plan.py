@@ -57,6 +57,7 @@ __all__ = [
     "Submission",
     "World",
     "discover",
+    "discover_team",
     "make_plan",
     "parse_seeds",
     "submission_digest",
@@ -307,32 +308,47 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
         else:
             continue
         team = team_name(raw)
-        outcome = "no_mission"
-        how = source = ""
-        path = entry.resolve()
-        if entry.is_symlink():  # never read through: it could lead anywhere (usar code agrees)
-            path = root.resolve() / entry.name
-            problem = f"unusable submission: {linked([shown(entry.name)])}"
-            target, digest, outcome = "", "", "bad_submission"
-        else:
-            try:  # first: nothing else of a folder is read before it is known to be safe to read
-                digest = submission_digest(path)
-            except (UnusableSubmission, OSError) as err:
-                reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
-                target, problem, digest = "", f"unusable submission: {reason}", ""
-                outcome = "bad_submission"
-            else:
-                if entry.is_dir():
-                    target, problem, how, source = _folder_target(entry)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(Submission(team, path, target, digest, problem, outcome, how, source))
+        subs.append(_submission(team, entry, root, target, problem))
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
     return subs
+
+
+def _submission(team: str, entry: Path, root: Path, target: str, problem: str) -> Submission:
+    """One team's :class:`Submission`: a link is never read through, a folder's files are
+    checked before anything else of it is read, then its target is found."""
+    outcome = "no_mission"
+    how = source = ""
+    path = entry.resolve()
+    if entry.is_symlink():  # never read through: it could lead anywhere (usar code agrees)
+        path = root.resolve() / entry.name
+        problem = f"unusable submission: {linked([shown(entry.name)])}"
+        target, digest, outcome = "", "", "bad_submission"
+    else:
+        try:  # first: nothing else of a folder is read before it is known to be safe to read
+            digest = submission_digest(path)
+        except (UnusableSubmission, OSError) as err:
+            reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
+            target, problem, digest = "", f"unusable submission: {reason}", ""
+            outcome = "bad_submission"
+        else:
+            if entry.is_dir():
+                target, problem, how, source = _folder_target(entry)
+    return Submission(team, path, target, digest, problem, outcome, how, source)
+
+
+def discover_team(folder: str | os.PathLike[str], team: str = "submission") -> Submission:
+    """One team folder graded in place, as :func:`discover` reads each of a class's (Gradescope's
+    ``/autograder/submission``: no class folder around it, no link, no copy)."""
+    path = Path(folder)
+    if not path.is_dir() or path.is_symlink():
+        raise UsageError(f"{path}: not a folder; give the team's submission folder")
+    return _submission(team_name(team), path, path.parent, "", "")
 
 
 def parse_seeds(text: str) -> list[int]:
