@@ -33,7 +33,7 @@ from conftest import one_room  # noqa: E402
 
 from usar_replay.batch.driver import grade_class, plan_class  # noqa: E402
 from usar_replay.batch.engines import make_engine  # noqa: E402
-from usar_replay.batch.plan import JobLimits  # noqa: E402
+from usar_replay.core.limits import RunLimits  # noqa: E402
 from usar_replay.core.settings import RecordSettings, RunSettings  # noqa: E402
 from usar_replay.core.settings import to_toml as settings_to_toml  # noqa: E402
 from usar_replay.log import bag  # noqa: E402
@@ -84,7 +84,7 @@ def grade(subs: Path, worlds: list[str], out: Path, engine: str, jobs: int, sim:
         out,
         scenarios=worlds,
         settings_toml=settings_to_toml(settings),
-        limits=JobLimits(tick_timeout_s=5.0),
+        limits=RunLimits(tick_timeout_s=5.0, cpu_s=1800),
     )
     t0 = time.perf_counter()
     grade_class(plan, make_engine(engine, jobs), quiet=True)

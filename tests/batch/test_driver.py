@@ -11,6 +11,7 @@ test runs a smaller class on both engines and compares the logs' digests.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import os
@@ -27,13 +28,13 @@ from logtools import digest
 
 from usar_replay.batch.classreport import ClassGrades, collect, to_table
 from usar_replay.batch.plan import (
-    JobLimits,
     RunResult,
     discover,
     make_plan,
     make_worlds,
 )
 from usar_replay.core.errors import UsageError
+from usar_replay.core.limits import BATCH_LIMITS
 from usar_replay.world.scenario_toml import to_toml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -226,7 +227,7 @@ def test_changed_inputs_are_run_again(graded_class: tuple[Path, Path, Path, str]
 
     worlds = make_worlds((), [str(room)])
     toml = settings_toml(RunSettings())
-    lim = JobLimits(tick_timeout_s=5.0, memory_mb=1000)
+    lim = dataclasses.replace(BATCH_LIMITS, tick_timeout_s=5.0, memory_mb=1000)  # CLASS_ARGS
     plan = make_plan(
         discover(subs), worlds, out, settings_toml=toml, limits=lim, submissions_root=subs
     )
@@ -237,7 +238,7 @@ def test_changed_inputs_are_run_again(graded_class: tuple[Path, Path, Path, str]
         worlds,
         out,
         settings_toml=toml,
-        limits=JobLimits(tick_timeout_s=6.0, memory_mb=1000),
+        limits=dataclasses.replace(lim, tick_timeout_s=6.0),
         submissions_root=subs,
     )
     assert len(plan.jobs) == 5

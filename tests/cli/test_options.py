@@ -129,9 +129,12 @@ def test_limits_and_the_files_hidden_from_the_mission() -> None:
         ({"tick_timeout": float("nan")}, "--tick-timeout nan"),
         ({"mission_memory": -1}, "--mission-memory -1"),
         ({"max_log_mib": -1}, "--max-log-mib -1"),
-        ({"run_memory": -1}, "--run-memory and --run-folder"),
+        ({"run_memory": -1}, r"--run-memory -1: expected MiB >= 0 \(0: none\)"),
+        ({"run_folder": -1}, r"--run-folder -1: expected MiB >= 0 \(0: no limit\)"),
         ({"processes": 0}, "--processes 0"),
-        ({"max_holds": -1}, "--max-holds and --max-capped"),
+        ({"max_holds": -1}, r"--max-holds -1: expected 0 \(no budget\) or more"),
+        ({"max_capped": 1.5}, "--max-capped 1.5: expected a whole number"),
+        ({"hold_wall": float("inf")}, "--hold-wall inf: expected seconds >= 0"),
         ({"wall_limit": -1.0}, "--wall-limit -1"),
     ]:
         with pytest.raises(UsageError, match=why):

@@ -365,7 +365,7 @@ def test_a_spinning_build_process_is_stopped_by_its_cpu_limit(tmp_path: Path) ->
 def test_a_build_past_its_wall_limit_is_build_failed(tmp_path: Path) -> None:
     pkg = package(tmp_path / "sleeper", "sleeper", "execute_process(COMMAND sleep 600)")
     outcome, reason = record_verdict(
-        tmp_path, pkg, options=Ros1Options(build_wall_s=2.0), limits=MissionLimits()
+        tmp_path, pkg, options=Ros1Options(), limits=MissionLimits(build_wall_s=2.0)
     )
     assert outcome == "build_failed", reason
     assert reason.strip().splitlines()[-1] == "the build of sleeper exceeded its 2 s wall limit"

@@ -15,7 +15,7 @@ import os
 import sys
 import textwrap
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -33,7 +33,6 @@ from usar_replay.batch.classreport import (
 )
 from usar_replay.batch.engines import Engine
 from usar_replay.batch.plan import (
-    JobLimits,
     Plan,
     RunResult,
     discover,
@@ -42,6 +41,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.batch.run_one import max_points
 from usar_replay.core.errors import UsageError
+from usar_replay.core.limits import RunLimits
 from usar_replay.core.outfiles import write_text
 from usar_replay.core.safe_text import safe_line
 from usar_replay.world.world_key import WorldKey
@@ -105,18 +105,21 @@ def plan_class(
     scenarios: Sequence[str] = (),
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: JobLimits | None = None,
+    limits: RunLimits | None = None,
+    sandbox: bool = True,
     world_key: WorldKey | None = None,
 ) -> Plan:
     """The plan of a batch: teams, worlds (seeded ones keyed by ``world_key``: hidden worlds),
-    and which runs still need doing."""
+    and which runs still need doing, each under ``limits`` (default:
+    :data:`~usar_replay.core.limits.BATCH_LIMITS`), in the kernel sandbox unless ``sandbox`` is
+    False (``--no-sandbox``)."""
     out, subs_root = Path(out_dir).resolve(), Path(submissions_dir).resolve()
     if out == subs_root or out.is_relative_to(subs_root) or subs_root.is_relative_to(out):
         raise UsageError(
             f"-o {out_dir}: the output folder and {submissions_dir} must not contain each other; "
             "choose an output folder elsewhere"
         )
-    if (limits or JobLimits()).sandbox:
+    if sandbox:
         require_sandbox()
     subs = discover(submissions_dir)
     worlds = make_worlds(seeds, scenarios, world_key)
@@ -127,6 +130,7 @@ def plan_class(
         settings_toml=settings_toml,
         thresholds_toml=thresholds_toml,
         limits=limits,
+        sandbox=sandbox,
         submissions_root=submissions_dir,
     )
 
@@ -226,19 +230,24 @@ def grade_class(
     code: bool = False,
     code_template: str | None = None,
     code_jobs: int = 1,
+    on_result: Callable[[RunResult], None] | None = None,
 ) -> BatchSummary:
     """Execute the plan's runs, then write ``summary.csv``, ``summary.txt`` and (``gradescope``)
     each team's ``results.json``; with ``code``, each team's code submission graded beside its
-    demo (:mod:`usar_replay.batch.code_grade`). KeyboardInterrupt propagates after the running
-    runs are cut off (their logs closed, no manifest entry: the next batch redoes them)."""
+    demo (:mod:`usar_replay.batch.code_grade`); ``on_result`` is told of each run as it ends
+    (``usar gradescope`` writes its results file then). KeyboardInterrupt propagates after the
+    running runs are cut off (their logs closed, no manifest entry: the next batch redoes
+    them)."""
     summary = BatchSummary(plan)
     with _Progress(plan, quiet, stream or sys.stderr) as progress:
 
-        def on_result(r: RunResult) -> None:
+        def ended(r: RunResult) -> None:
             summary.results.append(r)
             progress(r)
+            if on_result is not None:
+                on_result(r)
 
-        engine.run(plan.jobs, on_result)
+        engine.run(plan.jobs, ended)
     full = {w.name: max_points(w.scenario_toml) for w in plan.worlds}
     grades = collect(plan, full)
     out = plan.out_root

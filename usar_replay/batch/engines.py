@@ -22,7 +22,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
-from dataclasses import asdict, replace
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -100,7 +100,7 @@ def execute(job_json: str) -> dict[str, Any]:
         proc.stdin.write(job.to_json().encode())
         proc.stdin.close()
         try:
-            code = proc.wait(timeout=float(job.limits["wall_s"]))
+            code = proc.wait(timeout=job.run_limits.wall_s or None)
         except subprocess.TimeoutExpired:
             wall_limited = True
             code = _stop_run(proc, signal.SIGTERM)
@@ -175,7 +175,7 @@ class LocalEngine:
         if not jobs:
             return
         if self.cpus:  # each run's share, claimed by the run itself as it starts
-            jobs = [replace(j, limits={**j.limits, "cpus": self.cpus}) for j in jobs]
+            jobs = [j.with_cpus(self.cpus) for j in jobs]
         with ThreadPoolExecutor(max_workers=min(self.slots, len(jobs))) as pool:
             pending: set[Future[dict[str, Any]]] = {pool.submit(execute, j.to_json()) for j in jobs}
             try:
@@ -222,7 +222,7 @@ class RayEngine:
         task = ray.remote(num_cpus=1, max_retries=0)(execute)
         # one CPU set of one CPU per run, as Ray counts them (a run that took two when free
         # would make the next one on the node wait for its set)
-        jobs = [replace(j, limits={**j.limits, "cpus": 1}) for j in jobs]
+        jobs = [j.with_cpus(1) for j in jobs]
         refs = {task.remote(j.to_json()): j for j in jobs}
         pending = list(refs)
         try:

@@ -27,6 +27,7 @@ Ray), each in its own process (:mod:`usar_replay.batch.run_one`).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -42,6 +43,7 @@ from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
 from usar_replay.core.errors import UnclearStart, UsageError
 from usar_replay.core.folder_walk import linked, shown
+from usar_replay.core.limits import BATCH_LIMITS, RunLimits
 from usar_replay.ros1 import start
 from usar_replay.ros1.building.workspace import NoPackage, SeveralPackages, find_package
 from usar_replay.world.world_key import WorldKey
@@ -49,13 +51,13 @@ from usar_replay.world.world_key import WorldKey
 __all__ = [
     "GRADE_FORMAT",
     "RUN_FORMAT",
-    "JobLimits",
     "Plan",
     "RunJob",
     "RunResult",
     "Submission",
     "World",
     "discover",
+    "discover_team",
     "make_plan",
     "parse_seeds",
     "submission_digest",
@@ -110,43 +112,6 @@ class World:
 
 
 @dataclass(frozen=True, slots=True)
-class JobLimits:
-    """What one run may use. Wall-clock limits decide verdicts only, never a logged byte."""
-
-    tick_timeout_s: float = 10.0
-    """Wall seconds one tick's callbacks may take (past it: ``hung``)."""
-    startup_timeout_s: float = 60.0
-    """Wall seconds for importing the mission and running its ``main()``."""
-    memory_mb: int = 4096
-    """Address-space limit of the mission process in MiB (past it: ``out_of_memory``)."""
-    cpu_s: int = 1800
-    """CPU-time limit of the mission process in seconds (past it: ``hung``)."""
-    wall_s: float = 3600.0
-    """Wall seconds for the whole run, recorder included (past it: ``wall_limit``)."""
-    sandbox: bool = True
-    """Run the mission in the kernel sandbox (usar_replay.sandbox.kernel_sandbox) with the audit
-    guard (usar_replay.sandbox.audit_guard) on; ``usar batch --no-sandbox`` turns both off."""
-    max_log_mib: int = 2048
-    """The run's byte budget for its log in MiB (past it: ``refused``; 0: none)."""
-    grade_s: float = 600.0
-    """Wall seconds to grade one log (past it: the grade says ``grade_limit``)."""
-    run_memory_mb: int = 3072
-    """Memory of the whole run, its tmpfs files included, MiB (past it: ``out_of_memory``)."""
-    processes: int = 256
-    """Processes and threads of the run (reaching it: ``refused``)."""
-    run_folder_mb: int = 512
-    """Size of the run's writable folder, MiB (filling it: ``refused``)."""
-    max_holds: int = 20
-    """ROS 1 ticks held for a node's shutdown (past it: ``hung``)."""
-    max_capped: int = 600
-    """ROS 1 ticks that reach their wall cap (past it: ``hung``)."""
-    hold_wall_s: float = 30.0
-    """Wall seconds the ROS 1 shutdown holds may take together (past it: ``hung``)."""
-    build_folder_mb: int = 2048
-    """A ROS 1 team's build folder, MiB (filling it: ``build_failed``; 0: a plain folder)."""
-
-
-@dataclass(frozen=True, slots=True)
 class RunJob:
     """One (team, world) run, as plain data: it crosses a process boundary and Ray as JSON."""
 
@@ -158,6 +123,7 @@ class RunJob:
     settings_toml: str
     thresholds_toml: str
     limits: dict[str, Any]
+    """The run's limits in their JSON form (:meth:`RunLimits.to_dict`): :attr:`run_limits`."""
     team_dir: str
     out_root: str
     submissions_root: str
@@ -166,6 +132,19 @@ class RunJob:
     start: str = ""
     """A ROS 1 team's start as the plan read it (:attr:`Submission.start`), for its grade."""
     start_source: str = ""
+    sandbox: bool = True
+    """Run the mission in the kernel sandbox (:mod:`usar_replay.sandbox.kernel_sandbox`) with
+    the audit guard on; ``usar batch --no-sandbox`` turns both off."""
+
+    @property
+    def run_limits(self) -> RunLimits:
+        """The run's limits (checked again: the job may have crossed Ray as JSON)."""
+        return RunLimits.from_mapping(self.limits, f"the limits of {self.team} on {self.world}")
+
+    def with_cpus(self, cpus: int) -> RunJob:
+        """This job with its run's CPU set of ``cpus`` CPUs (an engine's share per run)."""
+        limits = dataclasses.replace(self.run_limits, cpus=cpus)
+        return dataclasses.replace(self, limits=limits.to_dict())
 
     @property
     def inputs_key(self) -> str:
@@ -329,32 +308,47 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
         else:
             continue
         team = team_name(raw)
-        outcome = "no_mission"
-        how = source = ""
-        path = entry.resolve()
-        if entry.is_symlink():  # never read through: it could lead anywhere (usar code agrees)
-            path = root.resolve() / entry.name
-            problem = f"unusable submission: {linked([shown(entry.name)])}"
-            target, digest, outcome = "", "", "bad_submission"
-        else:
-            try:  # first: nothing else of a folder is read before it is known to be safe to read
-                digest = submission_digest(path)
-            except (UnusableSubmission, OSError) as err:
-                reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
-                target, problem, digest = "", f"unusable submission: {reason}", ""
-                outcome = "bad_submission"
-            else:
-                if entry.is_dir():
-                    target, problem, how, source = _folder_target(entry)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(Submission(team, path, target, digest, problem, outcome, how, source))
+        subs.append(_submission(team, entry, root, target, problem))
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
     return subs
+
+
+def _submission(team: str, entry: Path, root: Path, target: str, problem: str) -> Submission:
+    """One team's :class:`Submission`: a link is never read through, a folder's files are
+    checked before anything else of it is read, then its target is found."""
+    outcome = "no_mission"
+    how = source = ""
+    path = entry.resolve()
+    if entry.is_symlink():  # never read through: it could lead anywhere (usar code agrees)
+        path = root.resolve() / entry.name
+        problem = f"unusable submission: {linked([shown(entry.name)])}"
+        target, digest, outcome = "", "", "bad_submission"
+    else:
+        try:  # first: nothing else of a folder is read before it is known to be safe to read
+            digest = submission_digest(path)
+        except (UnusableSubmission, OSError) as err:
+            reason = err if isinstance(err, UnusableSubmission) else err.strerror or err
+            target, problem, digest = "", f"unusable submission: {reason}", ""
+            outcome = "bad_submission"
+        else:
+            if entry.is_dir():
+                target, problem, how, source = _folder_target(entry)
+    return Submission(team, path, target, digest, problem, outcome, how, source)
+
+
+def discover_team(folder: str | os.PathLike[str], team: str = "submission") -> Submission:
+    """One team folder graded in place, as :func:`discover` reads each of a class's (Gradescope's
+    ``/autograder/submission``: no class folder around it, no link, no copy)."""
+    path = Path(folder)
+    if not path.is_dir() or path.is_symlink():
+        raise UsageError(f"{path}: not a folder; give the team's submission folder")
+    return _submission(team_name(team), path, path.parent, "", "")
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -450,16 +444,18 @@ def make_plan(
     *,
     settings_toml: str,
     thresholds_toml: str = "",
-    limits: JobLimits | None = None,
+    limits: RunLimits | None = None,
+    sandbox: bool = True,
     submissions_root: str | os.PathLike[str],
 ) -> Plan:
-    """Every (team, world) run and what it needs, judged from the files already in ``out_root``."""
-    limits = limits or JobLimits()
+    """Every (team, world) run and what it needs, judged from the files already in ``out_root``
+    (``limits``: default :data:`~usar_replay.core.limits.BATCH_LIMITS`)."""
+    limits_dict = (limits or BATCH_LIMITS).to_dict()
     out = Path(out_root).resolve()
     plan = Plan(out, list(submissions), list(worlds))
-    limits_dict = asdict(limits)
+    run_inputs = {**limits_dict, "sandbox": sandbox}  # another limit is another run
     settings_sha = hashlib.sha256(
-        (settings_toml + json.dumps(limits_dict, sort_keys=True)).encode()
+        (settings_toml + json.dumps(run_inputs, sort_keys=True)).encode()
     ).hexdigest()
     for sub in submissions:
         for world in worlds:
@@ -484,6 +480,7 @@ def make_plan(
                 },
                 start=sub.start,
                 start_source=sub.start_source,
+                sandbox=sandbox,
             )
             if sub.problem:
                 plan.invalid.append(

@@ -6,7 +6,8 @@ Why a process of its own (started by :mod:`usar_replay.batch.engines`): the reco
 pybullet world and an open log; a crash in it, a run past its wall-clock limit or a Ctrl-C ends this
 process only, and the engine can kill it and its mission process as one process group. The
 working directory is the run's own scratch folder; the mission process (started by
-:func:`usar_replay.pipeline.record.record`) inherits it and the limits of :class:`MissionLimits`.
+:func:`usar_replay.pipeline.record.record`) inherits it and the job's limits
+(:class:`~usar_replay.core.limits.RunLimits`).
 
 Signals: SIGTERM means "past the wall-clock limit": the log is closed (marked interrupted), graded
 as far as it goes, and the run is finished with the outcome ``wall_limit``; a SIGTERM while the
@@ -41,11 +42,11 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.outfiles import write_text
-from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
     from usar_replay.grading.grade import LiveGrade
+    from usar_replay.process.mission_process import MissionLimits
 
 __all__ = ["grade_job", "main", "max_points", "record_run", "rubric"]
 
@@ -171,7 +172,7 @@ def grade_job(
     outcome, reason = record["outcome"], record["outcome_reason"]
     import usar_replay.grading.grade  # noqa: F401 - imported before the clock starts
 
-    limit_s = float(job.limits.get("grade_s", 600.0))
+    limit_s = job.run_limits.grade_s
     try:
         if graded is not None and graded.seconds > limit_s:  # graded while it recorded
             raise GradeStopped(
@@ -217,22 +218,16 @@ def _start(job: RunJob, log: Path) -> dict[str, str]:
     return {"start": start, "start_source": source}
 
 
-def _mission_limits(job: RunJob) -> Any:
-    from usar_replay.process.mission_process import (
-        DEFAULT_HOLD_WALL_S,
-        DEFAULT_MAX_CAPPED,
-        DEFAULT_MAX_HOLDS,
-        DEFAULT_PROCESSES,
-        DEFAULT_RUN_MEMORY_MB,
-        MissionLimits,
-    )
+def _mission_limits(job: RunJob) -> MissionLimits:
+    """The job's limits (:attr:`RunJob.run_limits`) and where its mission runs: the team's
+    submission read-only, nothing of OUT_DIR (this run's grade and log are written by this
+    process, outside it), never run bare by accident."""
+    from usar_replay.process.mission_process import MissionLimits
     from usar_replay.sandbox.audit_guard import GuardPolicy
-    from usar_replay.sandbox.run_folder import DEFAULT_RUN_FOLDER_MB
 
-    lim = job.limits
     guard = None
-    if lim.get("sandbox", True):
-        own = str(Path(job.submission_path).resolve())
+    own = str(Path(job.submission_path).resolve())
+    if job.sandbox:
         work = str(job.work_dir.resolve())
         guard = GuardPolicy(
             read_roots=(own,),
@@ -240,24 +235,11 @@ def _mission_limits(job: RunJob) -> Any:
             deny_roots=(job.out_root, job.submissions_root),
             own_roots=(own, work),
         )
-    return MissionLimits(
-        tick_timeout_s=float(lim["tick_timeout_s"]),
-        startup_timeout_s=float(lim["startup_timeout_s"]),
-        memory_mb=int(lim["memory_mb"]),
-        cpu_s=int(lim["cpu_s"]),
-        max_log_mib=int(lim.get("max_log_mib", DEFAULT_MAX_LOG_MIB)),
-        run_memory_mb=int(lim.get("run_memory_mb", DEFAULT_RUN_MEMORY_MB)),
-        processes=int(lim.get("processes", DEFAULT_PROCESSES)),
-        run_folder_mb=int(lim.get("run_folder_mb", DEFAULT_RUN_FOLDER_MB)),
-        cpus=int(lim.get("cpus", 0)),
-        max_holds=int(lim.get("max_holds", DEFAULT_MAX_HOLDS)),
-        max_capped=int(lim.get("max_capped", DEFAULT_MAX_CAPPED)),
-        hold_wall_s=float(lim.get("hold_wall_s", DEFAULT_HOLD_WALL_S)),
+    return MissionLimits.of(
+        job.run_limits,
         guard=guard,
-        # the kernel sandbox: the team's submission read-only, nothing of OUT_DIR (this run's
-        # grade and log are written by this process, outside it); never run bare by accident
-        kernel_sandbox="required" if lim.get("sandbox", True) else "off",
-        read_roots=(str(Path(job.submission_path).resolve()),),
+        kernel_sandbox="required" if job.sandbox else "off",
+        read_roots=(own,),
         hidden=(job.out_root,),  # never mounted, unless it lies in the team's folder
     )
 
@@ -268,14 +250,12 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
     to native code; the time and memory limits do."""
     import dataclasses
 
-    from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
     from usar_replay.ros1.process import Ros1Options
     from usar_replay.ros1.record import record_ros1
 
     limits = dataclasses.replace(_mission_limits(job), guard=None)
     package = job.target.removeprefix(ROS1_TARGET_PREFIX)
-    folder = int(job.limits.get("build_folder_mb", DEFAULT_BUILD_FOLDER_MB))
-    options = Ros1Options(build_folder_mb=folder)
+    options = Ros1Options()
     return record_ros1(scenario, log, package, settings, watchdog, limits=limits, options=options)
 
 
@@ -334,7 +314,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
 
                 compiler = compiler_record(build, result.build_log, reason)
     except WallLimit:
-        wall = float(job.limits["wall_s"])
+        wall = job.run_limits.wall_s
         outcome, reason = "wall_limit", f"the run took more than {wall:g} s of wall time"
         sim_s = 0.0
     wall_s = time.perf_counter() - start

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from usar_replay.core.errors import UsageError
 
 if TYPE_CHECKING:
+    from usar_replay.core.limits import RunLimits
     from usar_replay.core.settings import RunSettings, Thresholds
     from usar_replay.grading.verdict import GradeReport
     from usar_replay.process.mission_process import MissionLimits
@@ -32,6 +33,7 @@ __all__ = [
     "overrides",
     "run_settings",
     "limits",
+    "run_limits",
     "grader_paths",
     "OUTPUT_OPTIONS",
     "output_inputs",
@@ -170,50 +172,39 @@ def run_settings(args: argparse.Namespace, base: RunSettings) -> RunSettings:
     return settings_mod.apply_overrides(out, overrides(args.set), default_group="mission")
 
 
+def run_limits(args: argparse.Namespace) -> RunLimits:
+    """The run's limits from the command line: the command's defaults, then ``--limits
+    FILE``'s ``[limits]`` table, then each limit flag given (checked as
+    :func:`usar_replay.core.limits.check_value` checks any: one line naming the flag)."""
+    from usar_replay.core.limits import FLAGS, RunLimits, check_value, load_limits
+
+    base = getattr(args, "limits_base", None) or RunLimits()
+    if getattr(args, "limits_file", None):
+        base = load_limits(args.limits_file, base)
+    given = {}
+    for row in FLAGS:
+        value = getattr(args, row.dest, None)
+        if value is not None:
+            check_value(row.name, value)
+            given[row.name] = value
+    return RunLimits(**{**base.values(), **given})
+
+
 def limits(args: argparse.Namespace) -> MissionLimits:
+    """The mission's limits: :func:`run_limits`, with every file the grader passed in hidden
+    from the mission."""
     from usar_replay.process.mission_process import MissionLimits
 
-    if not (args.tick_timeout > 0):
-        raise UsageError(f"--tick-timeout {args.tick_timeout}: expected a positive number of s")
-    if args.mission_memory < 0:
-        raise UsageError(f"--mission-memory {args.mission_memory}: expected MiB >= 0 (0: none)")
-    if args.max_log_mib < 0:
-        raise UsageError(f"--max-log-mib {args.max_log_mib}: expected MiB >= 0 (0: none)")
-    check_run_limits(args)
-    return MissionLimits(
-        tick_timeout_s=args.tick_timeout,
-        memory_mb=args.mission_memory,
-        max_log_mib=args.max_log_mib,
-        run_memory_mb=args.run_memory,
-        processes=args.processes,
-        run_folder_mb=args.run_folder,
-        max_holds=args.max_holds,
-        max_capped=args.max_capped,
-        hold_wall_s=getattr(args, "hold_wall", 30.0),
-        wall_s=args.wall_limit,
-        hidden=grader_paths(args),
-    )
-
-
-def check_run_limits(args: argparse.Namespace) -> None:
-    """``--run-memory``, ``--processes``, ``--run-folder``: one line for a bad value."""
-    if args.run_memory < 0 or args.run_folder < 0:
-        raise UsageError("--run-memory and --run-folder: expected MiB >= 0 (0: none)")
-    if args.processes < 1:
-        raise UsageError(f"--processes {args.processes}: expected 1 or more")
-    if args.max_holds < 0 or args.max_capped < 0:
-        raise UsageError("--max-holds and --max-capped: expected 0 (no budget) or more")
-    hold = getattr(args, "hold_wall", 0.0)
-    if not hold >= 0 or hold == float("inf"):
-        raise UsageError(f"--hold-wall {hold:g}: expected seconds >= 0 (0: no budget)")
-    if getattr(args, "wall_limit", 0.0) < 0:
-        raise UsageError(f"--wall-limit {args.wall_limit:g}: expected seconds >= 0 (0: none)")
+    return MissionLimits.of(run_limits(args), hidden=grader_paths(args))
 
 
 def grader_paths(args: argparse.Namespace) -> tuple[str, ...]:
     """Every file the grader passed in (the world, its key, the settings, the thresholds, the
     output): the sandboxed mission never reads one, wherever it lies (usar_replay.sandbox.hide)."""
-    names = ("scenario", "world_key", "settings", "thresholds", "out", "json", "junit", "csv")
+    names = (
+        *("scenario", "world_key", "settings", "thresholds", "limits_file"),
+        *("out", "json", "junit", "csv"),
+    )
     return tuple(str(getattr(args, n)) for n in names if getattr(args, n, None))
 
 

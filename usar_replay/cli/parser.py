@@ -17,6 +17,7 @@ from usar_replay.cli.commands import (
     doctor,
     echo,
     grade,
+    gradescope,
     info,
     log,
     record,
@@ -34,7 +35,8 @@ if TYPE_CHECKING:
 __all__ = ["COMMANDS", "build_parser"]
 
 COMMANDS = (
-    record, replay, grade, report, batch, code, view, echo, log, scenario, info, recover, doctor
+    record, replay, grade, report, batch, gradescope, code, view, echo, log, scenario, info,
+    recover, doctor,
 )
 """The commands, in the order ``usar --help`` lists them."""
 

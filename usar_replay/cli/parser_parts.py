@@ -11,11 +11,13 @@ import sys
 from typing import NoReturn
 
 from usar_replay.cli.exits import EXIT_USAGE
+from usar_replay.core.limits import FLAGS, RunLimits
 
 __all__ = [
     "UsageParser",
     "address",
     "grade_outputs",
+    "limit_options",
     "mission_options",
     "port",
     "positive_seconds",
@@ -79,83 +81,43 @@ def mission_options(p: argparse.ArgumentParser, *, replay: bool) -> None:
         help="a setting, e.g. detector.dictionary=DICT_5X5_50 or mission.settle_frames=3",
     )
     p.add_argument("--settings", metavar="TOML", help="settings from [record]/[mission]/[detector]")
-    p.add_argument(
-        "--tick-timeout",
-        type=float,
-        default=10.0,
-        metavar="S",
-        help="wall seconds a tick's callbacks may take before the mission is 'hung' (10)",
-    )
-    p.add_argument(
-        "--mission-memory",
-        type=int,
-        default=4096,
-        metavar="MIB",
-        help="memory limit of the mission process in MiB (4096; 0: none)",
-    )
-    p.add_argument(
-        "--max-log-mib",
-        type=int,
-        default=2048,
-        metavar="MIB",
-        help="byte budget of the run's log in MiB; past it the run is 'refused' (2048; 0: none)",
-    )
-    p.add_argument(
-        "--wall-limit",
-        type=float,
-        default=3600.0,
-        metavar="S",
-        help="wall seconds for the whole run; past it 'wall_limit' (3600; 0: none)",
-    )
-    run_limit_options(p)
+    limit_options(p, "replay" if replay else "record")
 
 
-def run_limit_options(p: argparse.ArgumentParser) -> None:
-    """The limits of a run as a whole (its cgroups and its folder; docs/batch.md)."""
-    p.add_argument(
-        "--run-memory",
-        type=int,
-        default=3072,
-        metavar="MIB",
-        help="memory of the whole run, its tmpfs files included, MiB; past it 'out_of_memory' "
-        "(3072; 0: none)",
+def limit_options(
+    p: argparse.ArgumentParser, command: str, defaults: RunLimits | None = None
+) -> None:
+    """The run's limits ``command`` takes, made from the one table of them
+    (:data:`usar_replay.core.limits.FLAGS`), ``defaults`` shown in the help (the command's:
+    ``usar batch`` gives each mission 30 CPU minutes); ``--limits FILE`` reads them from a
+    ``[limits]`` table, and a flag given wins over it. :func:`usar_replay.cli.options.run_limits`
+    reads them back."""
+    base = defaults or RunLimits()
+    group = p.add_argument_group("the run's limits (docs/batch.md, \"A run's limits\")")
+    group.add_argument(
+        "--limits",
+        metavar="TOML",
+        dest="limits_file",
+        help="the run's limits from a [limits] table (docs/batch.md); a flag given wins",
     )
-    p.add_argument(
-        "--processes",
-        type=int,
-        default=256,
-        metavar="N",
-        help="processes and threads of the run; reaching it: 'refused' (256)",
-    )
-    p.add_argument(
-        "--run-folder",
-        type=int,
-        default=512,
-        metavar="MIB",
-        help="size of the run's writable folder, MiB; filling it: 'refused' (512; 0: no limit)",
-    )
-    p.add_argument(
-        "--max-holds",
-        type=int,
-        default=20,
-        metavar="N",
-        help="ROS 1 ticks held for a node's shutdown; past it 'hung' (20; 0: no budget)",
-    )
-    p.add_argument(
-        "--hold-wall",
-        type=float,
-        default=30.0,
-        metavar="S",
-        help="wall seconds the ROS 1 shutdown holds may take together; past it 'hung' "
-        "(30; 0: no budget)",
-    )
-    p.add_argument(
-        "--max-capped",
-        type=int,
-        default=600,
-        metavar="N",
-        help="ROS 1 ticks that reach their wall cap; past it 'hung' (600; 0: no budget)",
-    )
+    for row in FLAGS:
+        if command not in row.commands:
+            continue
+        zero = f"; 0: {row.zero}" if row.zero else ""
+        group.add_argument(
+            row.flag,
+            type=row.kind,
+            default=None,
+            dest=row.dest,
+            metavar=row.metavar,
+            help=f"{row.help} ({_shown(getattr(base, row.name))}{zero})",
+        )
+    p.set_defaults(limits_base=base)
+
+
+def _shown(value: float) -> str:
+    """A default as the help says it: ``10``, ``0.5``, ``3600``."""
+    return f"{value:g}"
 
 
 def grade_outputs(p: argparse.ArgumentParser) -> None:

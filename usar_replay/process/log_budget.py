@@ -18,9 +18,11 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 
+from usar_replay.core.limits import RunLimits
+
 __all__ = ["DEFAULT_MAX_LOG_MIB", "LogBudget"]
 
-DEFAULT_MAX_LOG_MIB = 2048
+DEFAULT_MAX_LOG_MIB = RunLimits().max_log_mib
 """The default budget in MiB (``--max-log-mib``; 0: none)."""
 
 Wire = tuple[str, str, bytes]

@@ -42,24 +42,20 @@ from typing import Any
 from usar_replay import __version__
 from usar_replay.core import msgs
 from usar_replay.core.errors import MissionEnded, ProtocolMismatch, UsageError
+from usar_replay.core.limits import RunLimits
 from usar_replay.node.boundary_check import MAX_FRAME_BYTES, BoundaryCheck, OutputRefused
 from usar_replay.node.executor import PublishPolicy
 from usar_replay.process import protocol
-from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
+from usar_replay.process.log_budget import LogBudget
 from usar_replay.process.mission_target import MissionTarget
 from usar_replay.process.protocol import FrameKind, Wire
 from usar_replay.process.wire_io import send_within
 from usar_replay.sandbox import cpu_sets, hide, kernel_sandbox
 from usar_replay.sandbox.audit_guard import GuardPolicy
 from usar_replay.sandbox.kernel_sandbox import KernelSandbox, SandboxLimits
-from usar_replay.sandbox.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
+from usar_replay.sandbox.run_folder import RunFolder
 
 __all__ = [
-    "DEFAULT_HOLD_WALL_S",
-    "DEFAULT_MAX_CAPPED",
-    "DEFAULT_MAX_HOLDS",
-    "DEFAULT_PROCESSES",
-    "DEFAULT_RUN_MEMORY_MB",
     "MissionEnded",
     "MissionLimits",
     "MissionProcess",
@@ -68,34 +64,13 @@ __all__ = [
 ]
 
 
-DEFAULT_RUN_MEMORY_MB = 3072
-"""The whole run's memory in MiB (``--run-memory-mb``): a ROS 1 graph (master, roslaunch, rosout,
-the bridge, the team's nodes) uses well under 1 GiB."""
-DEFAULT_PROCESSES = 256
-"""Processes and threads of one run (``--processes``)."""
-DEFAULT_MAX_HOLDS = 20
-"""Shutdown holds of one ROS 1 run (``--max-holds``): an honest package holds once or twice."""
-DEFAULT_HOLD_WALL_S = 30.0
-"""Wall seconds all of one ROS 1 run's shutdown holds may take together (``--hold-wall``): an
-honest package's hold or two take well under a second each."""
-DEFAULT_MAX_CAPPED = 600
-"""Capped ticks of one ROS 1 run (``--max-capped``): 2 min of wall time at the default pace."""
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MissionLimits(RunLimits):
+    """A run's limits (:class:`~usar_replay.core.limits.RunLimits`, every number) and where its
+    mission runs: the guard, the kernel sandbox's mode, what it reads, what is hidden from it
+    and its folder. Wall-clock limits only decide *verdicts*; they never reach a message (a
+    slow machine gives the same log, or a ``hung`` verdict)."""
 
-
-@dataclass(frozen=True, slots=True)
-class MissionLimits:
-    """What a mission process may use. Wall-clock limits only decide *verdicts*; they never
-    reach a message (a slow machine gives the same log, or a ``hung`` verdict)."""
-
-    tick_timeout_s: float = 10.0
-    """Wall seconds one tick's callbacks may take before the mission is declared hung."""
-    startup_timeout_s: float = 60.0
-    """Wall seconds for importing the mission and running its ``main()``."""
-    memory_mb: int = 4096
-    """Address-space limit of the mission process (RLIMIT_AS), in MiB; 0 for none."""
-    cpu_s: int = 0
-    """CPU-time limit of the mission process (RLIMIT_CPU), in seconds; 0 for none. Past it the
-    process is killed and the run is ``hung`` (a batch sets it: see usar_replay.batch.plan)."""
     guard: GuardPolicy | None = None
     """The audit guard's policy: files, processes and network the mission's Python code may not
     touch (usar_replay.sandbox.audit_guard); None: no guard."""
@@ -118,32 +93,11 @@ class MissionLimits:
     work_dir: str = ""
     """The sandboxed mission's writable folder and working directory: default a fresh one,
     removed at close; a given one (the ROS 1 bridge's run folder) is the caller's to remove."""
-    max_log_mib: int = DEFAULT_MAX_LOG_MIB
-    """The run's byte budget for its log, in MiB (0: none); past it the run is ``refused``
-    (:mod:`usar_replay.process.log_budget`)."""
-    run_memory_mb: int = DEFAULT_RUN_MEMORY_MB
-    """Memory of the whole run in the kernel sandbox, MiB (0: none): every process of it and
-    the files it writes to its tmpfs mounts (its memory cgroup); past it: ``out_of_memory``."""
-    processes: int = DEFAULT_PROCESSES
-    """Processes and threads of the run together (its pids cgroup); reaching it: ``refused``."""
-    run_folder_mb: int = DEFAULT_RUN_FOLDER_MB
-    """Size of the run's writable folder, MiB (a tmpfs; 0: a plain folder); filling it:
-    ``refused`` (:mod:`usar_replay.sandbox.run_folder`)."""
-    max_holds: int = DEFAULT_MAX_HOLDS
-    """Ticks the ROS 1 bridge may hold for a node's shutdown (each up to 6 s of wall time);
-    past it the run is ``hung`` (0: no budget)."""
-    max_capped: int = DEFAULT_MAX_CAPPED
-    """Ticks whose wall cap may run out before the ROS 1 graph goes idle; past it: ``hung``
-    (0: no budget)."""
-    hold_wall_s: float = DEFAULT_HOLD_WALL_S
-    """Wall seconds the ROS 1 bridge's shutdown holds may take together; past it: ``hung``
-    (0: no budget). With :attr:`max_holds`, one hostile team costs at most this much more than
-    its sim time."""
-    wall_s: float = 0.0
-    """Wall seconds for the whole run, start-up included (0: none); past it: ``wall_limit``."""
-    cpus: int = 0
-    """CPUs of the run's own CPU set (:mod:`usar_replay.sandbox.cpu_sets`; 0: two when free, else
-    one). A batch gives each run its share."""
+
+    @classmethod
+    def of(cls, limits: RunLimits, **where: Any) -> MissionLimits:
+        """``limits`` for a mission that runs as ``where`` says (``guard=...``, ...)."""
+        return cls(**limits.values(), **where)
 
 
 def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimits:

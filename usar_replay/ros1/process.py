@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from usar_replay.core import contract, msgs
+from usar_replay.core.limits import RunLimits
 from usar_replay.log.ros1_run import (
     GoalTolerance,
     ParameterRead,
@@ -37,8 +38,6 @@ from usar_replay.process.mission_target import MissionTarget
 from usar_replay.process.protocol import Wire
 from usar_replay.ros1 import run_files, start
 from usar_replay.ros1.boundary import Ros1BoundaryCheck
-from usar_replay.ros1.building.build_folder import DEFAULT_BUILD_FOLDER_MB
-from usar_replay.ros1.building.jail import BUILD_WALL_S
 from usar_replay.ros1.building.workspace import BuildLimits, Built, Package, package_sha256
 from usar_replay.ros1.launch_output import file_label
 from usar_replay.ros1.netns import isolated_command
@@ -78,16 +77,8 @@ class Ros1Options:
     """Leave the run's folder (bridge, master and graph output, ROS logs) on disk."""
     cache: bool = True
     """Reuse a workspace built before from the same files (:func:`cached_build`)."""
-    build_wall_s: float = BUILD_WALL_S
-    """Wall seconds the build may take (its other limits are the run's: memory, processes,
-    file size; CPU seconds per process are the run's ``cpu_s`` when set, else
-    :attr:`BuildLimits.cpu_s`)."""
     one_cpu: bool = True
     """Run the graph's threads on one CPU under SCHED_RR (:mod:`.scheduling`; needs root)."""
-    build_folder_mb: int = DEFAULT_BUILD_FOLDER_MB
-    """The build's workspace while catkin runs: a tmpfs of this many MiB (and
-    :data:`~usar_replay.ros1.building.build_folder.BUILD_FOLDER_INODES` files; 0: a plain
-    folder), ``--build-folder``."""
     given_settings: tuple[str, ...] = ()
     """The settings the user gave explicitly (``mission.xy_tolerance``: ``--set`` or
     ``--settings``): such a move_base tolerance wins over the package's (:mod:`.nav_params`)."""
@@ -103,19 +94,22 @@ def _ros_etc() -> tuple[str, ...]:
     return tuple(p for p in _ROS_ETC if Path(p).exists())
 
 
-def build_limits_for(limits: MissionLimits, options: Ros1Options) -> BuildLimits:
+def build_limits_for(limits: RunLimits) -> BuildLimits:
     """The build's limits from the run's: the same memory per process (and the same process
     count and file size as every sandboxed run), the run's CPU seconds per process when it has
-    some, and the build's own wall time."""
+    some, and the build's own wall time and folder (:attr:`RunLimits.build_wall_s`,
+    :attr:`RunLimits.build_folder_mb`: ``--build-timeout``, ``--build-folder``; the folder is a
+    tmpfs of that many MiB and :data:`~usar_replay.ros1.building.build_folder.BUILD_FOLDER_INODES`
+    files, 0: a plain folder)."""
     base = BuildLimits()
     return dataclasses.replace(
         base,
-        wall_s=options.build_wall_s,
+        wall_s=limits.build_wall_s,
         memory_mb=limits.memory_mb,
         cpu_s=limits.cpu_s or base.cpu_s,
         run_memory_mb=limits.run_memory_mb,
         cpus=limits.cpus,
-        folder_mb=options.build_folder_mb,
+        folder_mb=limits.build_folder_mb,
     )
 
 

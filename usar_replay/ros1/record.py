@@ -78,7 +78,7 @@ def record_ros1(
     pkg = find_package(package)
     given = Path(package)
     opts = choose_entry(pkg, options or Ros1Options(), given if given.is_dir() else None)
-    build_limits = build_limits_for(limits or MissionLimits(), opts)
+    build_limits = build_limits_for(limits or MissionLimits())
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None
     process: Callable[..., Any]

@@ -84,7 +84,7 @@ def ros1_process(
     run_limits = limits or MissionLimits()
     built = cached_build(
         pkg,
-        limits=build_limits_for(run_limits, options),
+        limits=build_limits_for(run_limits),
         fixed=uses_kernel_sandbox(run_limits),
     )
     factory: Any = functools.partial(Ros1Process, package=pkg, options=options, built=built)

@@ -20,6 +20,8 @@ import os
 import shutil
 import tempfile
 
+from usar_replay.core.limits import RunLimits
+
 __all__ = [
     "DEFAULT_RUN_FOLDER_MB",
     "RunFolder",
@@ -29,7 +31,7 @@ __all__ = [
     "unmount_under",
 ]
 
-DEFAULT_RUN_FOLDER_MB = 512
+DEFAULT_RUN_FOLDER_MB = RunLimits().run_folder_mb
 """The run folder's default size in MiB (``--run-folder-mb``)."""
 
 _MNT_DETACH = 2

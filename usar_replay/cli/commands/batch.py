@@ -11,6 +11,7 @@ from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
 from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError, UsarError
+from usar_replay.core.limits import BATCH_LIMITS
 
 if TYPE_CHECKING:
     pass
@@ -39,32 +40,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
     )
-    p.add_argument(
-        "--tick-timeout", type=float, default=10.0, metavar="S", help="wall s per tick (10)"
-    )
-    p.add_argument(
-        "--mission-memory", type=int, default=4096, metavar="MIB", help="MiB (4096; 0: none)"
-    )
-    p.add_argument(
-        "--max-log-mib", type=int, default=2048, metavar="MIB", help="log budget (2048; 0: none)"
-    )
-    parser_parts.run_limit_options(p)
-    p.add_argument(
-        "--grade-limit", type=float, default=600.0, metavar="S", help="wall s to grade a log (600)"
-    )
-    p.add_argument(
-        "--cpu-limit", type=int, default=1800, metavar="S", help="mission CPU s (1800; 0: none)"
-    )
-    p.add_argument(
-        "--wall-limit", type=float, default=3600.0, metavar="S", help="wall s per run (3600)"
-    )
-    p.add_argument(
-        "--build-folder",
-        type=int,
-        default=2048,
-        metavar="MIB",
-        help="a ROS 1 team's build folder, MiB, and 100,000 files (2048; 0: no limit)",
-    )
+    parser_parts.limit_options(p, "batch", BATCH_LIMITS)
     p.add_argument(
         "--no-sandbox", action="store_true", help="run missions without bwrap and the guard"
     )
@@ -90,28 +66,14 @@ def run(args: argparse.Namespace) -> int:
 
     from usar_replay.batch.driver import grade_class, plan_class
     from usar_replay.batch.engines import make_engine
-    from usar_replay.batch.plan import JobLimits, parse_seeds
+    from usar_replay.batch.plan import parse_seeds
     from usar_replay.core.settings import RunSettings
     from usar_replay.core.settings import to_toml as settings_to_toml
 
     jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
     if jobs < 1:
         raise UsageError(f"--jobs {jobs}: expected 1 or more")
-    positive = (
-        ("--tick-timeout", args.tick_timeout),
-        ("--wall-limit", args.wall_limit),
-        ("--grade-limit", args.grade_limit),
-    )
-    for opt, value in positive:
-        if not value > 0:
-            raise UsageError(f"{opt} {value}: expected a positive number of seconds")
-    if args.build_folder < 0:
-        raise UsageError(f"--build-folder {args.build_folder}: expected MiB >= 0 (0: no limit)")
-    if args.mission_memory < 0 or args.cpu_limit < 0 or args.max_log_mib < 0:
-        raise UsageError(
-            "--mission-memory, --cpu-limit and --max-log-mib: expected 0 (none) or more"
-        )
-    options.check_run_limits(args)
+    limits = options.run_limits(args)  # before any other work: a bad limit is one line
     base = RunSettings()
     if args.max_sim_time is not None:
         base = dc.replace(base, record=dc.replace(base.record, max_sim_time_s=args.max_sim_time))
@@ -120,22 +82,6 @@ def run(args: argparse.Namespace) -> int:
     if args.thresholds:
         options.thresholds(args)  # a bad file is a usage error before any run
         thresholds = Path(args.thresholds).read_text(encoding="utf-8")
-    limits = JobLimits(
-        tick_timeout_s=args.tick_timeout,
-        memory_mb=args.mission_memory,
-        cpu_s=args.cpu_limit,
-        wall_s=args.wall_limit,
-        sandbox=not args.no_sandbox,
-        max_log_mib=args.max_log_mib,
-        grade_s=args.grade_limit,
-        run_memory_mb=args.run_memory,
-        processes=args.processes,
-        run_folder_mb=args.run_folder,
-        max_holds=args.max_holds,
-        max_capped=args.max_capped,
-        hold_wall_s=args.hold_wall,
-        build_folder_mb=args.build_folder,
-    )
     if args.code_template and not args.code:
         raise UsageError("--code-template: give --code too (it is the code grade's template)")
     if args.code_template:
@@ -156,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
         settings_toml=settings_to_toml(settings),
         thresholds_toml=thresholds,
         limits=limits,
+        sandbox=not args.no_sandbox,
         world_key=options.world_key(args),
     )
     if plan.jobs and not args.no_sandbox:

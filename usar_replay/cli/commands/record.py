@@ -63,21 +63,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="with --ros1: the slowest pace: a tick waits at most dt/R of wall time for the "
         "graph to go idle (default 0.5; 0: no cap)",
     )
-    ros1.add_argument(
-        "--build-timeout",
-        type=parser_parts.positive_seconds,
-        default=900.0,
-        metavar="S",
-        help="with --ros1: wall seconds the catkin build may take (900)",
-    )
-    ros1.add_argument(
-        "--build-folder",
-        type=int,
-        default=2048,
-        metavar="MIB",
-        help="with --ros1: size of the build's workspace while catkin runs, MiB, and 100,000 "
-        "files; filling it: 'build_failed', nothing kept (2048; 0: no limit)",
-    )
     p.set_defaults(func=run)
 
 
@@ -163,15 +148,11 @@ def _record_ros1(
         raise UsageError("--ros1 and --mission: give one mission")
     if args.rtf < 0:
         raise UsageError(f"--rtf {args.rtf:g}: give a factor >= 0 (0: no cap)")
-    if args.build_folder < 0:
-        raise UsageError(f"--build-folder {args.build_folder}: expected MiB >= 0 (0: no limit)")
     opts = Ros1Options(
         launch=args.launch or "",
         node=args.node or "",
         after_launch=tuple(args.after_launch),
         rtf=args.rtf,
-        build_wall_s=args.build_timeout,
-        build_folder_mb=args.build_folder,
         given_settings=options.given_settings(args),
     )
     return record_ros1(

@@ -19,11 +19,12 @@ import os
 import shutil
 from pathlib import Path
 
+from usar_replay.core.limits import RunLimits
 from usar_replay.sandbox.run_folder import mount_tmpfs, tmpfs_full, unmount
 
 __all__ = ["BUILD_FOLDER_INODES", "DEFAULT_BUILD_FOLDER_MB", "BuildFolder"]
 
-DEFAULT_BUILD_FOLDER_MB = 2048
+DEFAULT_BUILD_FOLDER_MB = RunLimits().build_folder_mb
 """The build folder's default size, MiB (``--build-folder``): the course template's build is
 some 60 MiB, usar's underlay some 20 MiB."""
 BUILD_FOLDER_INODES = 100_000

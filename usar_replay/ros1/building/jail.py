@@ -23,11 +23,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from usar_replay.core.limits import RunLimits
 from usar_replay.sandbox import cpu_sets, kernel_sandbox
 
 __all__ = ["BUILD_WALL_S", "BuildLimits", "BuildOutcome", "run_jailed"]
 
-BUILD_WALL_S = 900.0
+BUILD_WALL_S = RunLimits().build_wall_s
 """The build's default wall-clock limit, seconds."""
 
 _OUTPUT_CAP = 8 * 1024 * 1024
