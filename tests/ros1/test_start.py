@@ -96,7 +96,7 @@ def test_no_instructions_and_two_nodes_names_the_candidates(tmp_path: Path) -> N
     with pytest.raises(UnclearStart) as err:
         decide(pkg, "final_project")
     text = str(err.value)
-    assert "explorer_node, follower_node" in text and "usar.toml" in text
+    assert "explorer_node, follower_node" in text and "--starts FILE" in text
     assert "\n" not in text and isinstance(err.value, UsageError)
 
 
@@ -111,7 +111,7 @@ def test_usar_toml_overrides_the_text(tmp_path: Path) -> None:
     assert (start.node, start.after_launch, start.source) == (
         "b",
         ("rostopic pub -1 /go std_msgs/Bool true",),
-        "usar.toml [ros1]",
+        "the team's usar.toml [ros1]",
     )
 
 
