@@ -314,7 +314,7 @@ def test_the_instructors_start_wins_over_the_teams_files(tmp_path: Path) -> None
     told = InstructorStart(node="b", note="agreed", label="the instructor's starts.toml [p]")
     start = decide(pkg, "final_project", instructor=told)
     assert (start.node, start.after_launch) == ("b", ())
-    assert start.source == "the instructor's starts.toml [p] (agreed)"
+    assert start.source == "the instructor's starts.toml [p]: agreed"
     # only third commands: the team's start, the instructor's third commands
     (pkg / "usar.toml").unlink()
     told = InstructorStart(after_launch=("rosservice call /go",), label="the instructor's s [p]")

@@ -25,7 +25,7 @@ def test_a_table_per_team(tmp_path: Path) -> None:
         "final_project_node",
         ("rosservice call /start 'data: true'",),
     )
-    assert g7.source == "the instructor's starts.toml [group7] (office hours)"
+    assert g7.source == "the instructor's starts.toml [group7]: office hours"
     assert starts["group9"].after_launch == ("rostopic pub -1 /go std_msgs/Bool true",)
     assert starts["group9"].launch == starts["group9"].node == ""
     assert InstructorStart.from_json(g7.to_json()) == g7

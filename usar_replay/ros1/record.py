@@ -35,17 +35,23 @@ from usar_replay.ros1.building.workspace import (
     remove_tree,
 )
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
+from usar_replay.ros1.starts_file import InstructorStart
 from usar_replay.world.scenario import Scenario
 
 __all__ = ["choose_entry", "record_ros1"]
 
 
-def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = None) -> Ros1Options:
+def choose_entry(
+    pkg: Package,
+    options: Ros1Options,
+    team_dir: Path | None = None,
+    instructor: InstructorStart | None = None,
+) -> Ros1Options:
     """The start of the package (:func:`usar_replay.ros1.start.decide`: ``--launch``/``--node``,
-    else the team's ``usar.toml``, instructions, README, the package's shape), with where it
-    was read; :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when
-    nothing decides it. ``team_dir``: the folder handed in (a repository around the
-    package)."""
+    else the instructor's starts file's table for the team, the team's ``usar.toml``,
+    instructions, README, the package's shape), with where it was read;
+    :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when nothing
+    decides it. ``team_dir``: the folder handed in (a repository around the package)."""
     chosen = start.decide(
         pkg.path,
         pkg.name,
@@ -53,6 +59,7 @@ def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = Non
         node=options.node,
         team_dir=team_dir,
         after_launch=tuple(options.after_launch),
+        instructor=instructor,
     )
     return dataclasses.replace(
         options,
@@ -72,12 +79,16 @@ def record_ros1(
     *,
     options: Ros1Options | None = None,
     limits: MissionLimits | None = None,
+    instructor: InstructorStart | None = None,
 ) -> RecordResult:
-    """Build ``package`` and record it on ``scenario`` into ``out`` (see the module doc)."""
+    """Build ``package`` and record it on ``scenario`` into ``out`` (see the module doc);
+    ``instructor``: the team's table of the instructor's starts file (``usar batch
+    --starts``)."""
     debian.check()
     pkg = find_package(package)
     given = Path(package)
-    opts = choose_entry(pkg, options or Ros1Options(), given if given.is_dir() else None)
+    team_dir = given if given.is_dir() else None
+    opts = choose_entry(pkg, options or Ros1Options(), team_dir, instructor)
     build_limits = build_limits_for(limits or MissionLimits(), opts)
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None

@@ -49,7 +49,7 @@ class InstructorStart:
     @property
     def source(self) -> str:
         """The label, with the instructor's note."""
-        return self.label + (f" ({safe_line(self.note)})" if self.note else "")
+        return self.label + (f": {safe_line(self.note)}" if self.note else "")
 
     def to_json(self) -> dict[str, Any]:
         """Plain data (it crosses to a batch's run as JSON)."""
