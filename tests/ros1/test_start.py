@@ -327,3 +327,45 @@ def test_the_instructors_start_wins_over_the_teams_files(tmp_path: Path) -> None
             "final_project",
             instructor=InstructorStart(node="zz", label="the instructor's s [p]"),
         )
+
+
+def test_the_start_is_checked_against_what_the_build_made(tmp_path: Path) -> None:
+    """A name usar trusted before the build (a ``${VAR}`` target) that the build did not make:
+    its only built executable, said so; among several, one line; a script of the package's
+    own folder is always runnable. The command line's name gets no fallback."""
+    from usar_replay.ros1.start import as_built
+
+    pkg = template(tmp_path / "src" / "p", nodes=())
+    (pkg / "scripts").mkdir()
+    (pkg / "scripts" / "go.py").write_text("#!/usr/bin/env python3\n")
+    devel = tmp_path / "devel"
+    lib = devel / "lib" / "final_project"
+    lib.mkdir(parents=True)
+    (lib / "real_node").write_text("")
+    (lib / "real_node").chmod(0o755)
+    (lib / "data.txt").write_text("")  # not executable: not a node
+    assert as_built("go.py", "README.md line 1", pkg, devel, "final_project").node == "go.py"
+    assert as_built("real_node", "x", pkg, devel, "final_project").source == "x"
+    got = as_built("mystery_node", "README.md line 1", pkg, devel, "final_project")
+    assert (got.node, got.source) == (
+        "real_node",
+        "README.md line 1; `mystery_node` was not built; started its only executable `real_node`",
+    )
+    with pytest.raises(UnclearStart, match=r"^--node: `mystery_node` is not an executable"):
+        as_built("mystery_node", "--node", pkg, devel, "final_project")
+    (lib / "other_node").write_text("")
+    (lib / "other_node").chmod(0o755)
+    with pytest.raises(UnclearStart, match=r"it built other_node, real_node\); the instructor"):
+        as_built("mystery_node", "README.md line 1", pkg, devel, "final_project")
+    # no devel/ (a build that left none): not judged here
+    assert as_built("mystery_node", "s", pkg, tmp_path / "none", "final_project").node == (
+        "mystery_node"
+    )
+
+
+def test_a_renamed_output_trusts_the_written_name_until_the_build(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("final_project_node",))
+    with (pkg / "CMakeLists.txt").open("a") as f:
+        f.write('set_target_properties(final_project_node PROPERTIES OUTPUT_NAME node PREFIX "")\n')
+    (pkg / "README.md").write_text("rosrun final_project node\n")
+    assert decide(pkg, "final_project").node == "node"

@@ -20,9 +20,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core.errors import UnclearStart
 from usar_replay.core.settings import RunSettings
 from usar_replay.pipeline.record import BuildLog, Progress, RecordResult, record, with_latency
 from usar_replay.process.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
+from usar_replay.process.mission_target import MissionTarget
 from usar_replay.ros1 import start
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import (
@@ -70,6 +72,20 @@ def choose_entry(
     )
 
 
+def _as_built(
+    pkg: Package, opts: Ros1Options, built: Built, target: MissionTarget
+) -> tuple[Ros1Options, MissionTarget]:
+    """``opts`` and the log's target with the executable the build made
+    (:func:`usar_replay.ros1.start.as_built`)."""
+    chosen = start.as_built(
+        opts.node, opts.start_source, pkg.path, built.workspace / "devel", pkg.name
+    )
+    if chosen.node == opts.node:
+        return opts, target
+    opts = dataclasses.replace(opts, node=chosen.node, start_source=chosen.source)
+    return opts, dataclasses.replace(ros1_target(pkg, opts, hashed=False), sha256=target.sha256)
+
+
 def record_ros1(
     scenario: Scenario,
     out: str | os.PathLike[str],
@@ -102,6 +118,13 @@ def record_ros1(
             built = cached_build(pkg, limits=build_limits, fixed=fixed)
         else:  # a folder of its own, never inside the run's (which the run may write)
             built, holder = private_build(pkg, limits=build_limits, fixed=fixed)
+
+        try:  # the start's executable as built (issue 51): a fallback said so, or one line
+            opts, target = _as_built(pkg, opts, built, target)
+        except UnclearStart:
+            if holder is not None:
+                remove_tree(holder)
+            raise
 
         def process(*args: Any, **kwargs: Any) -> Ros1Process:
             made.append(Ros1Process(*args, package=pkg, options=opts, built=built, **kwargs))

@@ -64,6 +64,7 @@ __all__ = [
     "MAX_TEXT_BYTES",
     "Start",
     "UnclearStart",
+    "as_built",
     "decide",
     "executables",
     "launch_path",
@@ -83,10 +84,13 @@ _INSTALL_PYTHON = re.compile(
 )
 _PROJECT = re.compile(r"^[^#\n]*\bproject\s*\(\s*([A-Za-z0-9_]+)", re.MULTILINE | re.I)
 _UNKNOWN_BUILD = re.compile(
-    r"^[^#\n]*\b(add_executable\s*\(\s*[^\s()]*\$\{(?!PROJECT_NAME\})|add_subdirectory\s*\()",
+    r"^[^#\n]*\b(add_executable\s*\(\s*[^\s()]*\$\{(?!PROJECT_NAME\})|add_subdirectory\s*\("
+    r"|OUTPUT_NAME\b|RUNTIME_OUTPUT_DIRECTORY\b)",
     re.MULTILINE | re.I,
 )
-"""What makes the executables a package builds unknowable from its ``CMakeLists.txt``."""
+"""What makes the executables a package builds unknowable from its ``CMakeLists.txt`` (a
+target usar cannot resolve, a subfolder's, a renamed output): then a written name is checked
+after the build instead (:func:`as_built`)."""
 _SKIP = frozenset({"build", "devel", "install", ".git", "log", "logs", "__pycache__"})
 WORLD_LAUNCH = "multiple_robots.launch"
 """The course's world launch file: written beside a team's node, both are started."""
@@ -485,6 +489,35 @@ def _found(pkg: _Package, team_dir: Path | None) -> Start:
         f"{len(exes)} executables ({_listed(exes)}), {len(launches)} launch files; the "
         'instructor names one with usar batch --starts FILE (a table per team: node = "EXE" '
         'or launch = "FILE"), or --node/--launch'
+    )
+
+
+def as_built(node: str, source: str, pkg_dir: Path, devel: Path, package: str) -> Start:
+    """The executable to start, checked against what the build made (``devel/lib/PKG/``) and
+    the package's files (a script ``rosrun`` finds in its folder): a name it did not build is
+    the TA's fallback as in a text (its only built executable, said in the source), or
+    :class:`UnclearStart` with that line, never a ``rosrun`` that exits 3 and a team blamed
+    for a crash of code that never ran. The command line's and the instructor's names get no
+    fallback (a usage error, theirs to fix). A workspace without ``devel/`` is not judged."""
+    kept = Start(node=node, source=source)
+    lib = devel / "lib" / package
+    if not node or not devel.is_dir() or node in {p.name for p in _files(pkg_dir, ("",))}:
+        return kept
+    try:
+        built = sorted(
+            e.name for e in os.scandir(lib) if e.is_file(follow_symlinks=False)
+            and os.access(e.path, os.X_OK)
+        )  # fmt: skip
+    except OSError:
+        built = []
+    if node in built:
+        return kept
+    if len(built) == 1 and not source.startswith(("--", "the instructor's")):
+        note = f"`{safe_line(node)}` was not built; started its only executable `{built[0]}`"
+        return Start(node=built[0], source=f"{source}; {note}")
+    raise UnclearStart(
+        f"{source}: `{safe_line(node)}` is not an executable the package built (it built "
+        f"{_listed(built)}); the instructor names one with usar batch --starts FILE (or --node)"
     )
 
 
