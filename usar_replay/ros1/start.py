@@ -91,6 +91,8 @@ _UNKNOWN_BUILD = re.compile(
 """What makes the executables a package builds unknowable from its ``CMakeLists.txt`` (a
 target usar cannot resolve, a subfolder's, a renamed output): then a written name is checked
 after the build instead (:func:`as_built`)."""
+_MAX_FILES = 2000
+"""Files of a package looked at (its launch files, its scripts); past it, unknown."""
 _SKIP = frozenset({"build", "devel", "install", ".git", "log", "logs", "__pycache__"})
 WORLD_LAUNCH = "multiple_robots.launch"
 """The course's world launch file: written beside a team's node, both are started."""
@@ -143,7 +145,7 @@ def _files(pkg_dir: Path, names: tuple[str, ...]) -> list[Path]:
     for folder, dirs, files in os.walk(pkg_dir):
         dirs[:] = sorted(d for d in dirs if d not in _SKIP and not d.startswith("."))
         found += [Path(folder) / f for f in sorted(files) if f.endswith(names)]
-        if len(found) > 2000:
+        if len(found) > _MAX_FILES:
             break
     return found
 
@@ -204,8 +206,10 @@ class _Package:
 
 def _package(pkg_dir: Path, package: str) -> _Package:
     text = _read_text(pkg_dir / "CMakeLists.txt")
-    unresolved = text is None or bool(_UNKNOWN_BUILD.search(text))
-    files = frozenset(p.name for p in _files(pkg_dir, ("",)))
+    found = _files(pkg_dir, ("",))
+    # a walk cut short (a huge folder) cannot say a file is not there
+    unresolved = text is None or bool(_UNKNOWN_BUILD.search(text)) or len(found) > _MAX_FILES
+    files = frozenset(p.name for p in found)
     return _Package(
         pkg_dir, package, launch_files(pkg_dir), executables(pkg_dir, package), files,
         not unresolved,
@@ -501,7 +505,8 @@ def as_built(node: str, source: str, pkg_dir: Path, devel: Path, package: str) -
     fallback (a usage error, theirs to fix). A workspace without ``devel/`` is not judged."""
     kept = Start(node=node, source=source)
     lib = devel / "lib" / package
-    if not node or not devel.is_dir() or node in {p.name for p in _files(pkg_dir, ("",))}:
+    found = _files(pkg_dir, ("",))
+    if not node or not devel.is_dir() or len(found) > _MAX_FILES or node in {p.name for p in found}:
         return kept
     try:
         built = sorted(
