@@ -58,6 +58,12 @@ def words(text: str) -> list[tuple[str, ...]]:
             "rostopic pub -1 /go std_msgs/String \"data: 'hi'\".",
             ("rostopic", "pub", "-1", "/go", "std_msgs/String", "data: 'hi'"),
         ),
+        # a word processor's quotes
+        (
+            "Run \u201crosservice call /start \u201cdata: true\u201d\u201d now.",
+            ("rosservice", "call", "/start", "data: true"),
+        ),
+        ("Run \u2018rosrun p explorer\u2019.", ("rosrun", "p", "explorer")),
         # a comment after it
         ("rosrun p explorer  # the explorer", ("rosrun", "p", "explorer")),
     ],

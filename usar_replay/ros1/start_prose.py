@@ -31,6 +31,9 @@ _QUOTES = "\"'`"
 _PROMPTS = "$#>"
 _PUNCT = frozenset("();<>|&")
 _TRAILING = ".,;:!?"
+_TYPOGRAPHIC = str.maketrans("\u201c\u201d\u201e\u2018\u2019\u201a", "\"\"\"'''")
+"""A word processor's quotes (a handout pasted into ``instructions.txt``) read as the
+keyboard's."""
 _NAME = re.compile(r"[\w./~+-]*")
 THIRD_COMMANDS = (("rosservice", "call"), ("rostopic", "pub"))
 """The TA's third commands (the handout's ``rosservice call /start "data: true"``); no other
@@ -140,6 +143,7 @@ def parse_commands(text: str) -> list[Command]:
     for number, line in enumerate(text.splitlines(), start=1):
         if not _COMMAND.search(line):
             continue
+        line = line.translate(_TYPOGRAPHIC)
         for span in _spans(line):
             for piece in _pieces(_tokens(span)):
                 if _is_command(piece):
