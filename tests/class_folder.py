@@ -9,7 +9,7 @@ The shapes, each one of the real class's:
   command, ``rosservice call /start "data: true"``, which starts the mission in its callback;
 * ``one_node``: no instructions, one executable;
 * ``two_nodes``: no instructions, two executables (a TA would ask the team: ``no_mission``);
-* ``override``: a README naming the wrong node, and the instructor's ``usar.toml [ros1]``.
+* ``override``: a README naming the wrong node, and the team's own ``usar.toml [ros1]``.
 """
 
 from __future__ import annotations

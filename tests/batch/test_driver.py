@@ -403,3 +403,22 @@ def test_a_batch_runs_no_more_runs_at_once_than_free_cpus_and_shares_them_out() 
     assert share_cpus(3, 8, 8) == (3, 2)
     assert share_cpus(2, 0, 2) == (1, 1)  # all held by other runs: one at a time, waiting
     assert share_cpus(2, 0, 0) == (2, 0)  # no CPU sets here: as asked, none claimed
+
+
+def test_the_instructors_starts_file_mistakes_are_usage_errors(tmp_path: Path) -> None:
+    """``usar batch --starts``: a third command that is shell text, or a table naming no team,
+    is exit 2 with one line before anything runs (issue 50)."""
+    from clitools import usar
+
+    (tmp_path / "subs").mkdir()
+    (tmp_path / "subs" / "a.py").write_text("def main(): pass\n")
+    bad = tmp_path / "starts.toml"
+    bad.write_text("[a]\nafter_launch = ['echo $(id -u); sleep 1000']\n")
+    done = usar("batch", "subs", "-o", "out", "--starts", str(bad), "--no-sandbox", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(f"usar: error: --starts {bad} [a]: after_launch 'echo $(id")
+    assert len(done.stderr.splitlines()) == 1
+    bad.write_text('[b]\nnode = "x"\n')
+    done = usar("batch", "subs", "-o", "out", "--starts", str(bad), "--no-sandbox", cwd=tmp_path)
+    assert done.returncode == 2 and "--starts: [b] is no team of" in done.stderr
+    assert not (tmp_path / "out").exists()

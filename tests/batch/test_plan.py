@@ -226,3 +226,61 @@ def test_parse_seeds() -> None:
         p.parse_seeds("a")
     with pytest.raises(UsageError, match="0-20000 is not a range from low to high"):
         p.parse_seeds("0-20000")
+
+
+def _ros_team(root: Path, name: str, readme: str) -> Path:
+    team = root / name
+    (team / "launch").mkdir(parents=True)
+    (team / "package.xml").write_text(
+        "<package><name>final_project</name></package>\n", encoding="utf-8"
+    )
+    (team / "CMakeLists.txt").write_text(
+        "project(final_project)\nadd_executable(a a.cpp)\nadd_executable(b b.cpp)\n",
+        encoding="utf-8",
+    )
+    (team / "README.md").write_text(readme, encoding="utf-8")
+    return team
+
+
+def test_the_instructors_starts_are_labelled_theirs_and_rerun_the_team(tmp_path: Path) -> None:
+    """issue 50: the team's usar.toml is the team's word; the instructor's starts file (not in
+    any team's folder) is the instructor's, and changing it redoes that team's runs only."""
+    from usar_replay.ros1.starts_file import InstructorStart
+
+    root = tmp_path / "subs"
+    _ros_team(root, "own", "run `rosrun final_project a`\n")
+    (root / "own" / "usar.toml").write_text('[ros1]\nnode = "b"\n', encoding="utf-8")
+    _ros_team(root, "told", "rosrun final_project a\n")
+    told = InstructorStart(node="b", note="office hours", label="the instructor's s.toml [told]")
+    subs = {s.team: s for s in p.discover(root, {"told": told})}
+    assert (subs["own"].start, subs["own"].start_source) == (
+        "rosrun final_project b",
+        "the team's usar.toml [ros1]",
+    )
+    assert (subs["told"].start, subs["told"].start_source) == (
+        "rosrun final_project b",
+        "the instructor's s.toml [told]: office hours",
+    )
+    worlds = p.make_worlds([1], [])
+    jobs = {j.team: j for j in _plan(list(subs.values()), worlds, tmp_path / "out").jobs}
+    assert "instructor_start" not in jobs["own"].inputs
+    assert jobs["told"].instructor_start == told.to_json()
+    assert p.RunJob.from_json(jobs["told"].to_json()) == jobs["told"]
+    again = {s.team: s for s in p.discover(root, {"told": replace(told, node="a")})}
+    rejobs = {j.team: j for j in _plan(list(again.values()), worlds, tmp_path / "out").jobs}
+    assert rejobs["told"].inputs_key != jobs["told"].inputs_key
+    assert rejobs["own"].inputs_key == jobs["own"].inputs_key
+    with pytest.raises(UsageError, match=r"--starts: \[tlod\] is no team of"):
+        p.discover(root, {"tlod": told})
+
+
+def test_a_written_start_the_package_cannot_start_is_the_teams_line(tmp_path: Path) -> None:
+    """issue 51: a name the package does not build, with no obvious fallback: the team's
+    no_mission with the line that names it (never a crash of code that never ran)."""
+    root = tmp_path / "subs"
+    _ros_team(root, "t", '4. Run command "rosrun final_project final_project_nod"\n')
+    [sub] = p.discover(root)
+    assert (sub.target, sub.problem_outcome) == ("", "no_mission")
+    assert sub.problem.startswith(
+        "README.md line 1 names `final_project_nod`, which the package does not build (it has a, b)"
+    )

@@ -4,7 +4,8 @@ team's problem its own verdict, the class on one page.
 The teams (:mod:`class_folder`) are the real class's shapes, as small Python-node packages: the
 template's twelve launch files with ``doc/instructions.txt`` naming the world and the node, a
 README naming a launch file and a ``rosservice call``, one node and no instructions, two nodes
-and no instructions, an instructor's ``usar.toml`` over a wrong README. Real catkin_make,
+and no instructions, a team's own ``usar.toml`` over its wrong README (started as the instructor's
+starts file says in the batch: ``--starts``, issue 50). Real catkin_make,
 roslaunch, rosservice and the bridge, in the kernel sandbox, on the one-room world.
 """
 
@@ -59,7 +60,7 @@ def test_the_plan_reads_each_teams_start(subs: Path) -> None:
     assert "explorer_node.py, follower_node.py" in duo.problem
     assert (teams["override"].start, teams["override"].start_source) == (
         "rosrun chosen right.py",
-        "usar.toml [ros1]",
+        "the team's usar.toml [ros1]",
     )
 
 
@@ -70,6 +71,9 @@ def test_a_class_folder_grades_end_to_end(
     save(one_room(), world)
     out = tmp_path / "out"
     args = ["batch", str(subs), "-o", str(out), "--scenario", str(world), "--jobs", "2"]
+    starts = tmp_path / "starts.toml"  # the instructor's word, outside every team's folder
+    starts.write_text('[override]\nnode = "right.py"\nnote = "README names wrong.py"\n')
+    args += ["--starts", str(starts)]
     code = main([*args, "--max-sim-time", "3", "--gradescope", "--quiet"])
     said = capsys.readouterr()
     assert code == 0, said.out + said.err  # every run has a grade: no error of usar's
@@ -84,7 +88,10 @@ def test_a_class_folder_grades_end_to_end(
     assert grades["template"]["start"] == (
         "roslaunch final_project multiple_robots.launch; rosrun final_project explorer.py"
     )
-    assert grades["override"]["start_source"] == "usar.toml [ros1]"
+    assert grades["override"]["start"] == "rosrun chosen right.py"
+    assert grades["override"]["start_source"] == (
+        "the instructor's starts.toml [override]: README names wrong.py"
+    )
     # the two commands ran together: the world's parameter loaded, its detector dropped, and the
     # team's node ran; the third command reached the service's callback
     template = open_run(out / "template" / "room.mcap")

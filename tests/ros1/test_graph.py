@@ -63,3 +63,24 @@ def test_roslaunchs_report_of_a_death_is_the_problem(tmp_path: Path) -> None:
     assert graph.launcher_stopping()
     assert tail(graph.log_path, 1) == "Initiating shutdown!"
     assert tail(tmp_path / "absent.log") == ""
+
+
+def test_third_commands_run_as_argv_never_through_a_shell(tmp_path: Path) -> None:
+    graph = _graph(tmp_path, "trap 'exit 0' INT\nwhile :; do sleep 0.1; done\n")
+    pwned = tmp_path / "pwned"
+    try:
+        graph.run_after_launch(
+            [
+                f"echo hi > {pwned}",  # not a third command: refused, on record
+                f"rostopic pub -h $(touch {pwned}) '; touch {pwned}'",  # words, not shell text
+            ]
+        )
+        assert len(graph.after) == 1
+        graph.after[0].wait(timeout=60)
+    finally:
+        graph.stop()
+    out = graph.output_dir
+    refused = (out / "after_launch_1.out").read_text()
+    assert refused == f"usar: refused: not a rosservice call or rostopic pub: echo hi > {pwned}\n"
+    assert "Usage: rostopic pub" in (out / "after_launch_2.out").read_text()
+    assert not pwned.exists()

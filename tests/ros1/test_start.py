@@ -96,7 +96,7 @@ def test_no_instructions_and_two_nodes_names_the_candidates(tmp_path: Path) -> N
     with pytest.raises(UnclearStart) as err:
         decide(pkg, "final_project")
     text = str(err.value)
-    assert "explorer_node, follower_node" in text and "usar.toml" in text
+    assert "explorer_node, follower_node" in text and "--starts FILE" in text
     assert "\n" not in text and isinstance(err.value, UsageError)
 
 
@@ -111,7 +111,7 @@ def test_usar_toml_overrides_the_text(tmp_path: Path) -> None:
     assert (start.node, start.after_launch, start.source) == (
         "b",
         ("rostopic pub -1 /go std_msgs/Bool true",),
-        "usar.toml [ros1]",
+        "the team's usar.toml [ros1]",
     )
 
 
@@ -185,3 +185,187 @@ def test_executables_include_installed_python_scripts(tmp_path: Path) -> None:
         "  DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})\n"
     )
     assert executables(tmp_path, "p") == ["go.py", "p_node"]
+
+
+# issue 51: what a TA reads, and what a TA does when the written start cannot start
+
+
+def test_a_quoted_command_in_a_numbered_sentence_is_the_start(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("${PROJECT_NAME}_node", "helper"))
+    (pkg / "doc").mkdir()
+    (pkg / "doc" / "instructions.txt").write_text(
+        "5.Open a terminal and run roslaunch final_project multiple_robots.launch.\n"
+        '6.Open another terminal and run "rosrun final_project final_project_node" to run the '
+        "executable scripts.\n"
+    )
+    start = decide(pkg, "final_project")
+    assert (start.launch, start.node) == ("multiple_robots.launch", "final_project_node")
+    assert start.source == "doc/instructions.txt lines 1, 2"
+
+
+def test_a_name_the_package_does_not_build_starts_its_only_executable(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("final_project_node",))
+    (pkg / "doc").mkdir()
+    (pkg / "doc" / "instructions.txt").write_text(
+        "1. catkin_make\n2. source devel/setup.bash\n3. roscore\n4. read on\n"
+        "5. rosrun final_project final_project_nod\n"
+    )
+    start = decide(pkg, "final_project")
+    assert (start.launch, start.node) == ("", "final_project_node")
+    assert start.source == (
+        "doc/instructions.txt line 5 names `final_project_nod`, which the package does not "
+        "build; started its only executable `final_project_node`"
+    )
+
+
+def test_a_name_the_package_does_not_build_among_several_is_a_line(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("explorer", "follower"))
+    (pkg / "README.md").write_text("Run `rosrun final_project explorer_node`.\n")
+    with pytest.raises(UnclearStart) as err:
+        decide(pkg, "final_project")
+    text = str(err.value)
+    assert text.startswith(
+        "README.md line 1 names `explorer_node`, which the package does not build (it has "
+        "explorer, follower)"
+    )
+    assert "--starts" in text and "\n" not in text
+
+
+def test_a_script_of_the_package_is_a_name_it_has(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("a", "b"))
+    (pkg / "scripts").mkdir()
+    (pkg / "scripts" / "go.py").write_text("#!/usr/bin/env python3\n")
+    (pkg / "README.md").write_text("rosrun final_project go.py\n")
+    assert decide(pkg, "final_project").node == "go.py"
+
+
+def test_a_build_usar_cannot_read_trusts_the_written_name(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("a",))
+    with (pkg / "CMakeLists.txt").open("a") as f:
+        f.write("add_executable(${NODE_NAME} src/x.cpp)\n")
+    (pkg / "README.md").write_text("rosrun final_project mystery_node\n")
+    start = decide(pkg, "final_project")
+    assert (start.node, start.source) == ("mystery_node", "README.md line 1")
+
+
+def test_a_launch_file_of_that_name_in_another_case_is_started(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("a", "b"))
+    (pkg / "launch" / "explore.launch").write_text("<launch/>\n")
+    (pkg / "README.md").write_text("roslaunch final_project Explore.launch\n")
+    start = decide(pkg, "final_project")
+    assert start.launch == "explore.launch"
+    assert start.source == (
+        "README.md line 1 names `Explore.launch`, which the package does not have; started "
+        "its launch file `explore.launch`"
+    )
+
+
+def test_a_missing_launch_file_with_no_fallback_is_a_line(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("a", "b"))
+    (pkg / "README.md").write_text("roslaunch final_project nowhere.launch\n")
+    with pytest.raises(UnclearStart, match=r"^README.md line 1 names `nowhere.launch`, which"):
+        decide(pkg, "final_project")
+
+
+def test_the_worlds_launch_file_missing_beside_a_node_is_left_out(tmp_path: Path) -> None:
+    pkg = tmp_path / "p"
+    pkg.mkdir()
+    (pkg / "package.xml").write_text("<package><name>final_project</name></package>\n")
+    (pkg / "CMakeLists.txt").write_text("project(final_project)\nadd_executable(a a.cpp)\n")
+    (pkg / "README.md").write_text(
+        "roslaunch final_project multiple_robots.launch\nrosrun final_project a\n"
+    )
+    start = decide(pkg, "final_project")
+    assert (start.launch, start.node) == ("", "a")
+    assert start.source.startswith("README.md line 2; line 1 names `multiple_robots.launch`")
+
+
+# issue 50: the team's usar.toml is the team's word; the instructor's lives outside the folder
+
+
+def test_the_teams_usar_toml_third_commands_are_never_shell_text(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("a",))
+    (pkg / "usar.toml").write_text(
+        "[ros1]\nnode = \"a\"\nafter_launch = ['echo rt $(id -u); sleep 1000', "
+        "'rosservice call /start \"data: true\"']\n"
+    )
+    start = decide(pkg, "final_project")
+    assert start.after_launch == ("rosservice call /start 'data: true'",)
+    assert start.source == (
+        "the team's usar.toml [ros1]; after_launch 1 left out: not a rosservice call or "
+        "rostopic pub"
+    )
+
+
+def test_the_teams_usar_toml_naming_a_missing_node_falls_back_as_a_text(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("final_project_node",))
+    (pkg / "usar.toml").write_text('[ros1]\nnode = "final_project_nod"\n')
+    start = decide(pkg, "final_project")
+    assert start.node == "final_project_node"
+    assert start.source.startswith("the team's usar.toml [ros1]; node 'final_project_nod'")
+
+
+def test_the_instructors_start_wins_over_the_teams_files(tmp_path: Path) -> None:
+    from usar_replay.ros1.starts_file import InstructorStart
+
+    pkg = template(tmp_path / "p", nodes=("a", "b"))
+    (pkg / "usar.toml").write_text('[ros1]\nnode = "a"\n')
+    (pkg / "README.md").write_text("rosrun final_project a\nrosservice call /team_go\n")
+    told = InstructorStart(node="b", note="agreed", label="the instructor's starts.toml [p]")
+    start = decide(pkg, "final_project", instructor=told)
+    assert (start.node, start.after_launch) == ("b", ())
+    assert start.source == "the instructor's starts.toml [p]: agreed"
+    # only third commands: the team's start, the instructor's third commands
+    (pkg / "usar.toml").unlink()
+    told = InstructorStart(after_launch=("rosservice call /go",), label="the instructor's s [p]")
+    start = decide(pkg, "final_project", instructor=told)
+    assert (start.node, start.after_launch) == ("a", ("rosservice call /go",))
+    assert start.source == "README.md line 1; after_launch from the instructor's s [p]"
+    with pytest.raises(UnclearStart, match=r"the instructor's s \[p\]: node = 'zz'"):
+        decide(
+            pkg,
+            "final_project",
+            instructor=InstructorStart(node="zz", label="the instructor's s [p]"),
+        )
+
+
+def test_the_start_is_checked_against_what_the_build_made(tmp_path: Path) -> None:
+    """A name usar trusted before the build (a ``${VAR}`` target) that the build did not make:
+    its only built executable, said so; among several, one line; a script of the package's
+    own folder is always runnable. The command line's name gets no fallback."""
+    from usar_replay.ros1.start import as_built
+
+    pkg = template(tmp_path / "src" / "p", nodes=())
+    (pkg / "scripts").mkdir()
+    (pkg / "scripts" / "go.py").write_text("#!/usr/bin/env python3\n")
+    devel = tmp_path / "devel"
+    lib = devel / "lib" / "final_project"
+    lib.mkdir(parents=True)
+    (lib / "real_node").write_text("")
+    (lib / "real_node").chmod(0o755)
+    (lib / "data.txt").write_text("")  # not executable: not a node
+    assert as_built("go.py", "README.md line 1", pkg, devel, "final_project").node == "go.py"
+    assert as_built("real_node", "x", pkg, devel, "final_project").source == "x"
+    got = as_built("mystery_node", "README.md line 1", pkg, devel, "final_project")
+    assert (got.node, got.source) == (
+        "real_node",
+        "README.md line 1; `mystery_node` was not built; started its only executable `real_node`",
+    )
+    with pytest.raises(UnclearStart, match=r"^--node: `mystery_node` is not an executable"):
+        as_built("mystery_node", "--node", pkg, devel, "final_project")
+    (lib / "other_node").write_text("")
+    (lib / "other_node").chmod(0o755)
+    with pytest.raises(UnclearStart, match=r"it built other_node, real_node\); the instructor"):
+        as_built("mystery_node", "README.md line 1", pkg, devel, "final_project")
+    # no devel/ (a build that left none): not judged here
+    assert as_built("mystery_node", "s", pkg, tmp_path / "none", "final_project").node == (
+        "mystery_node"
+    )
+
+
+def test_a_renamed_output_trusts_the_written_name_until_the_build(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", nodes=("final_project_node",))
+    with (pkg / "CMakeLists.txt").open("a") as f:
+        f.write('set_target_properties(final_project_node PROPERTIES OUTPUT_NAME node PREFIX "")\n')
+    (pkg / "README.md").write_text("rosrun final_project node\n")
+    assert decide(pkg, "final_project").node == "node"

@@ -15,7 +15,7 @@ import os
 import sys
 import textwrap
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -44,6 +44,7 @@ from usar_replay.core.errors import UsageError
 from usar_replay.core.limits import RunLimits
 from usar_replay.core.outfiles import write_text
 from usar_replay.core.safe_text import safe_line
+from usar_replay.ros1.starts_file import InstructorStart
 from usar_replay.world.world_key import WorldKey
 
 __all__ = ["BatchSummary", "grade_class", "plan_class", "require_sandbox"]
@@ -108,11 +109,12 @@ def plan_class(
     limits: RunLimits | None = None,
     sandbox: bool = True,
     world_key: WorldKey | None = None,
+    starts: Mapping[str, InstructorStart] | None = None,
 ) -> Plan:
-    """The plan of a batch: teams, worlds (seeded ones keyed by ``world_key``: hidden worlds),
-    and which runs still need doing, each under ``limits`` (default:
-    :data:`~usar_replay.core.limits.BATCH_LIMITS`), in the kernel sandbox unless ``sandbox`` is
-    False (``--no-sandbox``)."""
+    """The plan of a batch: teams (started as the instructor's ``starts`` say, where they
+    do), worlds (seeded ones keyed by ``world_key``: hidden worlds), and which runs still need
+    doing, each under ``limits`` (default: :data:`~usar_replay.core.limits.BATCH_LIMITS`), in the
+    kernel sandbox unless ``sandbox`` is False (``--no-sandbox``)."""
     out, subs_root = Path(out_dir).resolve(), Path(submissions_dir).resolve()
     if out == subs_root or out.is_relative_to(subs_root) or subs_root.is_relative_to(out):
         raise UsageError(
@@ -121,7 +123,7 @@ def plan_class(
         )
     if sandbox:
         require_sandbox()
-    subs = discover(submissions_dir)
+    subs = discover(submissions_dir, starts)
     worlds = make_worlds(seeds, scenarios, world_key)
     return make_plan(
         subs,

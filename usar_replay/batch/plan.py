@@ -34,7 +34,7 @@ import os
 import re
 import stat
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +46,7 @@ from usar_replay.core.folder_walk import linked, shown
 from usar_replay.core.limits import BATCH_LIMITS, RunLimits
 from usar_replay.ros1 import start
 from usar_replay.ros1.building.workspace import NoPackage, SeveralPackages, find_package
+from usar_replay.ros1.starts_file import InstructorStart
 from usar_replay.world.world_key import WorldKey
 
 __all__ = [
@@ -92,7 +93,10 @@ class Submission:
     start: str = ""
     """A ROS 1 team's start as a TA types it (``roslaunch P F; rosrun P N``); '' otherwise."""
     start_source: str = ""
-    """Where :attr:`start` was read (``doc/instructions.txt line 7``, ``usar.toml [ros1]``)."""
+    """Where :attr:`start` was read (``doc/instructions.txt line 7``, ``the team's usar.toml
+    [ros1]``, ``the instructor's starts.toml [group7]``)."""
+    instructor_start: dict[str, Any] = field(default_factory=dict)
+    """The team's table of the instructor's starts file (``usar batch --starts``), as JSON."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,6 +149,9 @@ class RunJob:
         """This job with its run's CPU set of ``cpus`` CPUs (an engine's share per run)."""
         limits = dataclasses.replace(self.run_limits, cpus=cpus)
         return dataclasses.replace(self, limits=limits.to_dict())
+
+    instructor_start: dict[str, Any] = field(default_factory=dict)
+    """The instructor's start for the team (:attr:`Submission.instructor_start`)."""
 
     @property
     def inputs_key(self) -> str:
@@ -237,7 +244,9 @@ def team_name(raw: str) -> str:
     return name
 
 
-def _folder_target(folder: Path) -> tuple[str, str, str, str]:
+def _folder_target(
+    folder: Path, instructor: InstructorStart | None = None
+) -> tuple[str, str, str, str]:
     """(target, problem, start, start source) of a team folder: ``usar.toml``'s ``[mission]
     target``, ``mission.py``, or a catkin package started as :func:`usar_replay.ros1.start.decide`
     reads it (``usar.toml [ros1]``, the instructions, the README, the package's shape)."""
@@ -275,7 +284,7 @@ def _folder_target(folder: Path) -> tuple[str, str, str, str]:
         return target, "", "", ""
     else:  # built and run by usar's ROS 1 bridge, started as the team's text says
         try:
-            chosen = start.decide(pkg.path, pkg.name, team_dir=folder)
+            chosen = start.decide(pkg.path, pkg.name, team_dir=folder, instructor=instructor)
         except UnclearStart as err:
             return "", str(err), "", ""
         return target, "", "; ".join(chosen.commands(pkg.name)), chosen.source
@@ -287,13 +296,18 @@ def _folder_target(folder: Path) -> tuple[str, str, str, str]:
     )
 
 
-def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
+def discover(
+    submissions_dir: str | os.PathLike[str],
+    starts: Mapping[str, InstructorStart] | None = None,
+) -> list[Submission]:
     """The teams of a submissions folder, sorted by name: each ``.py`` file and each sub-folder
     (its ``mission.py``, or the ``[mission] target`` of its ``usar.toml``). Names starting with
     ``.`` or ``_`` are skipped; a folder without a mission is a team with a :attr:`problem`, and
     so is an entry that is a link (``bad_submission``: never read through, as ``usar code``
-    refuses it)."""
+    refuses it). ``starts``: the instructor's starts file by team (folder or team name;
+    :mod:`usar_replay.ros1.starts_file`); a name of it that is no team is a usage error."""
     root = Path(submissions_dir)
+    starts = starts or {}
     if not root.is_dir():
         raise UsageError(f"{root}: not a directory; give the folder of submissions")
     subs: list[Submission] = []
@@ -308,20 +322,35 @@ def discover(submissions_dir: str | os.PathLike[str]) -> list[Submission]:
         else:
             continue
         team = team_name(raw)
+        told = starts.get(entry.name) or starts.get(team)
         if team in seen:
             raise UsageError(
                 f"{root}: {seen[team]!r} and {entry.name!r} are both team {team!r}; rename one"
             )
         seen[team] = entry.name
-        subs.append(_submission(team, entry, root, target, problem))
+        subs.append(_submission(team, entry, root, target, problem, told))
     if not subs:
         raise UsageError(f"{root}: no submissions (a .py file or a folder per team)")
+    unknown = sorted(set(starts) - {s.team for s in subs} - set(seen.values()))
+    if unknown:
+        raise UsageError(
+            f"--starts: [{shown(unknown[0])}] is no team of {root}; its teams are folder names "
+            f"({', '.join(shown(s.team) for s in subs[:5])}{', ...' if len(subs) > 5 else ''})"
+        )
     return subs
 
 
-def _submission(team: str, entry: Path, root: Path, target: str, problem: str) -> Submission:
+def _submission(
+    team: str,
+    entry: Path,
+    root: Path,
+    target: str,
+    problem: str,
+    told: InstructorStart | None = None,
+) -> Submission:
     """One team's :class:`Submission`: a link is never read through, a folder's files are
-    checked before anything else of it is read, then its target is found."""
+    checked before anything else of it is read, then its target is found (as the instructor's
+    ``told`` start says, where there is one)."""
     outcome = "no_mission"
     how = source = ""
     path = entry.resolve()
@@ -338,8 +367,9 @@ def _submission(team: str, entry: Path, root: Path, target: str, problem: str) -
             outcome = "bad_submission"
         else:
             if entry.is_dir():
-                target, problem, how, source = _folder_target(entry)
-    return Submission(team, path, target, digest, problem, outcome, how, source)
+                target, problem, how, source = _folder_target(entry, told)
+    told_json = told.to_json() if told is not None else {}
+    return Submission(team, path, target, digest, problem, outcome, how, source, told_json)
 
 
 def discover_team(folder: str | os.PathLike[str], team: str = "submission") -> Submission:
@@ -471,16 +501,11 @@ def make_plan(
                 team_dir=str(out / sub.team),
                 out_root=str(out),
                 submissions_root=str(Path(submissions_root).resolve()),
-                inputs={
-                    "mission_sha256": sub.sha256,
-                    "mission_target": _relative_target(sub),
-                    "scenario_sha256": world.sha256,
-                    "settings_sha256": settings_sha,
-                    "usar_version": __version__,
-                },
+                inputs=_inputs(sub, world, settings_sha),
                 start=sub.start,
                 start_source=sub.start_source,
                 sandbox=sandbox,
+                instructor_start=sub.instructor_start,
             )
             if sub.problem:
                 plan.invalid.append(
@@ -501,6 +526,20 @@ def make_plan(
                 RunResult.from_files(sub.team, world.name, "finished", grade, record)
             )
     return plan
+
+
+def _inputs(sub: Submission, world: World, settings_sha: str) -> dict[str, str]:
+    """What a finished run was made of: a run is redone when one of these changes."""
+    inputs = {
+        "mission_sha256": sub.sha256,
+        "mission_target": _relative_target(sub),
+        "scenario_sha256": world.sha256,
+        "settings_sha256": settings_sha,
+        "usar_version": __version__,
+    }
+    if sub.instructor_start:  # only then: a class graded without one keeps its runs
+        inputs["instructor_start"] = _key(sub.instructor_start)
+    return inputs
 
 
 def _relative_target(sub: Submission) -> str:

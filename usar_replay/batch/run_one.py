@@ -252,11 +252,15 @@ def _record_ros1(job: RunJob, scenario: Any, log: Path, settings: Any, watchdog:
 
     from usar_replay.ros1.process import Ros1Options
     from usar_replay.ros1.record import record_ros1
+    from usar_replay.ros1.starts_file import InstructorStart
 
     limits = dataclasses.replace(_mission_limits(job), guard=None)
     package = job.target.removeprefix(ROS1_TARGET_PREFIX)
     options = Ros1Options()
-    return record_ros1(scenario, log, package, settings, watchdog, limits=limits, options=options)
+    told = InstructorStart.from_json(job.instructor_start) if job.instructor_start else None
+    return record_ros1(
+        scenario, log, package, settings, watchdog, limits=limits, options=options, instructor=told
+    )
 
 
 def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:

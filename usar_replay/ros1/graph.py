@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import contextlib
 import re
+import shlex
 import signal
 import subprocess
 from pathlib import Path
 from typing import Any
 
-from usar_replay.core.safe_text import team_lines
+from usar_replay.core.safe_text import safe_line, team_lines
 from usar_replay.ros1 import run_files
 from usar_replay.ros1.launch_output import (
     OUTPUT_SUFFIX,
@@ -27,6 +28,7 @@ from usar_replay.ros1.launch_output import (
 )
 from usar_replay.ros1.pacing import shim
 from usar_replay.ros1.pacing.proc_watch import ProcWatch
+from usar_replay.ros1.start_prose import THIRD_COMMANDS
 
 __all__ = ["START_FILE", "Graph", "launch_target", "tail"]
 
@@ -82,21 +84,56 @@ class Graph:
         """Start each command as a TA types it in a third terminal, in the workspace's
         environment (the pacing shim preloaded), beside the graph, its output in a file of its
         own (``after_launch_N``); they run on (a service call whose callback is the mission
-        returns when the mission does) and are stopped with the graph."""
+        returns when the mission does) and are stopped with the graph.
+
+        Never through a shell (issue 50): each command is split into its words as the shell
+        would (:func:`shlex.split`) and run as that argv, and only a ``rosservice call`` or a
+        ``rostopic pub`` runs; any other is refused, its line in its output file (kept with
+        the log). :mod:`.start` reads only such commands; this is the last check."""
+        env: dict[str, str] | None = None
         for number, command in enumerate(commands, start=1):
             label = f"after_launch_{number}"
             out = self.output_dir / (label + OUTPUT_SUFFIX)
+            argv = _third_argv(command)
+            if argv is None:
+                out.write_text(
+                    f"usar: refused: not a rosservice call or rostopic pub: {safe_line(command)}\n",
+                    encoding="utf-8",
+                )
+                continue
+            env = env if env is not None else self._workspace_env()
             with out.open("wb") as f:
                 self.after.append(
                     subprocess.Popen(
-                        ["bash", "-c", f"{self.setup} && exec {command}"],
+                        argv,
                         cwd=self._run,
-                        env=self._env,
+                        env=env,
                         stdin=subprocess.DEVNULL,
                         stdout=f,
                         stderr=subprocess.STDOUT,
                     )
                 )
+
+    def _workspace_env(self) -> dict[str, str]:
+        """The environment the workspace's ``setup.bash`` makes (what a TA's terminal has
+        after sourcing it), read once from ``env -0``: the third commands start in it without
+        a shell of their own."""
+        done = subprocess.run(
+            ["bash", "-c", f"{self.setup} && exec env -0"],
+            cwd=self._run,
+            env=self._env,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            timeout=60,
+            check=False,
+        )
+        env = dict(self._env)
+        if done.returncode == 0:
+            pairs = (
+                item.partition("=") for item in done.stdout.decode(errors="replace").split("\0")
+            )
+            env.update({k: v for k, sep, v in pairs if sep and k})
+        return env
 
     def exit_status(self) -> tuple[int, str] | None:
         """None while running; (exit code, problem) once it ended: roslaunch exits 0 even when
@@ -159,6 +196,16 @@ def launch_target(config: dict[str, Any]) -> tuple[str, str]:
         rel = str(config.get("launch_rel") or config["launch"])
         path.write_text(start_file(config["package"], rel, config["node"]), encoding="utf-8")
     return "", str(path)
+
+
+def _third_argv(command: str) -> list[str] | None:
+    """The words of a ``rosservice call`` / ``rostopic pub`` command, or None for any other
+    (or one that does not split: an open quote)."""
+    try:
+        argv = shlex.split(command)
+    except ValueError:
+        return None
+    return argv if tuple(argv[:2]) in THIRD_COMMANDS else None
 
 
 def tail(path: Path, lines: int = 20) -> str:

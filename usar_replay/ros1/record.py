@@ -20,9 +20,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core.errors import UnclearStart
 from usar_replay.core.settings import RunSettings
 from usar_replay.pipeline.record import BuildLog, Progress, RecordResult, record, with_latency
 from usar_replay.process.mission_process import MissionEnded, MissionLimits, uses_kernel_sandbox
+from usar_replay.process.mission_target import MissionTarget
 from usar_replay.ros1 import start
 from usar_replay.ros1.building import debian
 from usar_replay.ros1.building.workspace import (
@@ -35,17 +37,23 @@ from usar_replay.ros1.building.workspace import (
     remove_tree,
 )
 from usar_replay.ros1.process import Ros1Options, Ros1Process, build_limits_for, ros1_target
+from usar_replay.ros1.starts_file import InstructorStart
 from usar_replay.world.scenario import Scenario
 
 __all__ = ["choose_entry", "record_ros1"]
 
 
-def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = None) -> Ros1Options:
+def choose_entry(
+    pkg: Package,
+    options: Ros1Options,
+    team_dir: Path | None = None,
+    instructor: InstructorStart | None = None,
+) -> Ros1Options:
     """The start of the package (:func:`usar_replay.ros1.start.decide`: ``--launch``/``--node``,
-    else the team's ``usar.toml``, instructions, README, the package's shape), with where it
-    was read; :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when
-    nothing decides it. ``team_dir``: the folder handed in (a repository around the
-    package)."""
+    else the instructor's starts file's table for the team, the team's ``usar.toml``,
+    instructions, README, the package's shape), with where it was read;
+    :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when nothing
+    decides it. ``team_dir``: the folder handed in (a repository around the package)."""
     chosen = start.decide(
         pkg.path,
         pkg.name,
@@ -53,6 +61,7 @@ def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = Non
         node=options.node,
         team_dir=team_dir,
         after_launch=tuple(options.after_launch),
+        instructor=instructor,
     )
     return dataclasses.replace(
         options,
@@ -61,6 +70,20 @@ def choose_entry(pkg: Package, options: Ros1Options, team_dir: Path | None = Non
         after_launch=chosen.after_launch,
         start_source=chosen.source,
     )
+
+
+def _as_built(
+    pkg: Package, opts: Ros1Options, built: Built, target: MissionTarget
+) -> tuple[Ros1Options, MissionTarget]:
+    """``opts`` and the log's target with the executable the build made
+    (:func:`usar_replay.ros1.start.as_built`)."""
+    chosen = start.as_built(
+        opts.node, opts.start_source, pkg.path, built.workspace / "devel", pkg.name
+    )
+    if chosen.node == opts.node:
+        return opts, target
+    opts = dataclasses.replace(opts, node=chosen.node, start_source=chosen.source)
+    return opts, dataclasses.replace(ros1_target(pkg, opts, hashed=False), sha256=target.sha256)
 
 
 def record_ros1(
@@ -72,12 +95,16 @@ def record_ros1(
     *,
     options: Ros1Options | None = None,
     limits: MissionLimits | None = None,
+    instructor: InstructorStart | None = None,
 ) -> RecordResult:
-    """Build ``package`` and record it on ``scenario`` into ``out`` (see the module doc)."""
+    """Build ``package`` and record it on ``scenario`` into ``out`` (see the module doc);
+    ``instructor``: the team's table of the instructor's starts file (``usar batch
+    --starts``)."""
     debian.check()
     pkg = find_package(package)
     given = Path(package)
-    opts = choose_entry(pkg, options or Ros1Options(), given if given.is_dir() else None)
+    team_dir = given if given.is_dir() else None
+    opts = choose_entry(pkg, options or Ros1Options(), team_dir, instructor)
     build_limits = build_limits_for(limits or MissionLimits())
     fixed = uses_kernel_sandbox(limits or MissionLimits())  # built where the run will see it
     holder: Path | None = None
@@ -91,6 +118,13 @@ def record_ros1(
             built = cached_build(pkg, limits=build_limits, fixed=fixed)
         else:  # a folder of its own, never inside the run's (which the run may write)
             built, holder = private_build(pkg, limits=build_limits, fixed=fixed)
+
+        try:  # the start's executable as built (issue 51): a fallback said so, or one line
+            opts, target = _as_built(pkg, opts, built, target)
+        except UnclearStart:
+            if holder is not None:
+                remove_tree(holder)
+            raise
 
         def process(*args: Any, **kwargs: Any) -> Ros1Process:
             made.append(Ros1Process(*args, package=pkg, options=opts, built=built, **kwargs))

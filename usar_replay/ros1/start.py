@@ -9,21 +9,33 @@ usar's own ("the only launch file") can start a real class's packages. The start
 this order, the first that names one winning:
 
 1. ``--launch`` / ``--node`` on the command line;
-2. the team folder's ``usar.toml`` table ``[ros1]`` (``launch``, ``node``, ``after_launch``):
-   the instructor's word where the team's text is unclear or wrong;
-3. ``doc/instructions.txt`` (of the team's folder or of the package);
-4. the README(s) (of the team's folder, then of the package);
-5. the launch file named after the package;
-6. the package's only executable (``add_executable``);
-7. the package's only launch file.
+2. the instructor's starts file (``usar batch --starts FILE``, :mod:`.starts_file`): the
+   instructor's word, which lives outside the team's folder (issue 50);
+3. the team folder's ``usar.toml`` table ``[ros1]`` (``launch``, ``node``, ``after_launch``):
+   the team's own word, read as its text is and labelled so (:data:`TEAM_CONFIG`);
+4. ``doc/instructions.txt`` (of the team's folder or of the package);
+5. the README(s) (of the team's folder, then of the package);
+6. the launch file named after the package;
+7. the package's only executable (``add_executable``);
+8. the package's only launch file.
 
-From a text (3, 4) the package's own ``roslaunch PKG FILE.launch`` and ``rosrun PKG EXE``
-lines are the start (a line naming another package, ``rosrun rviz rviz``, is not), and the
-``rosservice call`` / ``rostopic pub`` lines after them are the TA's third command
-(:attr:`Start.after_launch`). At most one launch file and one executable: a launch file and an
+From a text (4, 5) the package's own ``roslaunch PKG FILE.launch`` and ``rosrun PKG EXE``
+commands are the start, read as a person reads prose (:mod:`.start_prose`: in quotes, after a
+prompt or a number, with a full stop after them); a command naming another package
+(``rosrun rviz rviz``) is not. The ``rosservice call`` / ``rostopic pub`` commands after them
+are the TA's third command (:attr:`Start.after_launch`); no other command of a team's, and no
+shell text, is ever run. At most one launch file and one executable: a launch file and an
 executable both written run together, as the TA's two terminals do. Otherwise
-:class:`UnclearStart` names the candidates and how to choose (``usar.toml``), which a batch
-turns into that team's ``no_mission`` verdict.
+:class:`UnclearStart` names the candidates and how to choose (the instructor's starts file),
+which a batch turns into that team's ``no_mission`` verdict.
+
+A written start that cannot start is the TA's fallback, on record (issue 51): a command naming
+an executable the package does not build starts its only executable, one naming a launch file
+it does not have starts the launch file of that name (another case or extension), and the
+start's source says so (``doc/instructions.txt line 5 names `final_project_nod`, which the
+package does not build; started its only executable `final_project_node```). With no obvious
+fallback the team's verdict is ``no_mission`` with that line, never a crash of code that
+never ran.
 
 Where the start came from is kept with it (``doc/instructions.txt line 7``), and the log, ``usar
 info``, the grade and the class summary show it. Every file read here is the team's: opened
@@ -42,13 +54,17 @@ from pathlib import Path
 
 from usar_replay.core.errors import UnclearStart
 from usar_replay.core.safe_text import safe_line
+from usar_replay.ros1.start_prose import clean_name, parse_commands, third_command
+from usar_replay.ros1.starts_file import InstructorStart
 
 __all__ = [
     "CONFIG_FILE",
+    "TEAM_CONFIG",
     "INSTRUCTIONS",
     "MAX_TEXT_BYTES",
     "Start",
     "UnclearStart",
+    "as_built",
     "decide",
     "executables",
     "launch_path",
@@ -56,16 +72,27 @@ __all__ = [
 ]
 
 CONFIG_FILE = "usar.toml"
+TEAM_CONFIG = f"the team's {CONFIG_FILE} [ros1]"
+"""How a start read from a team folder's ``usar.toml`` is labelled: the team's word."""
 INSTRUCTIONS = "doc/instructions.txt"
 MAX_TEXT_BYTES = 256 * 1024
 """What is read of one instructions file or README (the rest is not looked at)."""
 _README = re.compile(r"^readme(\.(md|txt|rst|markdown))?$", re.IGNORECASE)
-_COMMAND = re.compile(r"\b(roslaunch|rosrun|rosservice\s+call|rostopic\s+pub)\b")
 _ADD_EXECUTABLE = re.compile(r"^[^#\n]*\badd_executable\s*\(\s*([^\s()]+)", re.MULTILINE | re.I)
 _INSTALL_PYTHON = re.compile(
     r"^[^#\n]*\bcatkin_install_python\s*\(\s*PROGRAMS\s+([^)]*?)\s+DESTINATION", re.M | re.I
 )
 _PROJECT = re.compile(r"^[^#\n]*\bproject\s*\(\s*([A-Za-z0-9_]+)", re.MULTILINE | re.I)
+_UNKNOWN_BUILD = re.compile(
+    r"^[^#\n]*\b(add_executable\s*\(\s*[^\s()]*\$\{(?!PROJECT_NAME\})|add_subdirectory\s*\("
+    r"|OUTPUT_NAME\b|RUNTIME_OUTPUT_DIRECTORY\b)",
+    re.MULTILINE | re.I,
+)
+"""What makes the executables a package builds unknowable from its ``CMakeLists.txt`` (a
+target usar cannot resolve, a subfolder's, a renamed output): then a written name is checked
+after the build instead (:func:`as_built`)."""
+_MAX_FILES = 2000
+"""Files of a package looked at (its launch files, its scripts); past it, unknown."""
 _SKIP = frozenset({"build", "devel", "install", ".git", "log", "logs", "__pycache__"})
 WORLD_LAUNCH = "multiple_robots.launch"
 """The course's world launch file: written beside a team's node, both are started."""
@@ -118,7 +145,7 @@ def _files(pkg_dir: Path, names: tuple[str, ...]) -> list[Path]:
     for folder, dirs, files in os.walk(pkg_dir):
         dirs[:] = sorted(d for d in dirs if d not in _SKIP and not d.startswith("."))
         found += [Path(folder) / f for f in sorted(files) if f.endswith(names)]
-        if len(found) > 2000:
+        if len(found) > _MAX_FILES:
             break
     return found
 
@@ -154,78 +181,112 @@ def executables(pkg_dir: Path, package: str) -> list[str]:
 
 
 @dataclass(frozen=True, slots=True)
-class Command:
-    """One command of a text: its words and its line number (1-based)."""
+class _Package:
+    """What a start is checked against: the package's launch files, the executables its
+    ``CMakeLists.txt`` builds, and the names of its files (``rosrun`` runs a script too)."""
 
-    words: tuple[str, ...]
-    line: int
+    path: Path
+    name: str
+    launches: list[str]
+    exes: list[str]
+    files: frozenset[str]
+    builds_known: bool
+    """Whether :attr:`exes` is all it builds (no ``add_executable`` of a name usar cannot
+    resolve, no ``add_subdirectory``): else no written name is called missing."""
 
+    def has_exe(self, exe: str) -> bool:
+        return exe in self.exes or exe in self.files or not self.builds_known
 
-def _pieces(line: str) -> list[str]:
-    """The command texts of a line: its code spans when it has any with a command in them
-    (``run `rosrun p n` then ...``), else the line; each split at ``&&`` and ``;``."""
-    spans = line.split("`")[1::2]
-    texts = [s for s in spans if _COMMAND.search(s)] or [line]
-    out: list[str] = []
-    for text in texts:
-        out += [p for p in re.split(r"&&|;|\|\|", text) if p.strip()]
-    return out
-
-
-def _words(text: str) -> tuple[str, ...]:
-    """The shell words from the command word on (a prompt, a bullet or prose before it is
-    dropped); () when it does not parse."""
-    match = _COMMAND.search(text)
-    if match is None:
-        return ()
-    rest = text[match.start() :].strip().rstrip(".,")
-    try:
-        words = shlex.split(rest, comments=True)
-    except ValueError:  # an open quote: the line as plain words
-        words = rest.split()
-    return tuple(words)
+    def same_launch(self, name: str) -> str:
+        """The package's launch file ``name`` means (its case or extension aside), or ''."""
+        stem = name.lower().removesuffix(".xml").removesuffix(".launch")
+        found = [f for f in self.launches if f.lower().removesuffix(".launch") == stem]
+        return found[0] if len(found) == 1 else ""
 
 
-def parse_commands(text: str) -> list[Command]:
-    """Every ``roslaunch``, ``rosrun``, ``rosservice call`` and ``rostopic pub`` command of a
-    text, in order."""
-    out: list[Command] = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        if not _COMMAND.search(line):
-            continue
-        for piece in _pieces(line):
-            words = _words(piece)
-            if words:
-                out.append(Command(words, number))
-    return out
+def _package(pkg_dir: Path, package: str) -> _Package:
+    text = _read_text(pkg_dir / "CMakeLists.txt")
+    found = _files(pkg_dir, ("",))
+    # a walk cut short (a huge folder) cannot say a file is not there
+    unresolved = text is None or bool(_UNKNOWN_BUILD.search(text)) or len(found) > _MAX_FILES
+    files = frozenset(p.name for p in found)
+    return _Package(
+        pkg_dir, package, launch_files(pkg_dir), executables(pkg_dir, package), files,
+        not unresolved,
+    )  # fmt: skip
 
 
-def _from_text(
-    text: str, where: str, package: str, launches: list[str], exes: list[str]
-) -> Start | None:
+def _args(words: tuple[str, ...]) -> list[str]:
+    """A roslaunch/rosrun command's names: options and ``name:=value`` left out, each read as
+    prose writes it (:func:`.start_prose.clean_name`)."""
+    out = [clean_name(w) for w in words[1:] if not w.startswith("-") and ":=" not in w]
+    return [w for w in out if w]
+
+
+def _launch_word(args: list[str]) -> str:
+    """The launch file a roslaunch's names mean: the first ``.launch``/``.xml`` one, else the
+    second (``roslaunch PKG FILE``)."""
+    for arg in args:
+        if arg.endswith((".launch", ".xml")):
+            return arg
+    return args[1] if len(args) >= 2 else ""
+
+
+def _from_text(text: str, where: str, pkg: _Package) -> Start | None:
     """The start a text writes (None: it writes none of the package's); :class:`UnclearStart`
-    when it writes several."""
+    when it writes several, or names what the package does not have with no obvious
+    fallback (the line that names it, which a batch makes the team's ``no_mission``)."""
     launch: list[tuple[str, int]] = []
     node: list[tuple[str, int]] = []
     after: list[str] = []
+    notes: list[tuple[int, str]] = []
+    missing: list[tuple[int, str, str]] = []  # (line, name, what the package lacks)
     for cmd in parse_commands(text):
-        w = cmd.words
+        w, line = cmd.words, cmd.line
         if w[0] == "roslaunch":
-            args = [a for a in w[1:] if not a.startswith("-") and ":=" not in a]
-            file = Path(args[-1]).name if args else ""
-            ours = (len(args) >= 2 and args[0] == package) or file in launches
-            known = file.endswith(".launch") and ours and file in launches
-            if known and file not in [f for f, _ in launch]:
-                launch.append((file, cmd.line))
+            args = _args(w)
+            file = Path(_launch_word(args)).name
+            if not file or not ((len(args) >= 2 and args[0] == pkg.name) or file in pkg.launches):
+                continue  # another package's (turtlebot3_gazebo's world)
+            if file not in pkg.launches:
+                other = pkg.same_launch(file)
+                if not other:
+                    missing.append((line, file, "which the package does not have"))
+                    continue
+                notes.append((line, f"names `{file}`, which the package does not have; started "
+                                    f"its launch file `{other}`"))  # fmt: skip
+                file = other
+            if file not in [f for f, _ in launch]:
+                launch.append((file, line))
         elif w[0] == "rosrun":
-            args = [a for a in w[1:] if not a.startswith("-") and ":=" not in a]
-            ours = len(args) >= 2 and (args[0] == package or args[1] in exes)
-            if ours and args[1] not in [n for n, _ in node]:
-                node.append((args[1], cmd.line))
-        elif launch or node:  # rosservice call / rostopic pub, after the start
+            args = _args(w)
+            if len(args) < 2 or not (args[0] == pkg.name or args[1] in pkg.exes):
+                continue  # another package's (rosrun rviz rviz)
+            exe = args[1]
+            if not pkg.has_exe(exe):
+                if len(pkg.exes) != 1:
+                    missing.append((line, exe, "which the package does not build"))
+                    continue
+                notes.append((line, f"names `{exe}`, which the package does not build; "
+                                    f"started its only executable `{pkg.exes[0]}`"))  # fmt: skip
+                exe = pkg.exes[0]
+            if exe not in [n for n, _ in node]:
+                node.append((exe, line))
+        elif launch or node or missing:  # rosservice call / rostopic pub, after the start
             command = shlex.join(w)
             if command not in after:
                 after.append(command)
+    for line, name, why in missing:
+        if name == WORLD_LAUNCH and node:  # usar stands in for the course's world anyway
+            notes.append((line, f"names `{name}`, {why}; left out (usar stands in for the "
+                                "course's world)"))  # fmt: skip
+            continue
+        have = _listed(pkg.exes) if "build" in why else _listed(pkg.launches)
+        raise UnclearStart(
+            f"{where} line {line} names `{safe_line(name)}`, {why} (it has {have}), and no "
+            "other start is obvious; the instructor names one with usar batch --starts FILE "
+            "(or --node/--launch)"
+        )
     if not launch and not node:
         return None
     # the world's launch file beside a launch file of the team's: the team's includes it
@@ -234,45 +295,89 @@ def _from_text(
     if len(launch) > 1 or len(node) > 1:
         names = [f for f, _ in launch] + [n for n, _ in node]
         raise UnclearStart(
-            f"{where} starts {len(names)} things of package {package} ({', '.join(names)}); "
-            f"say which in the team's {CONFIG_FILE}: [ros1] launch = \"FILE\" or node = \"EXE\""
+            f"{where} starts {len(names)} things of package {pkg.name} ({', '.join(names)}); "
+            "the instructor says which with usar batch --starts FILE (a table per team: "
+            'launch = "FILE" or node = "EXE"), or --node/--launch'
         )
     lines = sorted({ln for _, ln in launch + node})
-    at = ", ".join(str(n) for n in lines)
     return Start(
         launch=launch[0][0] if launch else "",
         node=node[0][0] if node else "",
         after_launch=tuple(after),
-        source=f"{where} line{'s' if len(lines) > 1 else ''} {at}",
+        source=_where(where, lines, notes),
     )
 
 
-def _config(folder: Path) -> Start | None:
-    """The ``[ros1]`` table of ``folder/usar.toml`` (None without one); :class:`UnclearStart`
-    for one that is not valid."""
+def _where(where: str, lines: list[int], notes: list[tuple[int, str]]) -> str:
+    """``doc/instructions.txt lines 3, 5``, with what a TA would note of them (``line 5 names
+    `final_project_nod`, which the package does not build; started its only executable ...``)."""
+    if len(lines) == 1 and len(notes) == 1 and notes[0][0] == lines[0]:
+        return f"{where} line {lines[0]} {safe_line(notes[0][1])}"
+    at = ", ".join(str(n) for n in lines)
+    text = f"{where} line{'s' if len(lines) > 1 else ''} {at}"
+    return "; ".join([text, *(f"line {n} {safe_line(note)}" for n, note in notes)])
+
+
+def _config(folder: Path, pkg: _Package) -> Start | None:
+    """The ``[ros1]`` table of the team's ``folder/usar.toml`` (None without one), read as
+    the team's text is (issue 50): its launch file and executable checked as a written
+    command is, its third commands only ``rosservice call``/``rostopic pub`` ones (any other,
+    shell text above all, left out and said so); :class:`UnclearStart` for one that is not
+    valid."""
     text = _read_text(folder / CONFIG_FILE)
     if text is None:
         return None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise UnclearStart(f"{CONFIG_FILE} is not valid TOML: {err}") from None
+        raise UnclearStart(f"{CONFIG_FILE} is not valid TOML: {safe_line(str(err))}") from None
+    except RecursionError:
+        raise UnclearStart(f"{CONFIG_FILE} nests tables too deep to read") from None
     table = data.get("ros1")
     if table is None:
         return None
+    label = TEAM_CONFIG
     if not isinstance(table, dict):
-        raise UnclearStart(f"{CONFIG_FILE}: [ros1] must be a table")
+        raise UnclearStart(f"{label} must be a table")
     launch, node, after = table.get("launch", ""), table.get("node", ""), table.get("after_launch")
     after = [] if after is None else after
     if isinstance(after, str):
         after = [after]
     if not isinstance(launch, str) or not isinstance(node, str):
-        raise UnclearStart(f'{CONFIG_FILE}: [ros1] launch and node are strings ("go.launch")')
+        raise UnclearStart(f'{label}: launch and node are strings ("go.launch")')
     if not isinstance(after, list) or not all(isinstance(a, str) for a in after):
-        raise UnclearStart(f"{CONFIG_FILE}: [ros1] after_launch is a list of commands")
+        raise UnclearStart(f"{label}: after_launch is a list of commands")
     if not (launch or node or after):
         return None
-    return Start(Path(launch).name, node, tuple(after), f"{CONFIG_FILE} [ros1]")
+    notes: list[str] = []
+    thirds: list[str] = []
+    for number, item in enumerate(after, start=1):
+        command = third_command(item)
+        if command is None:
+            notes.append(f"after_launch {number} left out: not a rosservice call or rostopic pub")
+        elif command not in thirds:
+            thirds.append(command)
+    launch = Path(launch).name
+    if launch and launch not in pkg.launches:
+        other = pkg.same_launch(launch)
+        if not other:
+            raise UnclearStart(
+                f"{label}: launch = {safe_line(launch)!r}: no such launch file in {pkg.name} "
+                f"(it has {_listed(pkg.launches)})"
+            )
+        notes.append(f"launch {launch!r}: the package has {other!r}, started")
+        launch = other
+    if node and not pkg.has_exe(node):
+        if len(pkg.exes) != 1:
+            raise UnclearStart(
+                f"{label}: node = {safe_line(node)!r}, which the package does not build (it has "
+                f"{_listed(pkg.exes)})"
+            )
+        notes.append(f"node {node!r}, which the package does not build; started its only "
+                     f"executable {pkg.exes[0]!r}")  # fmt: skip
+        node = pkg.exes[0]
+    source = "; ".join([label, *(safe_line(n) for n in notes)])
+    return Start(launch, node, tuple(thirds), source)
 
 
 def _texts(pkg_dir: Path, team_dir: Path | None) -> list[tuple[str, Path]]:
@@ -314,31 +419,52 @@ def decide(
     node: str = "",
     team_dir: Path | None = None,
     after_launch: tuple[str, ...] = (),
+    instructor: InstructorStart | None = None,
 ) -> Start:
     """The start of ``package`` (at ``pkg_dir``, handed in as ``team_dir``) in the module
     doc's order; :class:`UnclearStart` (a one-line reason naming the candidates) when none
-    decides. ``launch``/``node``/``after_launch``: the command line's."""
+    decides. ``launch``/``node``/``after_launch``: the command line's; ``instructor``: the
+    team's table of the instructor's starts file (:mod:`.starts_file`)."""
     launches = launch_files(pkg_dir)
     if launch or node:
         if launch and Path(launch).name not in launches:
             raise UnclearStart(f"--launch {launch}: no such launch file in {package}")
         where = " and ".join(w for w, v in (("--launch", launch), ("--node", node)) if v)
         return Start(Path(launch).name if launch else "", node, after_launch, where)
-    exes = executables(pkg_dir, package)
-    for folder in dict.fromkeys(f for f in (team_dir, pkg_dir) if f is not None):
-        start = _config(folder)
+    pkg = _package(pkg_dir, package)
+    if instructor is not None and (instructor.launch or instructor.node):
+        if instructor.launch and instructor.launch not in launches:
+            raise UnclearStart(
+                f"{instructor.label}: launch = {instructor.launch!r}: no such launch file in "
+                f"{package} (it has {_listed(launches)})"
+            )
+        if instructor.node and not pkg.has_exe(instructor.node):
+            raise UnclearStart(
+                f"{instructor.label}: node = {instructor.node!r}: the package does not build "
+                f"it (it has {_listed(pkg.exes)})"
+            )
+        after = instructor.after_launch or ()
+        return Start(instructor.launch, instructor.node, after + after_launch, instructor.source)
+    found = _team_start(pkg, team_dir)
+    if instructor is not None:  # the instructor's third commands, or only a note
+        after = found.after_launch if instructor.after_launch is None else instructor.after_launch
+        what = "after_launch from " if instructor.after_launch is not None else "note: "
+        found = Start(found.launch, found.node, after, f"{found.source}; {what}{instructor.source}")
+    return _with(found, after_launch)
+
+
+def _team_start(pkg: _Package, team_dir: Path | None) -> Start:
+    """The start the team's own files say (its ``usar.toml [ros1]``, its texts), else the
+    package's shape."""
+    for folder in dict.fromkeys(f for f in (team_dir, pkg.path) if f is not None):
+        start = _config(folder, pkg)
         if start is not None:
-            if start.launch and start.launch not in launches:
-                raise UnclearStart(
-                    f"{CONFIG_FILE}: [ros1] launch = {start.launch!r}: no such launch file in "
-                    f"{package} (it has {_listed(launches)})"
-                )
             if start.launch or start.node:
-                return _with(start, after_launch)
-            found = _found(pkg_dir, package, team_dir, launches, exes)  # only after_launch
-            return Start(found.launch, found.node, start.after_launch + after_launch,
-                         f"{found.source}; after_launch from {CONFIG_FILE} [ros1]")
-    return _with(_found(pkg_dir, package, team_dir, launches, exes), after_launch)
+                return start
+            found = _found(pkg, team_dir)  # only after_launch
+            return Start(found.launch, found.node, start.after_launch,
+                         f"{found.source}; after_launch from {start.source}")  # fmt: skip
+    return _found(pkg, team_dir)
 
 
 def _with(start: Start, after_launch: tuple[str, ...]) -> Start:
@@ -347,16 +473,15 @@ def _with(start: Start, after_launch: tuple[str, ...]) -> Start:
     return Start(start.launch, start.node, start.after_launch + after_launch, start.source)
 
 
-def _found(
-    pkg_dir: Path, package: str, team_dir: Path | None, launches: list[str], exes: list[str]
-) -> Start:
-    for label, path in _texts(pkg_dir, team_dir):
+def _found(pkg: _Package, team_dir: Path | None) -> Start:
+    for label, path in _texts(pkg.path, team_dir):
         text = _read_text(path)
         if text is None:
             continue
-        start = _from_text(text, safe_line(label), package, launches, exes)
+        start = _from_text(text, safe_line(label), pkg)
         if start is not None:
             return start
+    package, exes, launches = pkg.name, pkg.exes, pkg.launches
     if f"{package}.launch" in launches:
         return Start(launch=f"{package}.launch", source="the launch file named after the package")
     if len(exes) == 1:
@@ -365,8 +490,39 @@ def _found(
         return Start(launch=launches[0], source="the package's only launch file")
     raise UnclearStart(
         f"package {package}: no roslaunch/rosrun line of it in {INSTRUCTIONS} or a README, and "
-        f"{len(exes)} executables ({_listed(exes)}), {len(launches)} launch files; name one in "
-        f"the team's {CONFIG_FILE}: [ros1] node = \"EXE\" or launch = \"FILE\" (or --node/--launch)"
+        f"{len(exes)} executables ({_listed(exes)}), {len(launches)} launch files; the "
+        'instructor names one with usar batch --starts FILE (a table per team: node = "EXE" '
+        'or launch = "FILE"), or --node/--launch'
+    )
+
+
+def as_built(node: str, source: str, pkg_dir: Path, devel: Path, package: str) -> Start:
+    """The executable to start, checked against what the build made (``devel/lib/PKG/``) and
+    the package's files (a script ``rosrun`` finds in its folder): a name it did not build is
+    the TA's fallback as in a text (its only built executable, said in the source), or
+    :class:`UnclearStart` with that line, never a ``rosrun`` that exits 3 and a team blamed
+    for a crash of code that never ran. The command line's and the instructor's names get no
+    fallback (a usage error, theirs to fix). A workspace without ``devel/`` is not judged."""
+    kept = Start(node=node, source=source)
+    lib = devel / "lib" / package
+    found = _files(pkg_dir, ("",))
+    if not node or not devel.is_dir() or len(found) > _MAX_FILES or node in {p.name for p in found}:
+        return kept
+    try:
+        built = sorted(
+            e.name for e in os.scandir(lib) if e.is_file(follow_symlinks=False)
+            and os.access(e.path, os.X_OK)
+        )  # fmt: skip
+    except OSError:
+        built = []
+    if node in built:
+        return kept
+    if len(built) == 1 and not source.startswith(("--", "the instructor's")):
+        note = f"`{safe_line(node)}` was not built; started its only executable `{built[0]}`"
+        return Start(node=built[0], source=f"{source}; {note}")
+    raise UnclearStart(
+        f"{source}: `{safe_line(node)}` is not an executable the package built (it built "
+        f"{_listed(built)}); the instructor names one with usar batch --starts FILE (or --node)"
     )
 
 

@@ -55,6 +55,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help="also grade each team's code submission (usar code; docs/code-rubric.md)")
     p.add_argument("--code-template", metavar="DIR",
                    help="with --code: the course template, boilerplate for the code grade")
+    p.add_argument(
+        "--starts",
+        metavar="TOML",
+        help="the instructor's starts: a table per team (launch, node, after_launch, note)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar or per-run lines")
     p.set_defaults(func=run)
 
@@ -91,6 +96,11 @@ def run(args: argparse.Namespace) -> int:
             read_template(args.code_template)  # a bad template is a usage error before any run
         except UsarError as err:
             raise UsageError(f"--code-template {args.code_template}: {err}") from None
+    starts = None
+    if args.starts:
+        from usar_replay.ros1.starts_file import read_starts
+
+        starts = read_starts(args.starts)  # a mistake is a usage error before any run
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: is a file; give a folder for the batch's output")
@@ -104,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
         limits=limits,
         sandbox=not args.no_sandbox,
         world_key=options.world_key(args),
+        starts=starts,
     )
     if plan.jobs and not args.no_sandbox:
         from usar_replay.batch.machine import warning
