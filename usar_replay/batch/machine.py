@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from usar_replay.ros1.building import debian
-from usar_replay.sandbox import cpu_sets, kernel_pools, kernel_sandbox
+from usar_replay.sandbox import cgroups, cpu_sets, kernel_pools, kernel_sandbox
 
 __all__ = ["Finding", "check", "isolated", "warning"]
 
@@ -35,21 +35,17 @@ class Finding:
 
 
 def _cgroup() -> Finding:
-    v2 = Path("/sys/fs/cgroup/cgroup.controllers").exists()
-    writable = []
-    for controller in ("memory", "pids", "cpuset"):
-        root = kernel_sandbox._controller_root(controller)  # the runs' own lookup
-        if root is not None and os.access(root, os.W_OK):
-            writable.append(controller)
-    version = "v2" if v2 else "v1"
-    if len(writable) == 3:
-        return Finding("cgroups", True, f"cgroup {version}: memory, pids, cpuset writable")
-    missing = [c for c in ("memory", "pids", "cpuset") if c not in writable]
+    got = cgroups.support()
+    writable = got.writable
+    if len(writable) == len(cgroups.CONTROLLERS):
+        where = f" ({got.where})" if got.version == 2 else ""
+        return Finding("cgroups", True, f"cgroup v{got.version}: memory, pids, cpuset{where}")
+    missing = [c for c in cgroups.CONTROLLERS if c not in writable]
     shown = ", ".join(writable) or "none"
     return Finding(
         "cgroups",
         False,
-        f"cgroup {version}: writable {shown}; not {', '.join(missing)}",
+        f"cgroup v{got.version}: writable {shown}; not {', '.join(missing)}",
         "without delegation (run as root, or delegate the controllers): "
         + "; ".join(
             {
