@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.batch import machine
-from usar_replay.sandbox import cgroups, cpu_sets, kernel_pools, kernel_sandbox
+from usar_replay.sandbox import cgroups, container, cpu_sets, kernel_pools, kernel_sandbox
 
 
 def test_this_machine_as_ci_has_it() -> None:
@@ -13,6 +13,7 @@ def test_this_machine_as_ci_has_it() -> None:
     found = {f.name: f for f in machine.check()}
     assert list(found) == [
         "kernel sandbox",
+        "container",
         "cgroups",
         "CPU sets",
         "real-time priority",
@@ -30,6 +31,7 @@ def test_this_machine_as_ci_has_it() -> None:
 def test_no_cpu_sets_is_said_with_what_it_means(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(cpu_sets, "usable_cpus", lambda: [])
     monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(1, ("memory", "pids")))
+    monkeypatch.setattr(container, "read", lambda: container.Signs())
     findings = machine.check()
     assert not machine.isolated(findings)
     line = next(f for f in findings if f.name == "cgroups")
