@@ -71,7 +71,7 @@ class Subtree:
     path: str | None
     """The base folder (None: none could be had)."""
     how: str
-    """How it was had (``transient scope usar-12.scope (systemd, Delegate=yes)``)."""
+    """How it was had (``usar-12.scope (systemd, Delegate=yes)``: a transient scope)."""
     enabled: tuple[str, ...] = ()
     """Which of :data:`NEED` its children get."""
     why: str = ""
@@ -260,8 +260,8 @@ def subtree() -> Subtree:
     if _systemd():
         scope, said = _new_scope()
         if scope is not None:
-            got = _take(scope, f"transient scope {os.path.basename(scope)} (systemd, Delegate=yes)",
-                        user_manager=os.geteuid() != 0)  # fmt: skip
+            how = f"{os.path.basename(scope)} (systemd, Delegate=yes)"
+            got = _take(scope, how, user_manager=os.geteuid() != 0)
             if got.path is not None and (os.geteuid() != 0 or len(got.enabled) == len(NEED)):
                 return got
             why = got.why

@@ -12,10 +12,11 @@ its first process, so a ``setsid`` daemon dies with it).
 
 What bwrap does not do: resource limits. rlimits (address space, CPU time, file size, open
 files, no core files) are set by the sandboxed program on itself before any untrusted code runs
-(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count is a
-``pids`` cgroup where one can be made (root, a writable cgroup file system), else RLIMIT_NPROC
-(a per-run count in the run's user namespace; the kernel does not apply it to processes that
-are root outside, which is why the cgroup comes first).
+(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count and
+the run's memory are cgroups where they can be made (:mod:`.cgroups`: v1 as root, v2 in a
+subtree delegated to usar), else RLIMIT_NPROC (a per-run count in the run's user namespace;
+the kernel does not apply it to processes that are root outside, which is why the cgroup comes
+first) and RLIMIT_AS per process.
 
 Reusable: :func:`sandbox_argv` builds the command for any program (the ROS 1 bridge runs its graph
 with ``network="loopback"``), :class:`KernelSandbox` holds one run's cgroup and limits.
