@@ -76,13 +76,12 @@ def _cgroup() -> Finding:
             ),
         )
     why = f" ({got.why})" if got.why else ""
-    return Finding(
-        "cgroups",
-        False,
-        said,
-        f"without delegation{why}: {costs}; run as root, or as a user whose systemd delegates "
-        "cpuset memory pids (`usar doctor` as that user names the file)",
+    fix = (
+        "in a container, run it with the flags the container line names"
+        if os.geteuid() == 0
+        else "run as root, or as a user whose systemd delegates cpuset memory pids"
     )
+    return Finding("cgroups", False, said, f"without delegation{why}: {costs}; {fix}")
 
 
 def _container() -> Finding:
