@@ -170,3 +170,20 @@ def test_each_run_gets_cpus_of_its_own_in_its_one_cgroup() -> None:
     finally:
         second.release()
     assert not os.path.exists(second.path)
+
+
+def test_the_ways_to_a_subtree_in_order() -> None:
+    """Which ways usar tries, by where it starts (the whole choice, without a machine)."""
+
+    def ways(**given: bool) -> list[str]:
+        base = {"in_leaf": False, "delegated": False, "at_mount": False, "root": True}
+        return cgroup_v2.plan(**{**base, "systemd": True, **given})
+
+    assert ways(in_leaf=True) == ["parent"]  # a batch's run process: the driver's subtree
+    assert ways(delegated=True) == ["own"]  # systemd-run --scope -p Delegate=yes usar ...
+    assert ways(delegated=True, at_mount=True, systemd=False) == ["root", "own"]  # no systemd
+    assert ways(delegated=True, at_mount=True, root=False) == ["own"]
+    assert ways() == ["scope", "top-down"]  # root in a login session's scope
+    assert ways(root=False) == ["scope"]  # a user: the user's own manager
+    assert ways(systemd=False) == ["top-down"]  # root, a read-only container: tried, refused
+    assert ways(root=False, systemd=False) == []

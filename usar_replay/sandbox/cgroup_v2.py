@@ -234,42 +234,80 @@ def _new_scope() -> tuple[str | None, str]:
     return None, f"systemd did not move usar into {unit} within 10 s"
 
 
+Step = str
+"""One way to a base: ``parent`` (the usar process above's), ``own`` (this process's delegated
+cgroup), ``root`` (the machine's root cgroup, from the root down), ``scope`` (a transient systemd
+scope), ``top-down`` (root's ``/sys/fs/cgroup/usar``)."""
+
+
+def plan(
+    *, in_leaf: bool, delegated: bool, at_mount: bool, root: bool, systemd: bool
+) -> list[Step]:
+    """The ways to a base to try, in order, for a process whose cgroup is ``usar-self`` below
+    a base already made (``in_leaf``), is delegated to it (``delegated``), is the mount's root
+    (``at_mount``: the machine's root or a container's cgroup namespace), as root or not,
+    with systemd running or not. The first that gives every controller wins; else the last
+    that gives any."""
+    if in_leaf:
+        return ["parent"]
+    if delegated:
+        # at the mount as root: the machine's own root cgroup may hand controllers down while
+        # it holds processes; a container namespace's root may not, so its processes move
+        return ["root", "own"] if at_mount and root else ["own"]
+    return [*(["scope"] if systemd else []), *(["top-down"] if root else [])]
+
+
+def _step(step: Step, own: str) -> Subtree:
+    user = os.geteuid() != 0
+    if step == "parent":
+        parent = os.path.dirname(own)
+        on, why = _enable(parent)  # the same answer the usar process above had
+        return Subtree(parent, f"{parent} (a usar process's above)", on, why, user)
+    if step == "own":
+        return _take(own, f"{own} (delegated to usar)", user_manager=user)
+    if step == "scope":
+        scope, said = _new_scope()
+        if scope is None:
+            return Subtree(None, "", why=said)
+        return _take(scope, f"{os.path.basename(scope)} (systemd, Delegate=yes)", user)
+    if step == "root":
+        enabled, why = _enable(MOUNT)
+        if len(enabled) < len(NEED):
+            return Subtree(None, "", why=why)
+    return _top_down()
+
+
 @functools.cache
 def subtree() -> Subtree:
-    """The base usar's runs' cgroups are made in (obtained once per process; see the module
-    doc for the order). A forked child inherits the answer, which holds for it too: it starts in
-    the same cgroup."""
+    """The base usar's runs' cgroups are made in (obtained once per process: :func:`plan`,
+    and the module doc). A forked child inherits the answer, which holds for it too: it starts
+    in the same cgroup."""
     if not os.path.exists(os.path.join(MOUNT, "cgroup.controllers")):
         return Subtree(None, "", why=f"{MOUNT} is not cgroup v2")
     own = _own()
     if own is None:
         return Subtree(None, "", why="this process has no cgroup v2 path")
-    if os.path.basename(own) == SELF:
-        parent = os.path.dirname(own)
-        done = parse_controllers(_read(os.path.join(parent, "cgroup.subtree_control")))
-        if _writable(parent) and any(n in done for n in NEED):
-            on, why = _enable(parent)  # the same answer the usar process above had
-            return Subtree(parent, f"{parent} (a usar process's above)", on, why)
-    if _delegated(own):
-        if own == MOUNT and os.geteuid() == 0:
-            enabled, why = _enable(MOUNT)
-            if len(enabled) == len(NEED):  # the machine's root: no rule against processes
-                return _top_down()
-        return _take(own, f"{own} (delegated to usar)", user_manager=os.geteuid() != 0)
-    why = f"{own} is not delegated to usar"
-    if _systemd():
-        scope, said = _new_scope()
-        if scope is not None:
-            how = f"{os.path.basename(scope)} (systemd, Delegate=yes)"
-            got = _take(scope, how, user_manager=os.geteuid() != 0)
-            if got.path is not None and (os.geteuid() != 0 or len(got.enabled) == len(NEED)):
-                return got
-            why = got.why
-        else:
-            why = said
-    if os.geteuid() == 0:
-        return _top_down()
-    return Subtree(None, "", why=why)
+    parent = os.path.dirname(own)
+    done = parse_controllers(_read(os.path.join(parent, "cgroup.subtree_control")))
+    steps = plan(
+        in_leaf=os.path.basename(own) == SELF
+        and _writable(parent)
+        and any(n in done for n in NEED),
+        delegated=_delegated(own),
+        at_mount=own == MOUNT,
+        root=os.geteuid() == 0,
+        systemd=_systemd(),
+    )
+    best = Subtree(None, "", why=f"{own} is not delegated to usar")
+    for step in steps:
+        got = _step(step, own)
+        if got.path is not None and len(got.enabled) == len(NEED):
+            return got
+        if got.path is not None and (best.path is None or len(got.enabled) > len(best.enabled)):
+            best = got
+        elif best.path is None and got.why:
+            best = Subtree(None, "", why=got.why)
+    return best
 
 
 def enabled() -> tuple[str, ...]:
