@@ -123,7 +123,7 @@ def _cpus() -> Finding:
     return Finding(
         "CPU sets",
         False,
-        "no cpuset hierarchy usar can write",
+        "no cpuset cgroup usar can write (the cgroups line says why)",
         "runs share every CPU: a ROS 1 run's log may depend on what else runs; run one at a time",
     )
 
