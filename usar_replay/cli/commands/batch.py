@@ -42,7 +42,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     parser_parts.limit_options(p, "batch", BATCH_LIMITS)
     p.add_argument(
-        "--no-sandbox", action="store_true", help="run missions without bwrap and the guard"
+        "--no-sandbox",
+        action="store_true",
+        help="run missions without bwrap and the guard: a mission can then read every file "
+        "usar can, the world key included (only for code you trust)",
     )
     p.add_argument("--gradescope", action="store_true", help="write TEAM/results.json per team")
     p.add_argument(
