@@ -25,7 +25,7 @@ __all__ = [
     "Rule",
 ]
 
-RUBRIC_VERSION = 3
+RUBRIC_VERSION = 4
 """1: only ``marker_frame`` was a broadcast, stamped exactly with a detected image's stamp.
 2 (issue #32): a frame of any name on ``/tf`` (not the simulator's), stamped within one camera
 period after a detected image (or zero: when it was sent), placed in ``map`` through its parent
@@ -37,7 +37,7 @@ camera's reliable range (a stand-off frame earns half, the worst frame decides);
 "on a detection" when a non-empty detection came within ``detection_recent_s`` before it (and it
 is not a stored pose sent again after an empty one); a detection counts when the explorer was
 at a target.
-3, issue 50 (no package setting widens the rubric): a package's move_base goal tolerance widens
+4 (issue 50, no package setting widens the rubric beyond a TA's eye): a package's move_base goal tolerance widens
 the radii by at most :data:`MAX_GOAL_TOLERANCE_M`; a stand-off frame earns its half only where
 it follows the detections (:mod:`.follow`), a frame that ignores them breaks
 ``only_on_detection``; a ROS 1 package's detections count only where one of its frames follows
