@@ -37,11 +37,11 @@ camera's reliable range (a stand-off frame earns half, the worst frame decides);
 "on a detection" when a non-empty detection came within ``detection_recent_s`` before it (and it
 is not a stored pose sent again after an empty one); a detection counts when the explorer was
 at a target.
-4 (issue 50, no package setting widens the rubric beyond a TA's eye): a package's move_base goal tolerance widens
-the radii by at most :data:`MAX_GOAL_TOLERANCE_M`; a stand-off frame earns its half only where
-it follows the detections (:mod:`.follow`), a frame that ignores them breaks
-``only_on_detection``; a ROS 1 package's detections count only where one of its frames follows
-them."""
+4 (issue 50, no package setting widens the rubric beyond a TA's eye): a package's move_base
+goal tolerance widens the radii by at most :data:`MAX_GOAL_TOLERANCE_M`; a stand-off frame earns
+its half only where it follows the detections (:mod:`.follow`), a frame that ignores them breaks
+``only_on_detection`` and earns nothing; a ROS 1 package's detections count only where one of
+its frames follows them."""
 TEMPLATE_GOAL_TOLERANCE_M = 0.05
 """The course template's move_base ``xy_goal_tolerance`` (``dwa_local_planner_params.yaml``):
 a robot's goal tolerance where neither the thresholds nor the log say another."""
