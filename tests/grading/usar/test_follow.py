@@ -69,3 +69,16 @@ def test_one_view_tells_nothing_and_memory_stays_flat() -> None:
     ray = FrameFollow()
     ray.keep(sample((d[0] / 2, d[1] / 2, d[2] / 2), _det(d), IDENTITY, SMALL))
     assert ray.verdict(SMALL) == "follows"
+
+
+def test_a_fixed_place_with_noise_added_still_ignores_the_detections() -> None:
+    """0.5 m ahead of the camera plus a few centimetres of noise (or decimetres) per broadcast:
+    no function of the detection; a frame at 1.5 times the detection (wrong maths) is one."""
+    for noise in (0.03, 0.3):
+        f = FrameFollow()
+        for k in range(40):
+            d = DETECTIONS[k % 5]
+            jitter = noise * math.sin(7.3 * k), noise * math.cos(3.1 * k), noise * math.sin(k)
+            f.keep(sample((jitter[0], jitter[1], 0.5 + jitter[2]), _det(d), IDENTITY, SMALL))
+        assert f.verdict(SMALL) == "ignores", noise
+    assert _verdict(lambda d: (1.5 * d[0], 1.5 * d[1], 1.5 * d[2])) == "moves"

@@ -12,11 +12,14 @@ the marker. So each broadcast judged as a detection's keeps its origin in the ca
   small offset from the detected pose (in the detection's axes or in ``map``'s; a goal in front
   of the marker's face), where that offset held while the frame moved (a frame that never moved
   shows nothing it follows);
-* ``ignores``: it stays at one place in the camera frame while the detections it was sent on
-  moved (a fixed offset ahead of the camera, the camera itself);
-* ``moves``: it moves, not in one of those shapes (wrong maths on the detection: a package that
-  read its detections, its frame judged by where it shows);
-* ``unknown``: neither it nor the detections moved (one view; nothing to tell them apart).
+* ``ignores``: the detections it was sent on moved, and it did not move with them: the part
+  of its place a linear fit on the detection explains moves less than the match (a fixed
+  offset ahead of the camera, the camera itself), or less than what is left unexplained (a
+  fixed place with noise added);
+* ``moves``: it moves with the detections, not in one of those shapes (wrong maths on the
+  detection: a package that read its detections, its frame judged by where it shows);
+* ``unknown``: the detections did not move (one view: a frame fixed ahead of the camera and a
+  fixed offset from the marker are the same broadcasts).
 
 The thresholds and their sources are :mod:`.rules`' (:data:`~.rules.FOLLOW_MATCH_M`,
 :data:`~.rules.ONE_PLACE`).
@@ -28,6 +31,8 @@ import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from usar_replay.core import msgs
 from usar_replay.grading.usar.rules import BROADCAST_MATCH_M, FOLLOW_MATCH_M, ONE_PLACE, STEADY
@@ -151,7 +156,20 @@ class FrameFollow:
         follows = sum(s.exact or i in steady for i, s in enumerate(self.samples))
         if follows >= STEADY * n:
             return "follows"
-        frame_still = _one_place([s.b for s in self.samples])
-        if frame_still and not _one_place([s.d for s in self.samples]):
-            return "ignores"
-        return "unknown" if frame_still else "moves"
+        if _one_place([s.d for s in self.samples]):
+            return "unknown"
+        return "moves" if self._moves_with() else "ignores"
+
+    def _moves_with(self) -> bool:
+        """Does the frame's place depend on the detection? A least-squares fit ``b = A d + c``
+        over the samples: the part it explains must move more than the match, and more than
+        twice what it leaves unexplained (a place with noise added is no function of the
+        detection)."""
+        b = np.array([s.b for s in self.samples], dtype=float)
+        d = np.array([s.d for s in self.samples], dtype=float)
+        x = np.hstack([d, np.ones((len(d), 1))])
+        coef, *_ = np.linalg.lstsq(x, b, rcond=None)
+        fitted = x @ coef
+        explained = float(np.sqrt(np.mean(np.sum((fitted - fitted.mean(0)) ** 2, axis=1))))
+        left = float(np.sqrt(np.mean(np.sum((b - fitted) ** 2, axis=1))))
+        return explained > FOLLOW_MATCH_M and left <= max(FOLLOW_MATCH_M, explained / 2)
