@@ -11,7 +11,8 @@ geometry), so each attack is judged in milliseconds:
 * ``marker_frame`` put 0.5 m ahead of the camera on every detection (the detected pose never
   used) earns nothing on the broadcast lines or ``only_on_detection`` (4/8 and 4/4 before);
 * the honest shapes keep their points: a copy of the detection (all of them), a stand-off on
-  the camera's line to the marker and one at a fixed offset along the marker's normal (half).
+  the camera's line to the marker and one at a fixed offset along the marker's normal (half);
+  the empty transform (team 001's bug) loses only the broadcast lines, as it did.
 """
 
 from __future__ import annotations
@@ -155,9 +156,29 @@ def ahead(_d: Vec, _r: Rotation) -> Vec:
     return (0.0, 0.0, 0.5)
 
 
-@pytest.mark.parametrize(("shape", "broadcast"), [(copy, 8.0), (ray_stand_off, 4.0),
-                                                  (normal_stand_off, 4.0), (ahead, 0.0)])
-def test_a_frame_earns_only_what_follows_the_detection(shape: Shape, broadcast: float) -> None:
+def empty(_d: Vec, _r: Rotation) -> Vec:
+    """The empty transform (team 001's ``broadcast()`` with nothing filled in): the camera."""
+    return (0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("shape", "broadcast", "only", "detected"),
+    [
+        (copy, 8.0, True, 12.0),
+        (ray_stand_off, 4.0, True, 12.0),
+        (normal_stand_off, 4.0, True, 12.0),
+        (ahead, 0.0, False, 0.0),
+        (empty, 0.0, True, 12.0),
+    ],
+)
+def test_a_frame_earns_only_what_follows_the_detection(
+    shape: Shape, broadcast: float, only: bool, detected: float
+) -> None:
+    """The course package's run with each shape of marker_frame. The attack (0.5 m ahead of the
+    camera, the detection never used) earns nothing on the broadcast lines, and a package
+    whose only frame ignores its detections read none of them; the honest shapes keep their
+    points; the empty transform (a bug, not a disguise) loses only the broadcast lines, as the
+    faulty examples do."""
     g = Grader(WORLD)
     g.detections_read = True  # a ROS 1 package's node subscribes
     course_run(g, shape)
@@ -167,17 +188,15 @@ def test_a_frame_earns_only_what_follows_the_detection(shape: Shape, broadcast: 
     assert sum(lines[f"marker_{k}.broadcast"].points for k in MARKERS) == broadcast, [
         lines[f"marker_{k}.broadcast"].measured for k in MARKERS
     ]
-    only = lines["marker_frame.only_on_detection"]
-    assert only.passed == (shape is not ahead), only.measured
+    only_line = lines["marker_frame.only_on_detection"]
+    assert only_line.passed == only, only_line.measured
+    assert sum(lines[f"marker_{k}.detected"].points for k in MARKERS) == detected
+    verdict = g.frame_verdict(contract.MARKER_FRAME)
+    assert verdict == {ahead: "ignores", empty: "empty"}.get(shape, "follows")
     if shape is ahead:
-        assert "40 ignoring the detection (marker_frame)" in only.measured
+        assert "40 ignoring the detection (marker_frame)" in only_line.measured
         assert "it ignores them" in lines["marker_0.broadcast"].measured
-        assert g.frame_verdict(contract.MARKER_FRAME) == "ignores"
-        # a node subscribes, but nothing it sends follows what it got: nothing detected
-        assert _points(g, "marker_") == 0
-    else:
-        assert g.frame_verdict(contract.MARKER_FRAME) == "follows"
-        assert sum(lines[f"marker_{k}.detected"].points for k in MARKERS) == 12
+        assert "no frame it broadcast follows a detection" in lines["marker_0.detected"].measured
 
 
 def never_moves(g: Grader) -> None:

@@ -12,10 +12,13 @@ the marker. So each broadcast judged as a detection's keeps its origin in the ca
   small offset from the detected pose (in the detection's axes or in ``map``'s; a goal in front
   of the marker's face), where that offset held while the frame moved (a frame that never moved
   shows nothing it follows);
+* ``empty``: it is the camera itself, the empty transform of a ``broadcast()`` with nothing
+  filled in (team 001's bug): the detection callback's broadcast, wrong in what it says, judged
+  by where it shows (at the camera: off the marker);
 * ``ignores``: the detections it was sent on moved, and it did not move with them: the part
   of its place a linear fit on the detection explains moves less than the match (a fixed
-  offset ahead of the camera, the camera itself), or less than what is left unexplained (a
-  fixed place with noise added);
+  offset ahead of the camera), or less than what is left unexplained (a fixed place with
+  noise added);
 * ``moves``: it moves with the detections, not in one of those shapes (wrong maths on the
   detection: a package that read its detections, its frame judged by where it shows);
 * ``unknown``: the detections did not move (one view: a frame fixed ahead of the camera and a
@@ -148,7 +151,7 @@ class FrameFollow:
         return out
 
     def verdict(self, small_m: float) -> str:
-        """``follows``, ``ignores``, ``moves`` or ``unknown`` (the module doc)."""
+        """``follows``, ``empty``, ``ignores``, ``moves`` or ``unknown`` (the module doc)."""
         n = len(self.samples)
         if not n:
             return "unknown"
@@ -156,6 +159,9 @@ class FrameFollow:
         follows = sum(s.exact or i in steady for i, s in enumerate(self.samples))
         if follows >= STEADY * n:
             return "follows"
+        at_camera = sum(math.hypot(*s.b) <= FOLLOW_MATCH_M for s in self.samples)
+        if at_camera >= ONE_PLACE * n:
+            return "empty"
         if _one_place([s.d for s in self.samples]):
             return "unknown"
         return "moves" if self._moves_with() else "ignores"

@@ -577,20 +577,25 @@ class Observations:
 
     def frame_verdict(self, frame: str) -> str:
         """How ``frame`` follows the detections it was sent on (:meth:`.FrameFollow.verdict`:
-        ``follows``, ``ignores``, ``moves`` or ``unknown``)."""
+        ``follows``, ``empty``, ``ignores``, ``moves`` or ``unknown``)."""
         f = self.follow.get(frame)
         return "unknown" if f is None else f.verdict(self.stand_off_m)
 
     def ignoring_frames(self) -> list[str]:
-        """The frames that stayed put in the camera frame while the detections moved."""
+        """The frames that did not move with the detections they were sent on (a place fixed
+        ahead of the camera): no detection's broadcasts (issue 50)."""
         return [f for f in self.follow if self.frame_verdict(f) == "ignores"]
 
     def detections_followed(self) -> bool:
-        """Does a frame of the mission's follow the detections (a copy, a stand-off of them,
-        or anything that moves with them)? Where a ROS 1 package's node subscribed, this is
-        what says the package read them (issue 50: a node that only subscribes reads
-        nothing)."""
-        return any(self.frame_verdict(f) in ("follows", "moves") for f in self.follow)
+        """Do the mission's broadcasts follow its detections: a frame sent mostly on them (not
+        a timer's) that does not ignore them (a copy, a stand-off, wrong maths on them, the
+        empty transform of the detection callback)? Where a ROS 1 package's node subscribed,
+        this is what says the package read them (issue 50: a node that only subscribes, or
+        that sends a place fixed ahead of the camera, reads nothing)."""
+        return any(
+            with_one and with_one >= without and self.frame_verdict(frame) != "ignores"
+            for frame, (with_one, without) in self.frame_tally.items()
+        )
 
     def _copied(
         self,
