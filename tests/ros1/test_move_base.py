@@ -41,3 +41,37 @@ def test_a_goal_beside_the_cylinder_the_course_plans_to_is_driven_to(grid: Plann
 
 def test_a_free_goal_is_the_goal(grid: PlanningGrid) -> None:
     assert planned_goal(grid, -4.0, 2.5) == ((-4.0, 2.5), "")
+
+
+def test_the_bridge_gives_move_base_the_packages_limits(capsys: pytest.CaptureFixture[str]) -> None:
+    """The launch file's facts reach each robot's move_base: the follower's footprint and
+    planner tolerance as its costmap YAML sets them, the explorer's the template's."""
+    from types import SimpleNamespace
+
+    from usar_replay.ros1.bridge import Bridge
+
+    square = [[-0.2, -0.2], [-0.2, 0.2], [0.2, 0.2], [0.2, -0.2]]
+    src = "param/costmap.yaml (launch/mb.launch)"
+    facts = {
+        "move_base": {
+            "follower": {
+                "footprint": {"key": "k", "value": square, "source": src},
+                "default_tolerance": {"key": "k", "value": 0.3, "source": src},
+            }
+        }
+    }
+    robots = ("explorer", "follower")
+    bridge = SimpleNamespace(
+        parameters={},
+        config={},
+        robots=robots,
+        move_base={r: SimpleNamespace(xy_tolerance=0.0, yaw_tolerance=0.0) for r in robots},
+        amcl={r: SimpleNamespace(update_min_d=0.0, update_min_a=0.0) for r in robots},
+        ready_info="",
+    )
+    Bridge._configure_stand_ins(bridge, facts)  # type: ignore[arg-type]
+    follower = bridge.move_base["follower"].goal_limits
+    assert (follower.inscribed_m, follower.default_tolerance_m) == pytest.approx((0.21, 0.3))
+    assert src in follower.source
+    assert bridge.move_base["explorer"].goal_limits == GoalLimits()
+    assert "usar move_base follower" in capsys.readouterr().out
