@@ -44,10 +44,16 @@ def drive(g: Grader, robot: str, points: list[tuple[float, float]], t: int) -> i
 
 
 def detect(
-    g: Grader, ids: list[int], t: int, *, came: int | None = None
+    g: Grader,
+    ids: list[int],
+    t: int,
+    *,
+    came: int | None = None,
+    at: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> msgs.FiducialTransformArray:
     """The course's detections of the image stamped ``t``, come at log time ``came`` (default
-    ``t``: with the image; a tick later where the detector answers a tick later)."""
+    ``t``: with the image; a tick later where the detector answers a tick later), the camera
+    at ``at`` in map with map's axes (default: its origin)."""
     arr = msgs.FiducialTransformArray(
         header=msgs.Header(stamp=msgs.Time.from_ns(t), frame_id=contract.OPTICAL_FRAME),
         transforms=tuple(
@@ -55,7 +61,9 @@ def detect(
             msgs.FiducialTransform(
                 fiducial_id=k,
                 transform=msgs.Transform(
-                    translation=msgs.Vector3(x=MARKERS[k][0], y=MARKERS[k][1], z=MARKERS[k][2])
+                    translation=msgs.Vector3(
+                        x=MARKERS[k][0] - at[0], y=MARKERS[k][1] - at[1], z=MARKERS[k][2] - at[2]
+                    )
                 ),
             )
             for k in ids

@@ -128,6 +128,6 @@ def test_a_grade_says_which_rubric_version_judged_it() -> None:
     from usar_replay.grading.rubric_ros2 import RUBRIC as ROS2
     from usar_replay.grading.usar import RUBRIC as USAR
 
-    assert RUBRIC_VERSION == USAR.version == 3 and ROS2.version == 1
+    assert RUBRIC_VERSION == USAR.version == 4 and ROS2.version == 1
     docs = (Path(__file__).resolve().parents[2] / "docs" / "reports.md").read_text()
     assert f"| `usar` | {RUBRIC_VERSION} |" in docs and f"| `ros2-final` | {ROS2.version} |" in docs

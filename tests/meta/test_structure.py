@@ -380,7 +380,6 @@ UNTESTED: dict[str, str] = {
         "the mission's side: tests/process/test_mission_process.py (handshake, verdicts), "
         "tests/node/test_node.py (crash, hang, memory)"
     ),
-    "ros1/move_base.py": "covered end to end by tests/e2e/test_ros1.py",
     "ros1/process.py": "covered end to end by tests/e2e/test_ros1.py",
 }
 

@@ -181,3 +181,59 @@ def test_the_node_listing_writes_what_the_launch_files_configure(tmp_path: Path)
         ),
         ("/mission/my_copy/t2", 2, "value"): "an inline <rosparam> (launch/go.launch)",
     }
+
+
+def _costmap(**values: Any) -> Any:
+    src = "param/costmap_common_params.yaml (launch/mb.launch)"
+    entry = {k: {"key": k, "value": v, "source": src} for k, v in values.items()}
+    return {"move_base": {"follower": entry}}
+
+
+def test_goal_limits_are_the_packages_costmap_then_the_templates() -> None:
+    """The template's footprint padded by costmap_2d's 0.01 m: 0.087 m; a package's footprint,
+    robot_radius, padding, inflation and default_tolerance as it sets them; a value that is not
+    usable is the template's."""
+    template = nav_params.goal_limits(None, "follower")
+    assert template[:3] == pytest.approx((0.087, 1.0, 0.0))
+    assert template[3] == "the course template's costmap and planner defaults"
+    assert nav_params.inscribed_radius(nav_params.TEMPLATE_FOOTPRINT) == pytest.approx(0.077)
+    square = [[-0.2, -0.2], [-0.2, 0.2], [0.2, 0.2], [0.2, -0.2]]
+    got = nav_params.goal_limits(
+        _costmap(footprint=square, footprint_padding=0, default_tolerance=0.5), "follower"
+    )
+    assert got[:3] == pytest.approx((0.2, 1.0, 0.5))
+    assert "footprint (param/costmap_common_params.yaml (launch/mb.launch))" in got[3]
+    text = nav_params.goal_limits(_costmap(footprint=json.dumps(square)), "follower")
+    assert text[0] == pytest.approx(0.21)
+    radius = nav_params.goal_limits(_costmap(robot_radius=0.3, inflation_radius=0.2), "follower")
+    assert radius[:2] == pytest.approx((0.31, 0.2))
+    for bad in ({"footprint": "[[0, 0]]"}, {"footprint": [[1e9, 0]] * 3}, {"robot_radius": "x"},
+                {"footprint": "[" * 10_000}):
+        assert nav_params.goal_limits(_costmap(**bad), "follower")[0] == pytest.approx(0.087)
+    for facts in ({"move_base": []}, {"move_base": {"follower": 3}}, []):
+        assert nav_params.goal_limits(facts, "follower")[0] == pytest.approx(0.087)  # type: ignore[arg-type]
+
+
+def test_facts_read_the_global_costmap_and_planner() -> None:
+    """A move_base node's global costmap parameters and its global planner's tolerance, under
+    its private namespace, as roslaunch loaded them."""
+    p = "/follower_move_base"
+    params = {
+        f"{p}/base_global_planner": "global_planner/GlobalPlanner",
+        f"{p}/GlobalPlanner/default_tolerance": 0.0,
+        f"{p}/global_costmap/footprint": [[-0.205, -0.155], [-0.205, 0.155], [0.077, 0.155],
+                                          [0.077, -0.155]],
+        f"{p}/global_costmap/inflation_radius": 1.0,
+        f"{p}/global_costmap/inflation_layer/inflation_radius": 0.5,
+    }
+    node = _node("follower_move_base", cmd_vel="/follower/cmd_vel")
+    facts = nav_params.facts(params, [node], {}, ROBOTS)
+    entry = facts["move_base"]["follower"]
+    assert entry["global_planner"] == "GlobalPlanner"
+    assert entry["default_tolerance"]["value"] == 0.0
+    inflation_key = f"{p}/global_costmap/inflation_layer/inflation_radius"
+    assert entry["inflation_radius"]["key"] == inflation_key
+    assert entry["footprint"]["value"][0] == [-0.205, -0.155]
+    inscribed, inflation, tolerance, _ = nav_params.goal_limits(json.loads(json.dumps(facts)),
+                                                                "follower")
+    assert (inscribed, inflation, tolerance) == pytest.approx((0.087, 0.5, 0.0))

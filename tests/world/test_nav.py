@@ -8,7 +8,16 @@ import math
 import pytest
 
 from usar_replay.core import msgs
-from usar_replay.world.nav import DriveLimits, Navigator, NavStatus, PlanningGrid, plan, robot_disc
+from usar_replay.world.nav import (
+    DriveLimits,
+    GoalLimits,
+    Navigator,
+    NavStatus,
+    PlanningGrid,
+    course_goal,
+    plan,
+    robot_disc,
+)
 from usar_replay.world.scenario import course_world
 
 COURSE = course_world()
@@ -128,3 +137,45 @@ def test_a_parked_robot_is_an_obstacle_in_another_robots_map(grid: PlanningGrid)
     assert not grid.occupied[grid.world_to_cell(cx, cy)]  # the original map is unchanged
     # the follower's start is still connected to the rest of the building around it
     assert plan(with_robot, (-4.0, 3.5), COURSE.targets[0]).ok
+
+
+# --- which goals the course's global planner has a plan to (issue 51) ---------------------------
+
+CYLINDER = (1.914, 3.688)
+"""A cylinder of the course world (r 0.2821): marker 2 of the second known layout hangs on it."""
+
+
+def test_a_goal_within_the_inscribed_radius_of_a_cylinder_has_no_plan(grid: PlanningGrid) -> None:
+    """Issue 51's follower goal, marker 2 of the second layout minus (0.4, 0.4): 0.10 m from the
+    cylinder's surface, its costmap cell within the template footprint's inscribed radius
+    (0.087 m, padded) of an obstacle cell: refused, never moved. 0.17 m out along x it is
+    plannable (it stays where it is; usar's move_base then keeps its own clearance)."""
+    refused, why = course_goal(grid, 2.208 - 0.4, 3.717 - 0.4)
+    assert refused is None
+    assert why.startswith("goal (1.808, 3.317) is within the footprint's inscribed radius")
+    assert "default_tolerance 0 m" in why
+    beside = (CYLINDER[0] - 0.45, CYLINDER[1])
+    assert course_goal(grid, *beside) == (beside, "")
+    assert not grid.is_free(*beside)  # inside usar's clearance all the same
+    wall, why = course_goal(grid, 0.0, 0.0)  # inside the divider: an obstacle cell
+    assert wall is None and "is in an obstacle" in why
+
+
+def test_the_packages_limits_decide(grid: PlanningGrid) -> None:
+    """A wider footprint refuses the goal beside the cylinder; a ``default_tolerance`` reaches a
+    plannable cell near a refused goal; an inflation radius below the inscribed radius paints no
+    inscribed cost (only the obstacle's own cells refuse)."""
+    beside = (CYLINDER[0] - 0.45, CYLINDER[1])
+    wide = GoalLimits(inscribed_m=0.2)
+    assert course_goal(grid, *beside, wide)[0] is None
+    near, why = course_goal(grid, 1.808, 3.317, GoalLimits(default_tolerance_m=0.2))
+    assert near is not None and why == "" and math.dist(near, (1.808, 3.317)) <= 0.2
+    assert grid.distance_to_obstacle(*near) > 0.087
+    thin = GoalLimits(inscribed_m=0.3, inflation_m=0.01)
+    assert course_goal(grid, 1.808, 3.317, thin) == ((1.808, 3.317), "")
+    assert course_goal(grid, 0.0, 0.0, thin)[0] is None
+
+
+def test_every_course_target_and_home_has_a_plan(grid: PlanningGrid) -> None:
+    for x, y in (*COURSE.targets, HOME, (COURSE.follower.x, COURSE.follower.y)):
+        assert course_goal(grid, x, y) == ((x, y), ""), (x, y)

@@ -93,6 +93,7 @@ from usar_replay.ros1.pacing.watcher import Watcher
 from usar_replay.ros1.receiving import Inbox
 from usar_replay.ros1.topic_recorder import TopicRecorder, wire_item
 from usar_replay.sandbox import kernel_sandbox
+from usar_replay.world.nav import GoalLimits
 
 if TYPE_CHECKING:
     from usar_replay.ros1.publishing import Publishing
@@ -314,6 +315,13 @@ class Bridge:
         for robot, xy, yaw, source in applied:
             mb = self.move_base[robot]
             mb.xy_tolerance, mb.yaw_tolerance = xy, yaw
+            inscribed, inflation, tolerance, why = nav_params.goal_limits(facts, robot)
+            mb.goal_limits = GoalLimits(
+                inscribed_m=inscribed,
+                inflation_m=inflation,
+                default_tolerance_m=tolerance,
+                source=why,
+            )
             print(f"usar move_base {robot}: xy {xy:g} m, yaw {yaw:g} rad ({source})", flush=True)
         self.ready_info = json.dumps(
             {

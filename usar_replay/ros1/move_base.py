@@ -11,10 +11,18 @@ mission drive alike. The server follows actionlib's rules as move_base does:
 * SUCCEEDED when the goal is reached, ABORTED with the planner's or controller's reason
   (goal in collision and no free cell near it, no path, stuck) otherwise.
 
-A goal inside an obstacle or its inflation is moved to the nearest free cell within
-:data:`GOAL_TOLERANCE_M` first; a goal deeper in is ABORTED, as move_base aborts it (issue 43:
-a package sending its explorer "home" to (0, 0), inside the course's walls, hung there on
-Gazebo; usar's move_base had moved the goal 0.39 m and called it reached). The other robot,
+A goal is first decided as the package's global planner decides it (:func:`planned_goal`,
+:func:`usar_replay.world.nav.course_goal`): a goal whose costmap cell is in an obstacle or within
+the footprint's inscribed radius of one (the package's ``footprint``/``robot_radius``,
+``footprint_padding``, ``inflation_radius``, its planner's ``default_tolerance``:
+:attr:`MoveBase.goal_limits`, read by :func:`usar_replay.ros1.nav_params.goal_limits`; the
+course template's by default) has no plan and is ABORTED, never moved (issue 43: a package
+sending its explorer "home" to (0, 0), inside the course's walls, hung there on Gazebo; issue
+51: a follower goal 0.11 m from a cylinder's surface had no plan on the course, and the package
+waited there). A plannable goal
+inside usar's own clearance (the circumscribed radius its controller keeps free, wider than
+the footprint's inscribed radius) is moved to the nearest free cell within
+:data:`GOAL_TOLERANCE_M`, as the course's robot drives up to such a goal. The other robot,
 where tf says it stands when the goal arrives, is an obstacle in this robot's costmap, as its
 laser would mark it.
 
@@ -39,25 +47,45 @@ from typing import Any
 from usar_replay.core import contract, msgs
 from usar_replay.core.rotations import quat_from_yaw, yaw_from_quat
 from usar_replay.world.nav import (
+    TEMPLATE_GOAL_LIMITS,
     DriveLimits,
+    GoalLimits,
     Navigator,
     NavStatus,
     PlanningGrid,
+    course_goal,
     goal_status,
     robot_disc,
 )
 
-__all__ = ["GOAL_TOLERANCE_M", "MoveBase"]
+__all__ = ["GOAL_TOLERANCE_M", "MoveBase", "planned_goal"]
 
 GOAL_TOLERANCE_M = 0.25
-"""How far a goal in collision may be moved to a free cell. The course template's
-GlobalPlanner has ``default_tolerance`` 0.0 (a goal in an obstacle is no plan: move_base
-aborts it) and treats as obstacle only the cells within the footprint's inscribed radius
-(0.077 m for the template's offset footprint), while usar's costmap keeps the circumscribed
-radius (:data:`usar_replay.world.nav.ROBOT_RADIUS`, 0.26 m) clear: a goal up to 0.26 - 0.077
-plus one 0.05 m cell (0.23 m) inside usar's clear zone is one move_base plans to."""
+"""How far a plannable goal inside usar's clearance may be moved to a free cell. The course
+template's planner treats as obstacle only the cells within the footprint's inscribed radius
+(0.087 m for the template's offset footprint, padded), while usar's costmap keeps the
+circumscribed radius (:data:`usar_replay.world.nav.ROBOT_RADIUS`, 0.26 m) clear: a goal up to
+0.26 - 0.087 plus one 0.05 m cell (0.23 m) inside usar's clear zone is one move_base plans
+to."""
 
 Pose = tuple[float, float, float]
+
+
+def planned_goal(
+    grid: PlanningGrid, x: float, y: float, limits: GoalLimits = TEMPLATE_GOAL_LIMITS
+) -> tuple[tuple[float, float] | None, str]:
+    """Where usar's navigator drives for a goal at (x, y): ``(None, why)`` where the package's
+    global planner has no plan to it (move_base aborts it); else the goal (the plannable cell
+    ``default_tolerance`` reached), moved to usar's nearest free cell within
+    :data:`GOAL_TOLERANCE_M` where it is inside usar's clearance."""
+    goal, why = course_goal(grid, x, y, limits)
+    if goal is None:
+        return None, why
+    if not grid.is_free(*goal):
+        near = grid.nearest_free(goal[0], goal[1], GOAL_TOLERANCE_M)
+        if near is not None:
+            return near, ""
+    return goal, ""
 
 
 class MoveBase:
@@ -70,6 +98,9 @@ class MoveBase:
         self.robot = robot
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
+        self.goal_limits = TEMPLATE_GOAL_LIMITS
+        """The package's costmap and global planner parameters that decide which goals have
+        a plan (the bridge sets them from the launch file's, :mod:`.nav_params`)."""
         self.grid: PlanningGrid | None = None
         self.nav: Navigator | None = None
         self.active: Any = None
@@ -174,10 +205,11 @@ class MoveBase:
             return out + self._finish(False, "no map received yet", t_ns)
         discs = [robot_disc(*pz) for r, pz in poses.items() if r != self.robot and pz]
         grid = self.grid.with_discs(discs) if discs else self.grid
-        if not grid.is_free(x, y):
-            near = grid.nearest_free(x, y, GOAL_TOLERANCE_M)
-            if near is not None:
-                x, y = near
+        goal, why = planned_goal(grid, x, y, self.goal_limits)
+        if goal is None:  # as the course's global_planner: no plan, move_base aborts
+            self.nav = None
+            return out + self._finish(False, why, t_ns)
+        x, y = goal
         self.nav = Navigator(grid, DriveLimits())
         path = self.nav.set_goal(
             x,

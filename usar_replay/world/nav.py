@@ -7,6 +7,10 @@ Pure numpy/scipy, deterministic, no clock: time comes in as integer nanoseconds 
   obstacle (``scipy.ndimage.distance_transform_edt``) and a move_base-like inflation cost that
   decays as ``exp(-3.0 (d - r))`` within 1.0 m. A cell is *free* when the robot, rotating about
   base_footprint, fits there: its distance is at least :attr:`PlanningGrid.robot_radius`.
+* :func:`course_goal` decides a goal as the course's ``global_planner`` would: a goal whose
+  costmap cell is lethal or within the footprint's inscribed radius of an obstacle
+  (:class:`GoalLimits`, from the package's costmap parameters) has no plan and is refused,
+  unless the planner's ``default_tolerance`` reaches a cell that has one.
 * :func:`plan` is Dijkstra (scipy's compiled ``csgraph.dijkstra``) on the 8-connected free cells,
   each step weighted by its length times ``1 + cost_weight * cost``, so paths keep off walls;
   the graph is built once per grid.
@@ -37,10 +41,13 @@ from usar_replay.core.rotations import wrap_angle
 from usar_replay.world.scenario import Scenario, building_extent
 
 __all__ = [
+    "TEMPLATE_GOAL_LIMITS",
+    "course_goal",
     "goal_status",
     "grid_from_msg",
     "grid_to_msg",
     "DriveLimits",
+    "GoalLimits",
     "NavStatus",
     "Navigator",
     "PlanningGrid",
@@ -89,6 +96,32 @@ class DriveLimits:
     backup_speed: float = 0.1
     backup_time_s: float = 1.5
     max_recoveries: int = 2
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class GoalLimits:
+    """What decides whether the course's global planner has a plan to a goal: the costmap's
+    inscribed radius (the footprint's, padded), its inflation radius (no inscribed cost is
+    painted beyond it) and the planner's ``default_tolerance``; ``source`` says where they
+    were read (a package's launch and YAML files, or the course template's defaults)."""
+
+    inscribed_m: float = 0.087
+    """The course template's footprint [[-0.205, -0.155], [-0.205, 0.155], [0.077, 0.155],
+    [0.077, -0.155]] padded by costmap_2d's default ``footprint_padding`` 0.01 m."""
+    inflation_m: float = 1.0
+    """The template's ``inflation_radius``."""
+    default_tolerance_m: float = 0.0
+    """The template's global planner's ``default_tolerance``."""
+    source: str = "the course template's costmap and planner defaults"
+
+    @property
+    def blocked_m(self) -> float:
+        """A cell this near an obstacle (cell centre to cell centre, as costmap_2d measures)
+        costs ``INSCRIBED_INFLATED_OBSTACLE`` or more: no plan ends there."""
+        return min(self.inscribed_m, self.inflation_m)
+
+
+TEMPLATE_GOAL_LIMITS = GoalLimits()
 
 
 @dataclass(frozen=True, slots=True)
@@ -252,6 +285,43 @@ class PlanningGrid:
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(h * w, h * w),
         )
+
+
+def course_goal(
+    grid: PlanningGrid, x: float, y: float, limits: GoalLimits = TEMPLATE_GOAL_LIMITS
+) -> tuple[tuple[float, float] | None, str]:
+    """The goal as the course's global planner takes it: ``((x, y), "")`` where its costmap
+    cell is plannable (neither lethal nor within the inscribed radius of an obstacle); the
+    nearest plannable cell within ``default_tolerance`` where one is; else ``(None, why)``
+    (move_base aborts it: issue 51, a follower goal 0.11 m from a cylinder's surface had no
+    plan on the course). A plannable goal inside usar's own clearance (the circumscribed
+    radius its controller keeps free) is the caller's to move."""
+    r0, c0 = grid.world_to_cell(x, y)
+    blocked = limits.blocked_m + 1e-9
+
+    def plannable(r: int, c: int) -> bool:
+        return grid.inside(r, c) and float(grid.distance[r, c]) > blocked
+
+    if plannable(r0, c0):
+        return (x, y), ""
+    n = math.ceil(limits.default_tolerance_m / grid.resolution)
+    best: tuple[float, int, int] | None = None
+    for r in range(r0 - n, r0 + n + 1):
+        for c in range(c0 - n, c0 + n + 1):
+            if plannable(r, c):
+                cx, cy = grid.cell_to_world(r, c)
+                d = math.hypot(cx - x, cy - y)
+                if d <= limits.default_tolerance_m and (best is None or (d, r, c) < best):
+                    best = (d, r, c)
+    if best is not None:
+        return grid.cell_to_world(best[1], best[2]), ""
+    where = "in an obstacle" if grid.distance_to_obstacle(x, y) <= 0.0 else (
+        f"within the footprint's inscribed radius ({limits.inscribed_m:.3f} m) of an obstacle"
+    )
+    return None, (
+        f"goal ({x:.3f}, {y:.3f}) is {where}: the global planner has no plan to it "
+        f"(default_tolerance {limits.default_tolerance_m:g} m; {limits.source})"
+    )
 
 
 def _cell_centres(

@@ -216,9 +216,9 @@ def test_the_simulators_frames_are_not_broadcasts() -> None:
 
 def test_several_frames_for_one_detection_are_judged_by_the_worst() -> None:
     """A shotgun (frames along the camera's ray, one of them on the marker) earns nothing;
-    one frame on the marker and a stand-off goal frame in front of it (the follower's goal)
-    pass; a stand-off frame alone earns half, and says so; 0.4 m behind the marker's face is
-    no stand-off (it fails)."""
+    one frame on the marker and a stand-off goal frame in front of it (the follower's goal,
+    on the camera's line to the marker) pass; a stand-off frame alone earns half, and says so;
+    0.4 m behind the marker's face is no stand-off (it fails)."""
     g = Grader(world())
     camera(g, 5 * S)
     detect(g, [0], 5 * S)
@@ -231,11 +231,12 @@ def test_several_frames_for_one_detection_are_judged_by_the_worst() -> None:
 
     def one(*frames: tuple[str, tuple[float, float, float]]) -> Any:
         h = Grader(world())
-        camera(h, 5 * S)
-        drive(h, "explorer", [(3.0, 1.0)], 5 * S)  # in front of the marker's face (+x)
-        detect(h, [0], 5 * S)
-        for name, where in frames:
-            send(h, name, where, 5 * S)
+        cam = (3.0, 1.0, z)  # in front of the marker's face (+x), looking at it
+        send(h, contract.OPTICAL_FRAME, cam, 5 * S, parent=contract.MAP)
+        drive(h, "explorer", [(3.0, 1.0)], 5 * S)
+        detect(h, [0], 5 * S, at=cam)
+        for name, (px, py, pz) in frames:
+            send(h, name, (px - cam[0], py - cam[1], pz - cam[2]), 5 * S)
         return marker_broadcast(h, 0)
 
     front = (x + 0.45, y, z)

@@ -7,11 +7,14 @@ from rubric_streams import (
     MARKERS,
     TARGETS,
     S,
+    camera,
     detect,
     drive,
+    send,
     world,
 )
 
+from usar_replay.core import contract
 from usar_replay.grading.usar import (
     Grader,
     marker_detected,
@@ -68,3 +71,25 @@ def test_a_package_that_reads_no_detections_detected_nothing() -> None:
     assert line.measured == (
         "no node subscribes to /fiducial_transforms (seen in 1 frame at a target)"
     )
+
+
+def test_a_package_reads_its_detections_only_where_a_frame_follows_them() -> None:
+    """Issue 50: a node that only subscribes to /fiducial_transforms (nothing broadcast), or
+    whose only frame is a timer's sent whatever was detected, read nothing; a frame sent on the
+    detection (a copy) says the package read it."""
+    g = Grader(world())
+    g.detections_read = True
+    drive(g, "explorer", [TARGETS[0]], 4 * S)
+    camera(g, 5 * S)
+    detect(g, [0], 5 * S)
+    line = marker_detected(g, 0)
+    assert not line.passed and line.measured == (
+        "a node subscribes to /fiducial_transforms, but no frame it broadcast follows a "
+        "detection (seen in 1 frame at a target)"
+    )
+    for k in range(20):  # a timer's frame, every 0.5 s, detection or not
+        camera(g, 5 * S + k * S // 2)
+        send(g, "timer", (5.0, 5.0, 0.0), 5 * S + k * S // 2, parent=contract.MAP)
+    assert not marker_detected(g, 0).passed
+    send(g, contract.MARKER_FRAME, MARKERS[0], 5 * S)
+    assert marker_detected(g, 0).passed

@@ -13,7 +13,7 @@ def test_every_rule_has_a_question_and_a_source() -> None:
         assert rule.question and rule.says and rule.source, key
         assert rule.question.startswith("Q") or rule.question == "(no points)", key
         assert len(rule.says) <= 100, key  # it is shown with the line
-    assert RUBRIC_VERSION == RUBRIC.version == 3
+    assert RUBRIC_VERSION == RUBRIC.version == 4
 
 
 def test_every_line_says_its_rule() -> None:

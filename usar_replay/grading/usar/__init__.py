@@ -1,4 +1,4 @@
-"""The course's live-demo rubric (60 points), pure: messages in, verdicts out. Rubric usar v3.
+"""The course's live-demo rubric (60 points), pure: messages in, verdicts out. Rubric usar v4.
 
 Why pure: the rubric is the part of usar a TA argues about, so it must be readable and testable
 on its own, without a log file, mcap or a simulator. Nothing here reads a file or imports mcap;
@@ -11,6 +11,7 @@ may change are :class:`usar_replay.core.settings.Thresholds`, and every line's `
 rule it applied.
 
 * :mod:`.observations`: :class:`Observations`, the streaming consumer (bounded state);
+* :mod:`.follow`: whether a broadcast frame follows the detections it is sent on;
 * :mod:`.targets` (Q1, targets reached), :mod:`.detection` (Q2, markers detected),
   :mod:`.broadcast` (Q3, properly broadcast, as a TA sees the frames in RViz),
   :mod:`.follower` (Q4, the follower's visits in ID order and home), :mod:`.timing` (Q5, 10
@@ -19,30 +20,35 @@ rule it applied.
   :data:`RUBRIC`.
 
 ===================================  ======  ===================================================
-line (``Check.id``)                  points  passes when (v3, issue 43: the TA's rules)
+line (``Check.id``)                  points  passes when (v4, issues 43 and 50: the TA's rules)
 ===================================  ======  ===================================================
 ``explorer.target_k``                12      the explorer came within ``target_reached_m`` (or
-                                             its own goal tolerance + ``goal_slack_m``) of
-                                             target_k after the earlier targets it reached
+                                             its own goal tolerance, at most 0.4 m, +
+                                             ``goal_slack_m``) of target_k after the earlier
+                                             targets it reached
 ``marker_k.detected``                12      the course's detector's ``/fiducial_transforms``
                                              (trusted; never a mission's) holds ID k in a frame
-                                             taken while the explorer was at a target
+                                             taken while the explorer was at a target (a ROS
+                                             1 package: and a frame of it follows them)
 ``marker_k.broadcast``               8       every frame broadcast on ``/tf`` as a detection of
                                              k (any name but the simulator's, within
                                              ``detection_recent_s`` after one), placed in
                                              ``map`` at the median of its broadcasts while the
                                              explorer scanned at a target, is within
                                              ``marker_map_error_m`` of the marker (a stand-off
-                                             frame alone: half)
+                                             frame alone that follows the detections: half; a
+                                             frame that ignores them: nothing)
 ``marker_frame.only_on_detection``   4       something was broadcast, every broadcast is a
                                              child of the camera's optical frame, made within
                                              ``detection_recent_s`` after a non-empty
-                                             detection, and none is a stored pose sent again
-                                             after an empty one
+                                             detection, none is a stored pose sent again
+                                             after an empty one, none of a frame that ignores
+                                             the detections
 ``explorer.home_before_follower``    4       after its last target the explorer came within
                                              ``home_m`` of its start before the follower moved
 ``follower.marker_k``                12      the follower *stopped* within the handout's
-                                             stand-off (in x and y) + its goal tolerance +
+                                             stand-off (in x and y) + its goal tolerance
+                                             (at most 0.4 m) +
                                              ``goal_slack_m`` of marker k, after the lower IDs
 ``follower.home``                    4       the follower left home and came back, after the
                                              explorer was home

@@ -3,7 +3,10 @@
 
 A marker's frames are placed as a TA sees them (:func:`frame_places`): each frame at the median
 of its broadcasts made while the explorer scanned at a target; the worst frame decides (a
-shotgun earns nothing), a stand-off frame alone earns half.
+shotgun earns nothing), a stand-off frame alone earns half, where it follows the detections
+(:mod:`.follow`: on the camera's line to the marker, or at one offset from the detected pose);
+a frame that stays put in the camera frame while the detections move ignores them: it earns
+nothing, and its broadcasts are not "on a detection" (issue 50).
 """
 
 from __future__ import annotations
@@ -42,6 +45,8 @@ class FramePlace:
     broadcasts: int
     where: str
     """``at a target`` or ``anywhere`` (no frame of the marker was broadcast at a target)."""
+    follow: str = "unknown"
+    """How the frame follows the detections (:meth:`.Observations.frame_verdict`)."""
 
 
 def _median(points: Sequence[tuple[float, ...]]) -> tuple[float, ...]:
@@ -67,12 +72,15 @@ def frame_places(g: Observations, mid: int) -> list[FramePlace]:
     marker = g.markers[mid]
     out: list[FramePlace] = []
     for f in frames:
+        follow = g.frame_verdict(f.frame)
         ring = f.at_target if at_target else f.elsewhere
         n = f.at_target_count if at_target else f.elsewhere_count
         where = "at a target" if at_target else "anywhere"
         if not ring:
             if f.failed_lookups and not (at_target and f.elsewhere):
-                out.append(FramePlace(f, (math.inf,) * 3, math.inf, "off", f.count, where))
+                out.append(
+                    FramePlace(f, (math.inf,) * 3, math.inf, "off", f.count, where, follow)
+                )
             continue
         place = _median([p for p, _ in ring])
         seen_from = _median([e for _, e in ring])
@@ -80,13 +88,15 @@ def frame_places(g: Observations, mid: int) -> list[FramePlace]:
         limit = g.th.marker_map_error_m
         on = sum(math.dist(p, marker) <= limit for p, _ in ring) >= STEADY * len(ring)
         steady = sum(math.dist(p, place) <= limit for p, _ in ring) >= STEADY * len(ring)
-        if err <= limit and on:
+        if follow == "ignores":
+            kind = "off"  # wherever it shows, it is no detection's (issue 50)
+        elif err <= limit and on:
             kind = "on"
-        elif steady and _stand_off(g, mid, place, seen_from):
+        elif steady and follow == "follows" and _stand_off(g, mid, place, seen_from):
             kind = "stand-off"
         else:
             kind = "off"
-        out.append(FramePlace(f, (place[0], place[1], place[2]), err, kind, n, where))
+        out.append(FramePlace(f, (place[0], place[1], place[2]), err, kind, n, where, follow))
     return out
 
 
@@ -100,7 +110,8 @@ def _stand_off(
     g: Observations, mid: int, place: tuple[float, ...], seen_from: tuple[float, ...]
 ) -> bool:
     """A frame put deliberately in front of the marker: on its face's side, towards the camera,
-    no farther than the follower's stand-off (0.4 m in x and in y) plus the threshold."""
+    no farther than the follower's stand-off (0.4 m in x and in y) plus the threshold. (Only
+    asked of a frame that follows the detections: a place alone is no stand-off.)"""
     x, y, _z = g.markers[mid]
     yaw = g.marker_yaw.get(mid, 0.0)
     vx, vy = place[0] - x, place[1] - y
@@ -110,7 +121,7 @@ def _stand_off(
     # offset sideways, along the image's x, is a wrong frame, not a goal in front of it)
     apart = math.hypot(vx, vy)
     camera_side = cx * vx + cy * vy > math.cos(math.pi / 4) * math.hypot(cx, cy) * apart
-    within = apart <= math.sqrt(2.0) * g.th.follower_visit_m + g.th.marker_map_error_m
+    within = apart <= g.stand_off_m
     return ahead > 0.0 and camera_side and within
 
 
@@ -134,7 +145,9 @@ def place_text(places: Sequence[FramePlace], shown: FramePlace) -> str:
     if not math.isfinite(shown.error_m):
         return f"{shown.frame.frame}: not found in {contract.MAP} or not finite{also}"
     text = f"{head}, {shown.error_m * 100:.1f} cm from the marker"
-    if shown.kind == "stand-off":
+    if shown.follow == "ignores":
+        text += ": it stays put in the camera frame whatever was detected (it ignores them)"
+    elif shown.kind == "stand-off":
         text += ": a stand-off frame in front of it (half the points)"
     return text + also
 
@@ -208,7 +221,9 @@ def only_on_detection(g: Observations) -> Check:
     broadcasts gives no credit when there were none: a mission that never broadcast (it
     crashed at its first target, or has no broadcaster yet) has shown nothing this line can
     judge, so it fails with "nothing broadcast" rather than passing by default."""
-    bad = g.bad_broadcasts
+    ignoring = g.ignoring_frames()
+    ignored = sum(g.frame_tally.get(f, [0, 0])[0] for f in ignoring)
+    bad = g.bad_broadcasts + ignored
     firsts = [
         (t, what)
         for t, what in (
@@ -217,6 +232,11 @@ def only_on_detection(g: Observations) -> Check:
         )
         if t is not None
     ]
+    for b in g.broadcasts.values():  # an ignoring frame's first broadcast is a bad one too
+        for name in ignoring:
+            f = b.frames.get(name)
+            if f is not None and f.first_ns is not None:
+                firsts.append((f.first_ns, f"{name} stamped {f.first_stamp[0] / 1e9:.3f} s"))
     first_bad = min(firsts, default=None)
     ok = bad == 0 and g.broadcast_count > 0
     period = f"{g.th.detection_recent_s:g} s"
@@ -230,6 +250,9 @@ def only_on_detection(g: Observations) -> Check:
             f"{plural(g.broadcast_count, 'broadcast')} ({names}), {g.without_detection} without "
             f"a detection within {period}, {g.wrong_parent} with another parent"
         )
+        if ignored:
+            which = ", ".join(ignoring[:2]) + (" ..." if len(ignoring) > 2 else "")
+            measured += f", {ignored} ignoring the detection ({which})"
     return Check(
         id="marker_frame.only_on_detection",
         rule=RULES["only_on_detection"].text,

@@ -13,8 +13,10 @@ __all__ = ["marker_detected"]
 
 def marker_detected(g: Observations, mid: int) -> Check:
     """``marker_k.detected``: the detector reported ID k in a frame taken while the explorer
-    was at a target (stopped or turning there), a detection the mission could use; a marker
-    only glimpsed while driving past does not count."""
+    was at a target (stopped or turning there, by the rubric's own radius), a detection the
+    mission could use; a marker only glimpsed while driving past does not count. A ROS 1
+    package reads its detections only where a node subscribes *and* a frame it broadcasts
+    follows them (:meth:`.Observations.detections_followed`; issue 50)."""
     t = g.detected_ns.get(mid)
     frames = g.detected_frames.get(mid, 0)
     glimpsed = g.glimpsed_frames.get(mid, 0)
@@ -25,6 +27,13 @@ def marker_detected(g: Observations, mid: int) -> Check:
         t = None  # seen by the course's detector, but nothing of the package read it
         seen = plural(frames, "frame")
         measured = f"no node subscribes to {contract.FIDUCIALS} (seen in {seen} at a target)"
+    elif g.detections_read and t is not None and not g.detections_followed():
+        t = None  # a node subscribes, but nothing it broadcast follows what it got (issue 50)
+        seen = plural(frames, "frame")
+        measured = (
+            f"a node subscribes to {contract.FIDUCIALS}, but no frame it broadcast follows a "
+            f"detection (seen in {seen} at a target)"
+        )
     elif t is not None:
         measured = f"in {plural(frames, 'frame')} at a target, first at {sim_s(t)}"
     elif glimpsed:

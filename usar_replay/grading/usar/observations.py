@@ -23,8 +23,11 @@ from usar_replay.core.finite import nonfinite_field
 from usar_replay.core.safe_text import safe_line
 from usar_replay.core.settings import Thresholds
 from usar_replay.core.tf_tree import BufferCore, BufferFeeder, TransformException
+from usar_replay.grading.usar.follow import FrameFollow, rotate, sample
 from usar_replay.grading.usar.rules import (
     BROADCAST_MATCH_M,
+    FOLLOW_MATCH_M,
+    MAX_GOAL_TOLERANCE_M,
     SCAN_TURN_RAD_S,
     TEMPLATE_GOAL_TOLERANCE_M,
 )
@@ -227,19 +230,27 @@ class Observations:
             return Disc(c, r, r + th.reentry_m, count_start)
 
         def tolerance(value: float | None) -> float:
-            return TEMPLATE_GOAL_TOLERANCE_M if value is None else value
+            # what the package's move_base may widen the rubric by: at most the handout's
+            # 0.4 m (rules.MAX_GOAL_TOLERANCE_M), however far its robot is let stop short
+            own = TEMPLATE_GOAL_TOLERANCE_M if value is None else value
+            return min(own, MAX_GOAL_TOLERANCE_M)
 
         self.explorer_tolerance = tolerance(th.explorer_goal_tolerance_m)
         self.follower_tolerance = tolerance(th.follower_goal_tolerance_m)
         own = self.explorer_tolerance + th.goal_slack_m
         self.target_radius = own if own > th.target_reached_m + 1e-9 else th.target_reached_m
         """How near a target the explorer must come: v2's 0.15 m, or the package's own goal
-        tolerance plus the controller's overshoot where that is more."""
+        tolerance (at most the handout's 0.4 m) plus the controller's overshoot where that is
+        more."""
         self.visit_radius = (
             math.sqrt(2.0) * th.follower_visit_m + self.follower_tolerance + th.goal_slack_m
         )
         """How near a marker the follower must stop: the handout's 0.4 m stand-off in x and
-        in y, the package's goal tolerance, the overshoot (0.72 m with the template's)."""
+        in y, the package's goal tolerance (at most 0.4 m), the overshoot (0.72 m with the
+        template's, 1.07 m at most)."""
+        self.stand_off_m = math.sqrt(2.0) * th.follower_visit_m + th.marker_map_error_m
+        """The farthest a stand-off frame may be from its marker: the follower's stand-off in
+        x and y plus the broadcast threshold."""
         self.target_discs = [disc(t, self.target_radius, True) for t in self.targets]
         self.explorer_home_disc = disc(self.explorer_home, th.home_m, False)
         self.marker_discs = {
@@ -281,9 +292,14 @@ class Observations:
         """The marker each frame name was last broadcast as (a detection's)."""
         """Per frame, the detections (image stamp, ID) it was broadcast as, the recent ones."""
         self.detections_read: bool | None = None
-        """Whether the mission could read the detections: a ROS 1 package's node subscribed
-        to ``/fiducial_transforms`` (the log's ``ros1.toml``); None: not known (a Python
-        mission, whose nodes read them in its own process, or an older log)."""
+        """Whether a node of the mission subscribed to the detections: a ROS 1 package's node
+        subscribed to ``/fiducial_transforms`` (the log's ``ros1.toml``); None: not known (a
+        Python mission, whose nodes read them in its own process, or an older log). Where
+        True, the package read them only where one of its frames follows them
+        (:meth:`detections_followed`)."""
+        self.follow: dict[str, FrameFollow] = {}
+        """Per frame name, how its broadcasts sat to the detections they were sent on
+        (:mod:`.follow`)."""
         self.fiducial_messages = 0
         """Messages on ``/fiducial_transforms``, empty ones included (0: no detector ran)."""
         self._not_candidates = frozenset((contract.MAP, *contract.sim_frames()))
@@ -441,7 +457,7 @@ class Observations:
                     parents[key] = None
             parent = parents[key]
             where = None if parent is None else _compose(parent.transform, tf.transform)
-            self._on_broadcast(tf, stamp, t_ns, times, where)
+            self._on_broadcast(tf, stamp, t_ns, times, where, parent)
 
     def _window(self, t_ns: int) -> list[tuple[int, msgs.FiducialTransform]]:
         """The detections a broadcast sent at ``t_ns`` may be: (image stamp, detection) of
@@ -461,10 +477,11 @@ class Observations:
         t_ns: int,
         times: int,
         where: tuple[float, float, float] | None,
+        parent: msgs.TransformStamped | None = None,
     ) -> None:
         """``times`` identical broadcasts of ``tf``, stamped ``stamp`` (its own, or the log time
         for a zero stamp); ``where`` is its child frame's position in ``map`` through its
-        parent at that stamp (None: the parent could not be looked up)."""
+        ``parent`` at that stamp (None: the parent could not be looked up)."""
         frame = _frame_name(tf.child_frame_id)
         if frame not in self.broadcast_frames and len(self.broadcast_frames) >= MAX_FRAMES:
             frame = OTHER_FRAMES
@@ -509,6 +526,7 @@ class Observations:
         if mid not in self.markers:
             return
         self._frame_marker[frame] = mid
+        self._keep_follow(frame, tf, stamp, where, found, parent if on_camera else None)
         b = self.broadcasts[mid].frames.setdefault(frame, FrameBroadcasts(frame))
         b.count += times
         if b.first_ns is None:
@@ -525,6 +543,59 @@ class Observations:
             explorer = self.explorer_xy or self.explorer_home
             scanning = self.explorer_at_target and not self.explorer_turning_fast
             b.keep(where, explorer, scanning and near, stamp)
+
+    def _keep_follow(
+        self,
+        frame: str,
+        tf: msgs.TransformStamped,
+        stamp: int,
+        where: tuple[float, float, float] | None,
+        found: msgs.FiducialTransform,
+        camera: msgs.TransformStamped | None,
+    ) -> None:
+        """How this broadcast sits to the detection it is judged as (:mod:`.follow`): its
+        origin in the camera frame at its stamp (through ``map`` where its parent is another
+        frame), with the camera's rotation in ``map``."""
+        if camera is None:
+            if where is None:
+                return
+            try:
+                camera = self.buffer.lookup_transform(contract.MAP, contract.OPTICAL_FRAME, stamp)
+            except TransformException:
+                return
+            p = camera.transform.translation
+            rel = (where[0] - p.x, where[1] - p.y, where[2] - p.z)
+            b = rotate(camera.transform.rotation, rel, inverse=True)
+        else:
+            v = tf.transform.translation
+            b = (v.x, v.y, v.z)
+        if not all(map(math.isfinite, b)) or nonfinite_field(found):
+            return
+        got = sample(b, found.transform, camera.transform.rotation, self.stand_off_m)
+        if all(map(math.isfinite, (*got.in_marker, *got.in_map))):
+            self.follow.setdefault(frame, FrameFollow()).keep(got)
+
+    def frame_verdict(self, frame: str) -> str:
+        """How ``frame`` follows the detections it was sent on (:meth:`.FrameFollow.verdict`:
+        ``follows``, ``empty``, ``ignores``, ``moves`` or ``unknown``)."""
+        f = self.follow.get(frame)
+        return "unknown" if f is None else f.verdict(self.stand_off_m)
+
+    def ignoring_frames(self) -> list[str]:
+        """The frames that did not move with the detections they were sent on (a place fixed
+        ahead of the camera): no detection's broadcasts (issue 50)."""
+        return [f for f in self.follow if self.frame_verdict(f) == "ignores"]
+
+    def detections_followed(self) -> bool:
+        """Do the mission's broadcasts follow its detections: a frame sent mostly on them (not
+        a timer's) that does not ignore them (a copy, a stand-off, wrong maths on them, the
+        empty transform of the detection callback)? Where a ROS 1 package's node subscribed,
+        this is what says the package read them (issue 50: a node that only subscribes, or
+        that sends a place fixed ahead of the camera, reads nothing)."""
+        return any(
+            with_one and with_one >= without and self.frame_verdict(frame) != "ignores"
+            for frame, (with_one, without) in self.frame_tally.items()
+        )
 
     def _copied(
         self,
@@ -556,11 +627,18 @@ class Observations:
         on_camera: bool,
     ) -> tuple[int, msgs.FiducialTransform]:
         """(image stamp, detection) a broadcast is: on the camera, the one it copies
-        (identical, else nearest in the camera frame); elsewhere, the detected marker nearest
-        to where it puts its frame in ``map``."""
+        (identical, else within the match), else the one on whose line from the camera it lies
+        (a stand-off along the ray), else the nearest in the camera frame; elsewhere, the
+        detected marker nearest to where it puts its frame in ``map``."""
         if on_camera:
             exact = next(((s, f) for s, f in window if f.transform == tf.transform), None)
-            return exact or min(window, key=lambda sf: _apart_m(tf.transform, sf[1].transform))
+            v = tf.transform.translation
+            b = (v.x, v.y, v.z)
+            near = min(window, key=lambda sf: _apart_m(tf.transform, sf[1].transform))
+            if exact or _apart_m(tf.transform, near[1].transform) <= BROADCAST_MATCH_M:
+                return exact or near
+            ray = min(window, key=lambda sf: _off_ray(b, sf[1].transform))
+            return ray if _off_ray(b, ray[1].transform) <= FOLLOW_MATCH_M else near
         if where is None:
             return window[0]
         known = [(s, f) for s, f in window if f.fiducial_id in self.markers]
@@ -579,6 +657,16 @@ def _apart_m(a: msgs.Transform, b: msgs.Transform) -> float:
     """How far apart two transforms put their child frame's origin (metres)."""
     p, q = a.translation, b.translation
     return math.dist((p.x, p.y, p.z), (q.x, q.y, q.z))
+
+
+def _off_ray(b: tuple[float, float, float], d: msgs.Transform) -> float:
+    """How far ``b`` is from the segment camera -> ``d`` (inf behind the camera or past d)."""
+    t = d.translation
+    dd = t.x * t.x + t.y * t.y + t.z * t.z
+    s = (b[0] * t.x + b[1] * t.y + b[2] * t.z) / dd if dd > 0 else -1.0
+    if not 0.0 < s <= 1.0:
+        return math.inf
+    return math.dist(b, (s * t.x, s * t.y, s * t.z))
 
 
 def _frame_name(frame: str) -> str:
