@@ -97,9 +97,12 @@ def test_a_100_mb_file_is_refused_before_it_is_read(tmp_path: Path, name: str) -
         f.truncate(100 * 1024 * 1024)
     got, peak = _bounded(lambda: tp.check_file(path))
     assert isinstance(got, TeamFileRefused)
-    assert str(got) == f"{name}: 104857600 bytes; usar reads at most " + (
-        f"{tp.MAX_CONFIG_BYTES}" if name.endswith(".toml") else f"{tp.MAX_XML_BYTES}"
-    ) + " of this file"
+    assert (
+        str(got)
+        == f"{name}: 104857600 bytes; usar reads at most "
+        + (f"{tp.MAX_CONFIG_BYTES}" if name.endswith(".toml") else f"{tp.MAX_XML_BYTES}")
+        + " of this file"
+    )
     assert peak < 1024 * 1024  # not a byte of it read
 
 

@@ -182,10 +182,6 @@ def toml_file(path: str | os.PathLike[str], label: str = "") -> dict[str, Any]:
 _XML_DECL = re.compile(rb"^\s*<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z0-9._-]{1,40})[\"']")
 
 
-class _Stop(Exception):
-    """Raised from expat's handlers to end a scan at the first rule broken."""
-
-
 def check_xml(data: bytes, label: str) -> None:
     """A team's XML (``package.xml``, a launch file) within the rules: its encoding (UTF-8, or
     the one its declaration names), elements nested at most :data:`MAX_DEPTH` deep, and no
@@ -206,31 +202,25 @@ def check_xml(data: bytes, label: str) -> None:
             raise _refuse(label, f"not {name} text as it declares (offset {err.start})") from None
     parser = xml.parsers.expat.ParserCreate()
     level = 0
-    refusal = ""
 
-    def start(_name: str, _attrs: Any) -> None:
-        nonlocal level, refusal
+    def start(_name: str, _attrs: Any) -> None:  # a refusal raised here ends expat's parse
+        nonlocal level
         level += 1
         if level > MAX_DEPTH:
-            refusal = f"elements nested deeper than {MAX_DEPTH} levels"
-            raise _Stop
+            raise _refuse(label, f"elements nested deeper than {MAX_DEPTH} levels")
 
     def end(_name: str) -> None:
         nonlocal level
         level -= 1
 
     def entity(*_args: Any) -> None:
-        nonlocal refusal
-        refusal = "declares an <!ENTITY>; a launch file or package.xml needs none"
-        raise _Stop
+        raise _refuse(label, "declares an <!ENTITY>; a launch file or package.xml needs none")
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
     parser.EntityDeclHandler = entity
     try:
         parser.Parse(data, True)
-    except _Stop:
-        raise _refuse(label, refusal) from None
     except xml.parsers.expat.ExpatError:
         return  # the team's syntax: its tools say what it is
 
