@@ -167,3 +167,15 @@ def test_a_name_with_controls_is_shown_escaped(tmp_path: Path) -> None:
     with pytest.raises(TeamFileRefused) as err:
         tp.check_file(path)
     assert "\x1b" not in str(err.value) and "x\\x1b[2J.yaml" in str(err.value)
+
+
+def test_head_reads_the_start_of_any_file_and_never_refuses(tmp_path: Path) -> None:
+    cmake = tmp_path / "CMakeLists.txt"
+    cmake.write_bytes(b"project(x)\nadd_executable(a a.cpp)\n\xff" + b"#" * (3 << 20))
+    text = tp.head(cmake)
+    assert text.startswith("project(x)\nadd_executable(a a.cpp)\n\ufffd")
+    assert len(text) == tp.MAX_HEAD_BYTES
+    (tmp_path / "link.txt").symlink_to(cmake)
+    os.mkfifo(tmp_path / "fifo")
+    assert tp.head(tmp_path / "link.txt") == tp.head(tmp_path / "fifo") == ""
+    assert tp.head(tmp_path / "missing") == ""

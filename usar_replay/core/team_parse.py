@@ -54,6 +54,7 @@ __all__ = [
     "check_package",
     "check_xml",
     "check_yaml",
+    "head",
     "parsed",
     "read_bytes",
     "read_text",
@@ -67,6 +68,9 @@ MAX_XML_BYTES = 2 * 1024 * 1024
 """A ``package.xml`` or launch file: the course's are a few kilobytes."""
 MAX_YAML_BYTES = 2 * 1024 * 1024
 """A parameter file: the course's largest (``dwa_local_planner_params.yaml``) is 2 KB."""
+MAX_HEAD_BYTES = 1024 * 1024
+"""What :func:`head` reads of a file scanned for a word (a ``CMakeLists.txt``'s
+``add_executable``): the course's are 8 KB."""
 MAX_DEPTH = 64
 """Levels of tables, arrays, elements or YAML blocks: the course's files use fewer than 10."""
 
@@ -136,6 +140,30 @@ def read_text(path: str | os.PathLike[str], limit: int, label: str = "") -> str:
     """:func:`read_bytes` decoded as UTF-8 (:class:`TeamFileRefused` when it is not)."""
     label = label or Path(path).name
     return _utf8(read_bytes(path, limit, label), label)
+
+
+def head(path: str | os.PathLike[str], limit: int = MAX_HEAD_BYTES) -> str:
+    """The first ``limit`` bytes of a team's file as text (bytes that are not UTF-8 replaced),
+    or '' for one :func:`read_bytes` refuses to open (a link, not a regular file): for a scan
+    that looks for a word and never refuses a team (is there an ``add_executable``?), whatever
+    the file's size."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        return ""
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return ""
+        chunks: list[bytes] = []
+        got = 0
+        while got < limit and (block := os.read(fd, min(1 << 20, limit - got))):
+            chunks.append(block)
+            got += len(block)
+    except OSError:
+        return ""
+    finally:
+        os.close(fd)
+    return b"".join(chunks).decode("utf-8", errors="replace")
 
 
 def _depth(value: Any) -> int:

@@ -210,10 +210,7 @@ def _package_dirs(root: Path) -> list[Path]:
 
 def _has_nodes(folder: Path) -> bool:
     """Does the package build a node (``add_executable`` outside a comment)?"""
-    try:
-        text = (folder / "CMakeLists.txt").read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return False
+    text = team_parse.head(folder / "CMakeLists.txt")  # the team's file: its first MiB
     return _ADD_EXECUTABLE.search(text) is not None
 
 
@@ -337,10 +334,7 @@ def warning_flags(folder: Path) -> tuple[str, ...]:
     for path in sorted(folder.rglob("*")):
         if path.name != "CMakeLists.txt" and path.suffix != ".cmake":
             continue
-        try:
-            text = path.read_text(encoding="utf-8", errors="replace")
-        except OSError:
-            continue
+        text = team_parse.head(path.resolve())  # the team's file (a link: its target in the copy)
         if _WERROR.search(text):
             return ()
     return WARNING_FLAGS
