@@ -48,7 +48,7 @@ def test_a_catkin_package_is_a_ros1_team(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("config", "why"),
     [
-        ("[mission\n", "usar.toml is not valid TOML"),
+        ("[mission\n", "usar.toml: not valid TOML"),
         ("[other]\n", 'usar.toml has no [mission] target = "FILE.py[:function]"'),
         ('[mission]\ntarget = "../x.py"\n', "target '../x.py' is outside the team's folder"),
         ('[mission]\ntarget = "nope.py"\n', "target 'nope.py': no such .py file"),
@@ -59,6 +59,49 @@ def test_a_bad_usar_toml_is_the_teams_problem(tmp_path: Path, config: str, why: 
     (tmp_path / "subs" / "team" / "usar.toml").write_text(config, encoding="utf-8")
     [sub] = p.discover(tmp_path / "subs")
     assert why in sub.problem and sub.target == ""
+
+
+def _package(folder: Path, name: str) -> Path:
+    (folder / "launch").mkdir(parents=True)
+    (folder / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package format="2"><name>{name}</name></package>\n',
+        encoding="utf-8",
+    )
+    (folder / "CMakeLists.txt").write_text(f"project({name})\n", encoding="utf-8")
+    (folder / "launch" / "go.launch").write_text("<launch/>\n", encoding="utf-8")
+    (folder / "README.md").write_text(f"roslaunch {name} go.launch\n", encoding="utf-8")
+    return folder
+
+
+def test_any_file_of_a_team_is_that_teams_verdict(tmp_path: Path) -> None:
+    """Issue 50, finding 3: a 5 KB usar.toml nested 5,000 deep, a launch file nested as deep,
+    a 100 MB YAML, a package.xml that is not UTF-8: each that team's problem in one line, and
+    the other teams are found as before (the batch grades them)."""
+    root = _subs(tmp_path / "subs")
+    (root / "toml_bomb").mkdir()
+    (root / "toml_bomb" / "usar.toml").write_text(
+        "a = " + "[" * 2500 + "]" * 2500 + "\n", encoding="utf-8"
+    )
+    (root / "toml_bomb" / "mission.py").write_text("def main(): pass\n", encoding="utf-8")
+    launch = _package(root / "launch_bomb", "lb") / "launch" / "go.launch"
+    launch.write_text("<launch>" + "<group>" * 5000 + "</group>" * 5000 + "</launch>")
+    big = _package(root / "big_yaml", "by") / "param.yaml"
+    with big.open("wb") as f:
+        f.truncate(100 * 1024 * 1024)
+    (_package(root / "latin", "la") / "package.xml").write_bytes(
+        b"<package><name>la</name><description>caf\xe9</description></package>"
+    )
+    subs = {s.team: s for s in p.discover(root)}
+    assert 4900 < (root / "toml_bomb" / "usar.toml").stat().st_size < 5100
+    said = {t: subs[t].problem for t in ("toml_bomb", "launch_bomb", "big_yaml", "latin")}
+    assert said == {
+        "toml_bomb": "usar.toml: nested deeper than 64 levels",
+        "launch_bomb": "launch/go.launch: elements nested deeper than 64 levels",
+        "big_yaml": "param.yaml: 104857600 bytes; usar reads at most 2097152 of this file",
+        "latin": "package.xml: not UTF-8 text (byte 0xe9 at offset 40); save it as UTF-8",
+    }
+    assert all(subs[t].target == "" for t in said)
+    assert subs["alpha"].target and subs["beta"].target and subs["gamma_team"].target
 
 
 def test_an_unreadable_folder_is_a_bad_submission_and_names_must_differ(tmp_path: Path) -> None:

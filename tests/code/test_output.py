@@ -51,3 +51,22 @@ def test_a_line_without_a_value_says_why_beside_its_place(tmp_path: Path) -> Non
     g = grade(sub, default_rubric(), options=Options(built=broken))
     line = next(x for x in to_text([g], [], 0.6).splitlines() if " builds_clean" in x)
     assert line.split() == ["0/3", "builds_clean", "does", "not", "compile:", "src/main.cpp:6"]
+
+
+def test_a_team_named_as_a_formula_is_text_in_every_output() -> None:
+    """Issue 50, finding 6: a team folder named ``=HYPERLINK(...)`` (controls in it too) is a
+    cell that begins with ``'`` in the CSV, escaped in the JSON and the table."""
+    from usar_replay.code.grade import refused
+    from usar_replay.core.safe_text import safe
+
+    evil = '=HYPERLINK("https:\\\\evil.invalid","open report")\x1b[2J\u202e'
+    grades = [refused(evil, f"/c/{evil}", f"{evil}: unreadable", default_rubric()),
+              refused("-dash", "/c/-dash", "x", default_rubric())]  # fmt: skip
+    text = to_csv(grades, [])
+    rows = list(csv.reader(io.StringIO(text)))
+    assert [r[1] for r in rows[1:]] == ["'-dash", "'=HYPERLINK(\"https:\\\\evil.invalid\",\"open "
+                                        "report\")\\x1b[2J\\u202e"]  # fmt: skip
+    assert all(not c.startswith(("=", "+", "-", "@")) for r in rows for c in r)
+    doc = to_json(grades, [], rubric="r", template=None, threshold=0.6)
+    assert all(safe(ch) == ch or ch == "\n" for ch in doc)
+    assert all(safe(ch) == ch for ch in to_text(grades, [], 0.6).replace("\n", ""))

@@ -74,3 +74,30 @@ def test_a_crash_reason_is_one_safe_line(tmp_path: Path) -> None:
     text = describe(run)
     assert _fields(text)["Mission"] == "the mission's code crashed: ZeroDivisionError\\x1b[2J: boom"
     assert "  (no scenario attached)" in text.splitlines()
+
+
+def test_a_label_as_wide_as_the_column_keeps_a_space_after_its_colon() -> None:
+    """Issue 50, seen in passing: ``Start read from:usar.toml [ros1]``."""
+    from usar_replay.log.info import _field
+
+    assert _field("Start read from", "usar.toml [ros1]") == ["Start read from: usar.toml [ros1]"]
+    assert _field("Started with", "rosrun a b") == ["Started with:  rosrun a b"]  # as before
+    long = _field("Start read from", "x " * 60)
+    assert long[0].startswith("Start read from: x") and all(len(ln) <= 100 for ln in long)
+
+
+def test_attachments_nested_thousands_deep_are_problems_not_tracebacks(tmp_path: Path) -> None:
+    """A log is anyone's file: its TOML attachments nested 5,000 deep (``tomllib`` recurses)
+    are said invalid, as a malformed one is, and ``usar info`` still reports."""
+    bomb = ("a = " + "[" * 5000 + "]" * 5000 + "\n").encode()
+    path = tmp_path / "deep.mcap"
+    with bag.BagWriter(path, chunk_size=1024) as w:
+        w.add_metadata(bag.RUN_METADATA, {"usar_version": "test"})
+        for name in (contract.SCENARIO_ATTACHMENT, contract.SETTINGS_ATTACHMENT,
+                     contract.MISSION_ATTACHMENT, contract.ROS1_ATTACHMENT):  # fmt: skip
+            w.add_attachment(name, "application/toml", bomb, S)
+        w.write(contract.cmd_vel("explorer"), msgs.Twist(), S)
+        w.close(outcome="done", outcome_reason="")
+    text = describe(open_checked(path))
+    assert f"the attached {contract.MISSION_ATTACHMENT} is invalid" in text
+    assert "nested too deep" in text

@@ -214,3 +214,20 @@ def test_the_log_does_not_depend_on_where_the_build_is_kept(
     cpp = sorted(f for f in files if f.endswith(".cpp"))
     assert cpp and all(f.startswith("/ros1/ws/src/usar_two_nodes/src/") for f in cpp), files
     assert not [f for f in files if "cache" in f or str(tmp_path) in f], files
+
+
+def test_a_teams_file_no_parser_may_read_is_one_line_before_any_build(tmp_path: Path) -> None:
+    """Issue 50, finding 3, for ``usar record --ros1``: a usar.toml nested 5,000 deep beside a
+    package is ``usar: error:`` and one line (exit 2), before anything is built."""
+    from catkintools import package as catkin_package
+
+    team = tmp_path / "team"
+    catkin_package(team / "pkg", "deep_team")
+    (team / "usar.toml").write_text("a = " + "[" * 5000 + "]" * 5000 + "\n", encoding="utf-8")
+    world = tmp_path / "room.toml"
+    save(quick_room(), world)
+    got = usar("record", "--ros1", str(team), "--scenario", str(world), "--out",
+               str(tmp_path / "x.mcap"), "--max-sim-time", "1")  # fmt: skip
+    assert got.returncode == 2, got.stderr
+    assert got.stderr.strip() == "usar: error: usar.toml: nested deeper than 64 levels"
+    assert not (tmp_path / "x.mcap").exists()

@@ -12,12 +12,12 @@ page of a resumed batch is the page of a batch run in one go.
 
 from __future__ import annotations
 
-import html
 from collections.abc import Callable
 from typing import Any
 
 from usar_replay import __version__
 from usar_replay.batch.classreport import OUTCOME_WORDS, ClassGrades, start_text
+from usar_replay.core.safe_text import html_text
 
 __all__ = ["QUESTIONS", "class_page", "question_of"]
 
@@ -82,14 +82,14 @@ def _code_cell(grades: ClassGrades, team: str) -> str:
     text = f"{_num(c.points)}/{_num(c.max_points)}"
     if c.similar:
         text += ("<br><a href='code.html'>similar to "
-                 + html.escape(", ".join(c.similar)) + "</a>")  # fmt: skip
+                 + html_text(", ".join(c.similar)) + "</a>")  # fmt: skip
     return f"<td class='num'>{text}</td>"
 
 
 def class_page(grades: ClassGrades, link: Callable[[str, str], str | None]) -> str:
     """The page (see the module doc); ``link(team, world)`` is a run page's address relative to
     the page, or None where there is none."""
-    e = html.escape
+    e = html_text  # every string, the team's above all: controls escaped, then HTML's
     used = [
         (q, title)
         for q, title in QUESTIONS

@@ -18,6 +18,7 @@ from typing import Any
 
 from usar_replay.batch.code_grade import CODE_JSON, CodeCell, cells_from_json
 from usar_replay.batch.plan import GRADE_FORMAT, Plan, read_json
+from usar_replay.core.safe_text import csv_row, json_data, safe_line
 
 __all__ = [
     "CLASS_FILE",
@@ -135,7 +136,8 @@ CLASS_FILE = "class.json"
 def class_json(grades: ClassGrades) -> str:
     """``OUT/class.json`` (format ``usar-batch-class/1``, docs/batch.md): the batch's teams and
     worlds in its order, each team's problem (outcome, reason) and start (commands, where read),
-    so that ``usar report OUT`` rebuilds the class from the folder alone."""
+    so that ``usar report OUT`` rebuilds the class from the folder alone. Team text (a start,
+    a problem) has its controls escaped (:func:`~usar_replay.core.safe_text.json_data`)."""
     outcomes = {t: grades.cells[(t, grades.worlds[0])].outcome for t in grades.problems}
     data = {
         "format": CLASS_FORMAT,
@@ -144,7 +146,7 @@ def class_json(grades: ClassGrades) -> str:
         "problems": {t: [outcomes.get(t, "no_mission"), why] for t, why in grades.problems.items()},
         "starts": {t: list(s) for t, s in grades.starts.items()},
     }
-    return json.dumps(data, indent=2, sort_keys=True) + "\n"
+    return json.dumps(json_data(data), indent=2, sort_keys=True) + "\n"
 
 
 def from_folder(out_root: Path) -> ClassGrades | None:
@@ -179,11 +181,13 @@ def from_folder(out_root: Path) -> ClassGrades | None:
 
 
 def start_text(grades: ClassGrades, team: str) -> str:
-    """``roslaunch P F; rosrun P N (doc/instructions.txt line 7)``, or '' (not a ROS 1 team)."""
+    """``roslaunch P F; rosrun P N (doc/instructions.txt line 7)``, or '' (not a ROS 1 team).
+    The team's text on one line, its controls escaped (:func:`safe_line`): a README's command
+    may carry ESC sequences that would draw over ``summary.txt`` in a terminal."""
     how, source = grades.starts.get(team, ("", ""))
     if not how:
         return ""
-    return f"{how} ({source})" if source else how
+    return safe_line(f"{how} ({source})" if source else how)
 
 
 def _num(x: float) -> str:
@@ -192,12 +196,13 @@ def _num(x: float) -> str:
 
 def to_csv(grades: ClassGrades) -> str:
     """One row per team: points per world, total, maximum, and the runs that did not end
-    ``done`` (``world: outcome``)."""
+    ``done`` (``world: outcome``). Every cell through
+    :func:`~usar_replay.core.safe_text.csv_row` (controls escaped, formulas neutralised)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     code_cols = ["code", "code_max", "code_similar_to"] if grades.code else []
-    w.writerow(["team", *grades.worlds, "total", "max_total", "problems", "start", "start_from",
-                *code_cols])  # fmt: skip
+    w.writerow(csv_row(["team", *grades.worlds, "total", "max_total", "problems", "start",
+                        "start_from", *code_cols]))  # fmt: skip
     for team in grades.teams:
         cells = [grades.cells[(team, wn)] for wn in grades.worlds]
         total, full = grades.total(team)
@@ -209,7 +214,7 @@ def to_csv(grades: ClassGrades) -> str:
         if team in grades.problems:
             notes = [grades.problems[team]]
         w.writerow(
-            [
+            csv_row([
                 team,
                 *(_num(c.points) if c.graded else "" for c in cells),
                 _num(total),
@@ -217,8 +222,8 @@ def to_csv(grades: ClassGrades) -> str:
                 "; ".join(notes),
                 *grades.starts.get(team, ("", "")),
                 *(_code_cells(grades, team) if grades.code else []),
-            ]
-        )
+            ])
+        )  # fmt: skip
     return buf.getvalue()
 
 
@@ -237,15 +242,16 @@ def _code_table(grades: ClassGrades, width: int) -> list[str]:
         said = "no catkin package" if c is None else f"{_num(c.points)}/{_num(c.max_points)}"
         if c is not None and c.similar:
             said += "; similar to " + ", ".join(c.similar) + " (see code.html)"
-        lines.append(_wrap(f"  {team}: {said}", width))
+        lines.append(_wrap(safe_line(f"  {team}: {said}"), width))
     return lines
 
 
 def to_table(grades: ClassGrades, width: int = 100) -> str:
     """A table for people that fits ``width`` columns: points per world with a letter for a
     run that did not finish (legend below), the total; worlds that do not fit are left to the
-    CSV and said so."""
-    name_w = min(max([4, *(len(t) for t in grades.teams)]), 24)
+    CSV and said so. Team text (names, problems, starts) has its controls escaped
+    (:func:`safe_line`) before it is measured and wrapped; every line is checked again."""
+    name_w = min(max([4, *(len(safe_line(t)) for t in grades.teams)]), 24)
     total_w = 13
     col_ws = [max(len(w), 6) for w in grades.worlds]
     room = width - name_w - total_w - 2
@@ -263,7 +269,9 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
     lines = [head + "  " + "total".rjust(total_w - 2)]
     marks_used: set[str] = set()
     for team in grades.teams:
-        row = (team[: name_w - 1] + "~" if len(team) > name_w else team).ljust(name_w)
+        shown_team = safe_line(team)
+        row = shown_team[: name_w - 1] + "~" if len(shown_team) > name_w else shown_team
+        row = row.ljust(name_w)
         for w, cw in zip(worlds, col_ws, strict=False):
             c = grades.cells[(team, w)]
             mark = OUTCOME_MARKS.get(c.outcome, "?") if c.graded else "-"
@@ -289,7 +297,7 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
     for team in grades.teams:  # why a team has no run, and how each ROS 1 team was started
         if team in grades.problems:
             outcome = grades.cells[(team, grades.worlds[0])].outcome if grades.worlds else ""
-            why = f"{team}: {outcome or 'no_mission'}: {grades.problems[team]}"
+            why = safe_line(f"{team}: {outcome or 'no_mission'}: {grades.problems[team]}")
             lines.append(_wrap(why, width))
     started = [(t, start_text(grades, t)) for t in grades.teams if start_text(grades, t)]
     if started:
@@ -297,7 +305,7 @@ def to_table(grades: ClassGrades, width: int = 100) -> str:
         lines += [_wrap(f"  {team}: {text}", width) for team, text in started]
     if grades.code:
         lines += _code_table(grades, width)
-    return "\n".join(lines)
+    return "\n".join(safe_line(line) for line in "\n".join(lines).split("\n"))
 
 
 def _wrap(text: str, width: int) -> str:
@@ -397,7 +405,10 @@ def gradescope_results(
 
 
 def gradescope_json(results: dict[str, Any]) -> str:
-    return json.dumps(results, indent=2, sort_keys=True) + "\n"
+    """``results.json`` as Gradescope reads it: every string's controls escaped
+    (:func:`~usar_replay.core.safe_text.json_data`), so that its output box shows a team's
+    text and obeys none of it."""
+    return json.dumps(json_data(results), indent=2, sort_keys=True) + "\n"
 
 
 def team_wall_s(plan: Plan, team: str, worlds: Sequence[str]) -> float:

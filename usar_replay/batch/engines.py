@@ -29,7 +29,7 @@ from typing import Any, Protocol
 from usar_replay.batch.plan import RunJob, RunResult, read_json
 from usar_replay.batch.run_state import clean_environment
 from usar_replay.core.errors import UsageError
-from usar_replay.core.safe_text import team_lines
+from usar_replay.core.safe_text import safe_copy, team_lines
 from usar_replay.sandbox import cpu_sets
 from usar_replay.sandbox.run_folder import unmount_under
 
@@ -112,8 +112,10 @@ def execute(job_json: str) -> dict[str, Any]:
         with _lock:
             _running.discard(proc)
     tail = _tail(output)
-    if output.exists():
-        os.replace(output, job.path(".output.txt"))
+    if output.exists():  # the team's text for people: its controls escaped (core/safe_text)
+        shown = work / "output.safe.txt"
+        safe_copy(output, shown)
+        os.replace(shown, job.path(".output.txt"))
     unmount_under(str(work))  # a run killed at its limit left its folder's tmpfs mounted
     shutil.rmtree(work, ignore_errors=True)
     with contextlib.suppress(OSError):

@@ -33,7 +33,6 @@ import json
 import os
 import re
 import stat
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -41,6 +40,7 @@ from typing import Any
 
 from usar_replay import __version__
 from usar_replay.batch.team_files import UnusableSubmission, submission_digest
+from usar_replay.core import team_parse
 from usar_replay.core.errors import UnclearStart, UsageError
 from usar_replay.core.folder_walk import linked, shown
 from usar_replay.core.limits import BATCH_LIMITS, RunLimits
@@ -253,10 +253,10 @@ def _folder_target(
     config = folder / CONFIG_FILE
     data: Any = {}
     if config.is_file():
-        try:
-            data = tomllib.loads(config.read_text(encoding="utf-8", errors="replace"))
-        except tomllib.TOMLDecodeError as err:
-            return "", f"{CONFIG_FILE} is not valid TOML: {err}", "", ""
+        try:  # the team's file: bounded, depth-checked, one line (core/team_parse)
+            data = team_parse.toml_file(config, CONFIG_FILE)
+        except UnusableSubmission as err:
+            return "", str(err), "", ""
     if config.is_file() and ("mission" in data or "ros1" not in data):  # a Python mission
         mission_table = data.get("mission", {})
         spec = mission_table.get("target") if isinstance(mission_table, dict) else None
@@ -274,12 +274,18 @@ def _folder_target(
     if mission.is_file():
         return str(mission.resolve()), "", "", ""
     target = ROS1_TARGET_PREFIX + str(folder.resolve())
+    try:  # every file catkin, roslaunch or usar parses, bounded before any of them reads it
+        team_parse.check_package(folder)
+    except UnusableSubmission as err:
+        return "", str(err), "", ""
     try:  # a catkin package (the course's deliverable), found as `--ros1 FOLDER` finds it
         pkg = find_package(folder)
     except NoPackage:
         pass
     except SeveralPackages as err:  # which, and how to choose
         return "", str(err).removeprefix("--ros1 "), "", ""
+    except UnusableSubmission as err:  # a package.xml past its cap (core/team_parse)
+        return "", str(err), "", ""
     except UsageError:  # a package usar will say more about when it runs (no <name>...)
         return target, "", "", ""
     else:  # built and run by usar's ROS 1 bridge, started as the team's text says

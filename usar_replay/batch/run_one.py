@@ -42,6 +42,7 @@ from usar_replay.batch.plan import (
 )
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.outfiles import write_text
+from usar_replay.core.safe_text import json_data
 
 if TYPE_CHECKING:
     from usar_replay.core.settings import Thresholds
@@ -195,7 +196,7 @@ def grade_job(
         **_start(job, log),
         **lines,
     }
-    text = json.dumps(grade, indent=2, sort_keys=True) + "\n"
+    text = json.dumps(json_data(grade), indent=2, sort_keys=True) + "\n"  # team text escaped
     write_text(job.path(".grade.json"), text, overwrite=True)
     return grade
 
@@ -344,7 +345,7 @@ def record_run(job: RunJob) -> tuple[dict[str, Any], LiveGrade | None]:
 
 
 def _write_record(job: RunJob, rec: dict[str, Any]) -> None:
-    text = json.dumps(rec, indent=2, sort_keys=True) + "\n"
+    text = json.dumps(json_data(rec), indent=2, sort_keys=True) + "\n"  # team text escaped
     write_text(job.path(".run.json"), text, overwrite=True)
 
 

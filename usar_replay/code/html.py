@@ -1,17 +1,18 @@
 """The similar pairs as an HTML page: the matching passages side by side, for a person.
 
 Why: a similarity score alone is an accusation without evidence; a grader decides from the
-passages. Every team's text is escaped (``html.escape``): a submission's code is anyone's, and
+passages. Every team's text is escaped (:func:`~usar_replay.core.safe_text.html_text`:
+controls shown, then ``html.escape``): a submission's code is anyone's, and
 it must not script the grader's browser. The page is self-contained (no script, no remote
 resource) and deterministic (sorted, no clock).
 """
 
 from __future__ import annotations
 
-import html
 from collections.abc import Sequence
 
 from usar_replay.code.similarity import Pair
+from usar_replay.core.safe_text import html_text
 
 __all__ = ["pairs_html"]
 
@@ -24,7 +25,7 @@ _STYLE = (
 
 def pairs_html(pairs: Sequence[Pair], threshold: float) -> str:
     """The page: each pair (score first), its passages in two columns."""
-    esc = html.escape
+    esc = html_text  # controls escaped, then HTML's escapes
     out = [
         "<!DOCTYPE html><html><head><meta charset='utf-8'>",
         "<meta http-equiv='Content-Security-Policy' content=\"default-src 'none'; "

@@ -17,7 +17,7 @@ from typing import Any
 
 from usar_replay.code.grade import PackageGrade
 from usar_replay.code.similarity import Pair
-from usar_replay.core.safe_text import safe_line
+from usar_replay.core.safe_text import csv_row, json_data, safe_line
 
 __all__ = ["FORMAT", "to_csv", "to_json", "to_text"]
 
@@ -67,7 +67,9 @@ def to_json(
     template: str | None,
     threshold: float,
 ) -> str:
-    """The ``usar-code/1`` document (docs/code-rubric.md)."""
+    """The ``usar-code/1`` document (docs/code-rubric.md); every string's controls escaped
+    (:func:`~usar_replay.core.safe_text.json_data`): team names, paths, evidence are the
+    team's."""
     doc = {
         "format": FORMAT,
         "rubric": rubric,
@@ -79,27 +81,28 @@ def to_json(
             for p in similar
         ],
     }
-    return json.dumps(doc, indent=1, sort_keys=True, ensure_ascii=False) + "\n"
+    return json.dumps(json_data(doc), indent=1, sort_keys=True, ensure_ascii=False) + "\n"
 
 
 def to_csv(grades: Sequence[PackageGrade], similar: Sequence[Pair]) -> str:
     """One row per team: points, maximum, each line's points, the report's flags, and the
-    teams it is similar to."""
+    teams it is similar to; every cell through :func:`~usar_replay.core.safe_text.csv_row`
+    (a team folder named ``=HYPERLINK(...)`` is text in a spreadsheet, not a link)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     ids = [s.line.id for s in grades[0].lines] if grades else []
-    w.writerow(["format", "team", "package", "verdict", "points", "max_points", *ids,
-                "report_pages", "similar_to"])  # fmt: skip
+    w.writerow(csv_row(["format", "team", "package", "verdict", "points", "max_points", *ids,
+                        "report_pages", "similar_to"]))  # fmt: skip
     for g in sorted(grades, key=lambda g: g.team):
         by_id = {s.line.id: s.points for s in g.lines}
         close = sorted(
             {f"{p.b if p.a == g.team else p.a} ({p.score:.2f})" for p in similar
              if g.team in (p.a, p.b)}
         )  # fmt: skip
-        w.writerow([FORMAT, g.team, g.package, g.verdict, _num(g.points), _num(g.max_points),
-                    *(_num(by_id.get(i)) for i in ids),
-                    "" if g.report is None or g.report.pages is None else g.report.pages,
-                    "; ".join(close)])  # fmt: skip
+        w.writerow(csv_row([FORMAT, g.team, g.package, g.verdict, _num(g.points),
+                            _num(g.max_points), *(_num(by_id.get(i)) for i in ids),
+                            "" if g.report is None or g.report.pages is None else g.report.pages,
+                            "; ".join(close)]))  # fmt: skip
     return buf.getvalue()
 
 

@@ -22,6 +22,7 @@ __all__ = [
     "DetectError",
     "MissingRos1",
     "UnusableSubmission",
+    "TeamFileRefused",
     "TreeRefused",
     "ProtocolMismatch",
     "NoPackage",
@@ -111,6 +112,12 @@ class UnusableSubmission(UsarError):
     """A team's folder breaks a rule of :mod:`usar_replay.batch.team_files` (a FIFO, a link
     out of it, a file over the caps); ``str()`` says which file and why. The batch makes it
     that team's verdict (``bad_submission``)."""
+
+
+class TeamFileRefused(UnusableSubmission):
+    """A file of a team's that usar will not parse (over its size cap, nested too deep, not
+    UTF-8, an ``<!ENTITY>``): ``str()`` names the file and the rule, in one line. (Raised by
+    :mod:`usar_replay.core.team_parse`; a batch makes it that team's verdict.)"""
 
 
 class TreeRefused(UsarError):

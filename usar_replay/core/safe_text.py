@@ -13,18 +13,49 @@ traceback), newline and tab. Escaped: the C0 and C1 control characters (ESC, BEL
 return, backspace, ...), DEL, and Unicode's format characters (category ``Cf``: the
 right-to-left overrides that reorder what a reader sees, zero-width joiners) and separators
 that break a line outside ``\\n`` (U+2028, U+2029).
+
+One helper per medium, used by every writer of that medium (design.md: "team text is data until
+an output writes it"), each built on :func:`safe`:
+
+* terminal and text files (``summary.txt``, tables): :func:`safe` / :func:`safe_line`, and
+  :class:`SafeStream` on the CLI's stdout;
+* CSV: :func:`csv_row` (:func:`csv_cell` per cell): controls escaped, and a cell that begins
+  with ``=``, ``+``, ``-``, ``@``, a tab or a carriage return gets a leading ``'`` (OWASP's rule
+  against CSV injection: a team folder named ``=HYPERLINK("https://evil.invalid", "open")``
+  is a clickable link in LibreOffice and Excel otherwise); a plain number stays a number;
+* HTML: :func:`html_text`: controls escaped, then ``html.escape`` (quotes included);
+* JSON: :func:`json_data` on the document before ``json.dumps``: every string (keys too) with
+  its controls escaped, so that what a reader of the JSON shows (Gradescope's output box, a
+  spreadsheet's import) holds no raw ESC, C1 control, bidi override or line separator
+  (``json.dumps`` escapes C0 only, and only in its bytes: decoded, they are raw again).
 """
 
 from __future__ import annotations
 
+import codecs
 import contextlib
+import html
 import io
+import os
+import re
 import sys
 import unicodedata
 from collections.abc import Iterable, Iterator
-from typing import TextIO
+from typing import Any, TextIO
 
-__all__ = ["MAX_LINE", "SafeStream", "safe", "safe_line", "safe_stdout", "team_lines"]
+__all__ = [
+    "MAX_LINE",
+    "SafeStream",
+    "csv_cell",
+    "csv_row",
+    "html_text",
+    "json_data",
+    "safe",
+    "safe_copy",
+    "safe_line",
+    "safe_stdout",
+    "team_lines",
+]
 
 MAX_LINE = 400
 """Characters kept of one line of a team's text (a build's error, a node's output) for a
@@ -58,6 +89,60 @@ def safe(text: str, *, lines: bool = True) -> str:
 def safe_line(text: str) -> str:
     """``text`` for one line of output: :func:`safe` with newline and tab escaped too."""
     return safe(text, lines=False)
+
+
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+"""What a spreadsheet reads as the start of a formula (OWASP, "CSV Injection")."""
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def csv_cell(value: object) -> object:
+    """One CSV cell: a string with its controls escaped (:func:`safe_line`) and, when it begins
+    with a formula character (``= + - @``, tab, CR) and is not a plain number, a ``'`` in front
+    so that a spreadsheet shows it as text; numbers and None as they are."""
+    if not isinstance(value, str):
+        return value
+    text = safe_line(value)
+    if text.startswith(_FORMULA_START) and not _NUMBER.fullmatch(text):
+        return "'" + text
+    return text
+
+
+def csv_row(values: Iterable[object]) -> list[object]:
+    """A row for ``csv.writer``: every cell through :func:`csv_cell`."""
+    return [csv_cell(v) for v in values]
+
+
+def html_text(text: str, *, lines: bool = True) -> str:
+    """``text`` for HTML: controls escaped (:func:`safe`; newline and tab kept with ``lines``,
+    for a ``<pre>``), then ``&``, ``<``, ``>`` and both quotes as entities (an attribute's value
+    too)."""
+    return html.escape(safe(str(text), lines=lines), quote=True)
+
+
+def json_data(value: Any) -> Any:
+    """``value`` (a JSON-ready document) with every string in it, keys included, through
+    :func:`safe` (newline and tab kept: ``json.dumps`` writes them as ``\\n``, ``\\t``)."""
+    if isinstance(value, str):
+        return safe(value)
+    if isinstance(value, dict):
+        return {json_data(k): json_data(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_data(v) for v in value]
+    return value
+
+
+def safe_copy(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
+    """A text file a team's processes wrote (a run's ``output.txt``: what its mission printed)
+    copied to ``target`` for people, every control escaped (:func:`safe`, newline and tab
+    kept), read a megabyte at a time (the file is as long as the run's output was): ``cat`` of
+    it in a terminal draws nothing the team chose. Bytes that are not UTF-8 are shown as
+    U+FFFD."""
+    decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
+    with open(source, "rb") as src, open(target, "w", encoding="utf-8", newline="") as dst:
+        while block := src.read(1 << 20):
+            dst.write(safe(decoder.decode(block)))
+        dst.write(safe(decoder.decode(b"", final=True)))
 
 
 def team_lines(text: str, max_len: int = MAX_LINE) -> list[str]:

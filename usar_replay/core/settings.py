@@ -346,6 +346,8 @@ def from_toml(
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise UsageError(f"{source}: invalid TOML: {err}") from err
+    except RecursionError:  # a log's attachment is anyone's: arrays nested thousands deep
+        raise UsageError(f"{source}: invalid TOML: nested too deep") from None
     if table is not None:
         sub = data.get(table)
         if not isinstance(sub, dict):

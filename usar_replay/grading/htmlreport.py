@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 from usar_replay import __version__
 from usar_replay.core import contract, msgs
+from usar_replay.core.safe_text import html_text
 from usar_replay.grading.labels import Label, diameter_pt, place
 from usar_replay.grading.stored_markers import StoredMarkers, is_marker_topic
 from usar_replay.grading.verdict import Check, GradeReport
@@ -375,14 +376,14 @@ def _verdict(ok: bool) -> str:
 def _page(title: str, body: str) -> str:
     return (
         "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
-        f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>"
+        f"<title>{html_text(title)}</title><style>{_STYLE}</style></head>"
         f"<body>{body}<p class='muted'>usar-replay {html.escape(__version__)}</p></body></html>\n"
     )
 
 
 def run_page(run: Run, report: GradeReport, pic: RunPicture) -> str:
     """One run's page."""
-    e = html.escape
+    e = html_text  # every string: controls escaped, then HTML's escapes
     scenario = run.require_scenario()
     verdict = _verdict(report.passed and report.log_complete)
     parts = [
@@ -492,7 +493,7 @@ def index_page(
     entries: Sequence[tuple[str, str, GradeReport | None, str]],
 ) -> str:
     """The index: (recording, page file name, report or None, error) per run."""
-    e = html.escape
+    e = html_text  # every string: controls escaped, then HTML's escapes
     rows = ["<tr><th>recording</th><th></th><th>points</th><th>failed lines</th></tr>"]
     for source, page, report, error in entries:
         if report is None:

@@ -5,6 +5,11 @@ The machine formats are a contract, documented in ``docs/reports.md`` and versio
 or re-typed without a new version. A recording that could not be graded at all (not an MCAP,
 no scenario attached, a needed topic missing, unreadable) is never dropped: it is an entry of
 the same shape with ``status`` ``error``.
+
+A report's strings are partly a team's (the start it read, a frame's name in what was measured)
+and partly a log's (anyone's file): each format escapes them with
+:mod:`usar_replay.core.safe_text`'s helper for its medium (the table: ``safe_line``, JSON:
+``json_data``, CSV: ``csv_row``, JUnit XML: ``safe``, where a raw control is not even XML).
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import textwrap
 from collections.abc import Sequence
 
 from usar_replay import __version__
+from usar_replay.core.safe_text import csv_row, json_data, safe, safe_line
 from usar_replay.core.settings import to_mapping
 from usar_replay.grading.verdict import Check, GradeReport
 
@@ -96,17 +102,19 @@ def to_table(report: GradeReport, width: int | None = None) -> str:
             [
                 "PASS" if c.passed else "FAIL",
                 f"{c.points:.3g}/{c.max_points:.3g}",
-                c.id,
-                f"{c.measured}\nneeds {c.threshold}",
+                safe_line(c.id),
+                f"{safe_line(c.measured)}\nneeds {safe_line(c.threshold)}",
                 _evidence(c),
             ]
         )
-    lines = [f"Grade of {report.source}"]
+    lines = [f"Grade of {safe_line(report.source)}"]
     if report.started_with:
-        lines += textwrap.wrap(f"Started with: {report.started_with}", width)
+        lines += textwrap.wrap(safe_line(f"Started with: {report.started_with}"), width)
     if not report.log_complete:
         lines += textwrap.wrap(
-            f"WARNING: the log is incomplete ({report.log_problem}); graded as far as it goes",
+            safe_line(
+                f"WARNING: the log is incomplete ({report.log_problem}); graded as far as it goes"
+            ),
             width,
         )
     lines += _layout(rows, width, flexible=(3,))
@@ -115,7 +123,7 @@ def to_table(report: GradeReport, width: int | None = None) -> str:
         verdict += " (incomplete log)"
     lines.append(f"Total: {report.points:.4g} / {report.max_points:.4g} points: {verdict}")
     lines.append("'at': the sim time of the evidence (the `usar view` timeline)")
-    return "\n".join(lines)
+    return "\n".join(safe_line(line) for line in lines)
 
 
 def summary_line(report: GradeReport | None, source: str, error: str = "") -> str:
@@ -131,6 +139,7 @@ def summary_line(report: GradeReport | None, source: str, error: str = "") -> st
         if failed:
             tail += f" (failed: {', '.join(failed)})"
     width = table_width()
+    source, tail = safe_line(source), safe_line(tail)
     room = max(width - len(head) - len(tail), 24)
     path = source if len(source) <= room else "..." + source[-(room - 3) :]
     text = head + path + tail
@@ -223,7 +232,7 @@ def to_json(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
         "recordings": [_entry(r, r.source) for r in reports]
         + [_entry(None, src, msg) for src, msg in errors],
     }
-    return json.dumps(doc, indent=2) + "\n"
+    return json.dumps(json_data(doc), indent=2) + "\n"
 
 
 def _classname(source: str) -> str:
@@ -305,6 +314,9 @@ def to_junit(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
         ET.SubElement(case, "error", message=msg)
         total["tests"] += 1
         total["errors"] += 1
+    for element in suites.iter():  # a raw control is not XML 1.0: every text shown escaped
+        for name, value in element.attrib.items():
+            element.set(name, safe(value))
     for key, count in total.items():
         suites.set(key, str(count))
     suites.set("time", f"{seconds:.3f}")
@@ -325,7 +337,7 @@ def to_csv(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
-        [
+        csv_row([
             "schema_version",
             "recording",
             "status",
@@ -335,12 +347,12 @@ def to_csv(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
             "log_complete",
             "error",
             *ids,
-        ]
-    )
+        ])
+    )  # fmt: skip
     for r in reports:
         by_id = {c.id: c for c in r.checks}
         w.writerow(
-            [
+            csv_row([
                 SCHEMA_VERSION,
                 r.source,
                 "graded",
@@ -350,8 +362,8 @@ def to_csv(reports: Sequence[GradeReport], errors: Errors = ()) -> str:
                 int(r.log_complete),
                 r.log_problem,
                 *("" if i not in by_id else ("pass" if by_id[i].passed else "fail") for i in ids),
-            ]
-        )
+            ])
+        )  # fmt: skip
     for src, msg in errors:
-        w.writerow([SCHEMA_VERSION, src, "error", 0, "", "", 0, msg, *("" for _ in ids)])
+        w.writerow(csv_row([SCHEMA_VERSION, src, "error", 0, "", "", 0, msg, *("" for _ in ids)]))
     return buf.getvalue()

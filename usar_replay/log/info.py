@@ -72,8 +72,9 @@ def _size(n: int) -> str:
 
 
 def _field(label: str, text: str) -> list[str]:
-    """``Label:  text``, wrapped to :data:`WIDTH` with the label's indent."""
-    head = f"{label + ':':<{_LABEL}}"
+    """``Label:  text``, wrapped to :data:`WIDTH` with the label's indent; a label as wide as
+    the column (``Start read from``) keeps one space after its colon."""
+    head = f"{label + ':':<{_LABEL}}" if len(label) + 2 <= _LABEL else f"{label}: "
     return textwrap.wrap(
         safe_line(text),
         WIDTH,

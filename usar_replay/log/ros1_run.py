@@ -271,7 +271,8 @@ def of(run: Run) -> Ros1Run | None:
         return None
     try:
         return Ros1Run.from_toml(text.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError, TypeError):
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError, ValueError, AttributeError, TypeError,
+            RecursionError):  # fmt: skip
         said = f"the attached {contract.ROS1_ATTACHMENT} is invalid"
         if said not in run.problems:
             run.problems.append(said)

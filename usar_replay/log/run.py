@@ -222,7 +222,7 @@ def open_run(path: str | os.PathLike[str], *, check: str = "data") -> Run:
     if mtext is not None:
         try:
             mission = MissionInfo.from_toml(mtext.decode("utf-8"))
-        except (UnicodeDecodeError, tomllib.TOMLDecodeError):
+        except (UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError):
             problems.append(f"the attached {contract.MISSION_ATTACHMENT} is invalid")
     return Run(
         path=p,

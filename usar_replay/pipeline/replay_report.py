@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from usar_replay.core.safe_text import csv_row, json_data, safe
 from usar_replay.grading.delta import RubricDelta
 from usar_replay.grading.reports import SCHEMA_VERSION, to_json, to_junit
 from usar_replay.grading.verdict import GradeReport
@@ -70,7 +71,7 @@ def replay_to_json(
     doc = json.loads(to_json(grades))
     doc["replay"] = replay_dict(report)
     doc["replay"]["rubric_delta"] = None if delta is None else delta.as_dict()
-    return json.dumps(doc, indent=2) + "\n"
+    return json.dumps(json_data(doc), indent=2) + "\n"  # the log's and the team's text
 
 
 def replay_to_junit(report: ReplayReport, grades: Sequence[GradeReport] = ()) -> str:
@@ -87,9 +88,8 @@ def replay_to_junit(report: ReplayReport, grades: Sequence[GradeReport] = ()) ->
     failures = 0
     case = ET.SubElement(suite, "testcase", classname=cls, name="mission.ran", time="0")
     if report.mission_failure is not None:
-        ET.SubElement(
-            case, "failure", message=f"the mission {report.mission_failure}"
-        ).text = report.mission_failure_detail
+        failure = ET.SubElement(case, "failure", message=f"the mission {report.mission_failure}")
+        failure.text = safe(report.mission_failure_detail)  # the team's traceback: no raw control
         failures += 1
     for _, t in sorted(report.topics.items()):
         case = ET.SubElement(suite, "testcase", classname=cls, name=t.topic, time="0")
@@ -110,6 +110,9 @@ def replay_to_junit(report: ReplayReport, grades: Sequence[GradeReport] = ()) ->
     for key, add in (("tests", tests), ("failures", failures)):
         root.set(key, str(int(root.get(key, "0")) + add))
     root.set("name", "usar replay")
+    for element in suite.iter():  # a raw control is not XML 1.0: every text shown escaped
+        for name, value in element.attrib.items():
+            element.set(name, safe(value))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
@@ -122,6 +125,8 @@ def replay_to_csv(report: ReplayReport) -> str:
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
     w.writerow(["schema_version", "source", "topic", "recorded", "replayed", "identical"])
-    for _, t in sorted(report.topics.items()):
-        w.writerow([SCHEMA_VERSION, report.source, t.topic, t.recorded, t.replayed, t.identical])
+    for _, t in sorted(report.topics.items()):  # a log's names: csv_row neutralises formulas
+        w.writerow(
+            csv_row([SCHEMA_VERSION, report.source, t.topic, t.recorded, t.replayed, t.identical])
+        )
     return out.getvalue()

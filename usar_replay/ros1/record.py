@@ -20,6 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from usar_replay.core import team_parse
 from usar_replay.core.errors import UnclearStart
 from usar_replay.core.settings import RunSettings
 from usar_replay.pipeline.record import BuildLog, Progress, RecordResult, record, with_latency
@@ -54,6 +55,8 @@ def choose_entry(
     instructions, README, the package's shape), with where it was read;
     :class:`~usar_replay.core.errors.UnclearStart` (a usage error, one line) when nothing
     decides it. ``team_dir``: the folder handed in (a repository around the package)."""
+    # every file catkin, roslaunch or usar parses, bounded before any reads it (one line)
+    team_parse.check_package(team_dir or pkg.path)
     chosen = start.decide(
         pkg.path,
         pkg.name,

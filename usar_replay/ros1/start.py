@@ -48,11 +48,11 @@ import os
 import re
 import shlex
 import stat
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from usar_replay.core.errors import UnclearStart
+from usar_replay.core import team_parse
+from usar_replay.core.errors import TeamFileRefused, UnclearStart
 from usar_replay.core.safe_text import safe_line
 from usar_replay.ros1.start_prose import clean_name, parse_commands, third_command
 from usar_replay.ros1.starts_file import InstructorStart
@@ -327,12 +327,10 @@ def _config(folder: Path, pkg: _Package) -> Start | None:
     text = _read_text(folder / CONFIG_FILE)
     if text is None:
         return None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise UnclearStart(f"{CONFIG_FILE} is not valid TOML: {safe_line(str(err))}") from None
-    except RecursionError:
-        raise UnclearStart(f"{CONFIG_FILE} nests tables too deep to read") from None
+    try:  # bounded as every team file is (core.team_parse: depth, size)
+        data = team_parse.toml(text, CONFIG_FILE)
+    except TeamFileRefused as err:
+        raise UnclearStart(safe_line(str(err))) from None
     table = data.get("ros1")
     if table is None:
         return None

@@ -117,6 +117,8 @@ def _read_toml(text: str, src: str) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise InvalidScenario(f"{src}: invalid TOML: {err}") from err
+    except RecursionError:  # a log's attachment is anyone's: arrays nested thousands deep
+        raise InvalidScenario(f"{src}: invalid TOML: nested too deep") from None
 
 
 _TOP_LEVEL = [

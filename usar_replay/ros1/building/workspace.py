@@ -58,6 +58,7 @@ import usar_replay.ros1.building.layout as layout
 import usar_replay.ros1.building.message as buildmsg
 import usar_replay.ros1.building.standins as standins
 import usar_replay.ros1.building.tree as tree
+from usar_replay.core import team_parse
 from usar_replay.core.errors import (
     BuildFailed,
     MissionEnded,
@@ -209,10 +210,7 @@ def _package_dirs(root: Path) -> list[Path]:
 
 def _has_nodes(folder: Path) -> bool:
     """Does the package build a node (``add_executable`` outside a comment)?"""
-    try:
-        text = (folder / "CMakeLists.txt").read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return False
+    text = team_parse.head(folder / "CMakeLists.txt")  # the team's file: its first MiB
     return _ADD_EXECUTABLE.search(text) is not None
 
 
@@ -248,12 +246,13 @@ def find_package(path: str | os.PathLike[str]) -> Package:
 
 
 def _name(folder: Path) -> str | None:
-    """The ``<name>`` in ``folder/package.xml`` (None when it has none or cannot be read)."""
-    try:
-        text = (folder / "package.xml").read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return None
-    match = _NAME.search(text)
+    """The ``<name>`` in ``folder/package.xml`` (None when it has none);
+    :class:`~usar_replay.core.errors.TeamFileRefused` when it cannot be read or is over
+    :data:`usar_replay.core.team_parse.MAX_XML_BYTES`."""
+    # the team's file, bounded before it is read: TeamFileRefused (one line) past the cap
+    label = f"{folder.name}/package.xml"
+    data = team_parse.read_bytes(folder / "package.xml", team_parse.MAX_XML_BYTES, label)
+    match = _NAME.search(data.decode("utf-8", errors="replace"))
     return match.group(1) if match else None
 
 
@@ -334,10 +333,7 @@ def warning_flags(folder: Path) -> tuple[str, ...]:
     for path in sorted(folder.rglob("*")):
         if path.name != "CMakeLists.txt" and path.suffix != ".cmake":
             continue
-        try:
-            text = path.read_text(encoding="utf-8", errors="replace")
-        except OSError:
-            continue
+        text = team_parse.head(path.resolve())  # the team's file (a link: its target in the copy)
         if _WERROR.search(text):
             return ()
     return WARNING_FLAGS
