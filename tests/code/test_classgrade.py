@@ -87,3 +87,23 @@ def test_a_linked_team_folder_is_its_verdict_in_the_batchs_words(tmp_path: Path)
     (only_links / "b").symlink_to(root / "beta")
     with pytest.raises(UsageError, match=r"links: a, b are links: usar reads only real folders"):
         teams([str(only_links)])
+
+
+def test_a_committed_catkin_workspace_is_graded_without_catkins_link(tmp_path: Path) -> None:
+    """Every ``catkin_make`` workspace has ``src/CMakeLists.txt`` -> catkin's
+    ``toplevel.cmake``: catkin's link, left out and said; the team is graded on the rest, as
+    ``usar batch`` reads it; any other link out is still the team's verdict (issue 51)."""
+    root = _class(tmp_path / "class")
+    ws = tmp_path / "class" / "workspace"
+    (ws / "src").mkdir(parents=True)
+    os.rename(root / "beta", ws / "src" / "beta")
+    (ws / "src" / "CMakeLists.txt").symlink_to("/opt/ros/noetic/share/catkin/cmake/toplevel.cmake")
+    done = grade_class([str(root)], default_rubric(), jobs=2)
+    [team] = [g for g in done.grades if g.team == "workspace"]
+    assert team.verdict == "graded" and team.points > 0
+    assert "src/CMakeLists.txt: catkin's link out of the workspace, left out" in team.findings
+    (ws / "src" / "CMakeLists.txt").unlink()
+    (ws / "src" / "CMakeLists.txt").symlink_to("/etc/hostname")
+    done = grade_class([str(root)], default_rubric(), jobs=2)
+    [team] = [g for g in done.grades if g.team == "workspace"]
+    assert team.verdict == "unreadable" and "a link leaving" in team.findings[0]
