@@ -16,6 +16,7 @@ the package's own files, nothing measured twice.
 
 from __future__ import annotations
 
+import contextvars
 import posixpath
 import re
 import tempfile
@@ -171,8 +172,10 @@ def compile_check(
             ran = run_tool(["g++", *flags, f"src/{unit}"], work, limits, ro_binds=extra)
             return ran.limit, ran.code, ran.errors
 
+        # each unit in a copy of this thread's context: the team's budget holds in the pool
+        runs = [(contextvars.copy_context(), u) for u in units]
         with ThreadPoolExecutor(max(1, jobs)) as pool:
-            results = list(pool.map(one, units))
+            results = list(pool.map(lambda r: r[0].run(one, r[1]), runs))
     errors = warnings = 0
     where = ""
     for unit, (limit, code, output) in zip(units, results, strict=True):
