@@ -84,6 +84,28 @@ def test_the_code_grade_beside_the_demo(tmp_path: Path) -> None:
     assert back is not None and back.code == code
 
 
+@needs
+def test_a_team_of_long_pdfs_holds_the_others_no_longer_than_its_budget(tmp_path: Path) -> None:
+    """Six PDFs of 1,500 pages in a team's doc/ (issue 50: the batch's code grade took 108 s
+    against 12 s): that team is graded within its budget, its verdict line in code.json, and
+    every other team's grade is written with it."""
+    import time
+
+    from usar_replay.code.budget import DEFAULT
+
+    plan, teams = _class(tmp_path)
+    for n in range(6):
+        codetools.many_pages_pdf(teams[1][1] / "doc" / f"part{n}.pdf", 1500)
+    start = time.monotonic()
+    code = grade_code(teams, plan.out_root, None, jobs=2)
+    assert time.monotonic() - start < DEFAULT.wall_s
+    assert set(code) == {"alpha", "copy"}
+    doc = json.loads((plan.out_root / CODE_JSON).read_text())
+    findings = {p["team"]: p["findings"] for p in doc["packages"]}
+    assert findings["copy"][0].startswith(f"budget spent: its {DEFAULT.pdfs} PDFs tried")
+    assert not findings["alpha"]
+
+
 def test_without_code_nothing_changes(tmp_path: Path) -> None:
     plan, _ = _class(tmp_path)
     grades = collect(plan, {"w": 60.0})
