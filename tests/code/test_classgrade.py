@@ -199,3 +199,20 @@ def _running(pids: dict[int, str]) -> list[int]:
         if state != "Z":
             out.append(p)
     return out
+
+
+def test_a_team_past_its_calls_scores_0_on_the_lines_cut_and_says_so(tmp_path: Path) -> None:
+    """Past its tool calls, each later tool of that team is refused at once: its lines score 0
+    as a tool past its own limit does, each note saying the budget, and the verdict line
+    first among its findings."""
+    from usar_replay.code.budget import Budget
+    from usar_replay.code.grade import Options
+
+    root = _class(tmp_path / "class")
+    opts = Options(budget=Budget(tool_calls=1))
+    done = grade_class([str(root / "beta")], default_rubric(), options=opts)
+    [beta] = done.grades
+    assert beta.verdict == "graded"
+    assert beta.findings[0].startswith("budget spent: its 1 tool calls (of 1 tool calls, ")
+    cut = [s for s in beta.lines if "the team's budget (its 1 tool calls)" in s.note]
+    assert cut and all(s.points == 0 for s in cut)
