@@ -474,3 +474,44 @@ HANDOUT_PAGES = [
     "Final Project\n7 Deliverables\nYour group's project submission",
     "8 Getting Help\n9 Grading Rubric\nLive demonstration: 60 pts.",
 ]
+
+
+def many_pages_pdf(path: Path, pages: int, first: str = "Lorem ipsum", slow_first: int = 0
+                   ) -> Path:  # fmt: skip
+    """A PDF of ``pages`` pages, written byte by byte: page 1 has ``first`` (one line); every
+    other page shares one content stream of 30 blocks of text, so the file stays small (1,500
+    pages: ~270 KB) while a full ``pdftotext`` of it takes tens of seconds (issue 50).
+    ``slow_first``: page 1 also draws the shared stream that many times (a first page that
+    takes as long to read as that many pages)."""
+    text = "Lorem ipsum dolor sit amet consectetur adipiscing elit " * 16
+    block = "BT /F1 9 Tf 40 750 Td 11 TL "
+    block += " ".join(f"({text[i : i + 90]}) '" for i in range(0, len(text), 90)) + " ET "
+    shared = (block * 30).encode()
+    opening = f"BT /F1 12 Tf 40 750 Td ({first}) Tj ET".encode()
+    objs: list[bytes] = [
+        b"<< /Type /Catalog /Pages 2 0 R >>",
+        b"<< /Type /Pages /Kids [%s] /Count %d >>"
+        % (" ".join(f"{6 + i} 0 R" for i in range(pages)).encode(), pages),
+        b"<< /Type /Font /Subtype /Type1 /BaseFont /Helvetica >>",
+        b"<< /Length %d >>\nstream\n%s\nendstream" % (len(shared), shared),
+        b"<< /Length %d >>\nstream\n%s\nendstream" % (len(opening), opening),
+    ]
+    contents = b"[5 0 R%s]" % (b" 4 0 R" * slow_first)
+    for i in range(pages):
+        objs.append(
+            b"<< /Type /Page /Parent 2 0 R /MediaBox [0 0 612 792] "
+            b"/Resources << /Font << /F1 3 0 R >> >> /Contents %s >>"
+            % (contents if i == 0 else b"4 0 R")
+        )
+    out = bytearray(b"%PDF-1.4\n")
+    offsets = []
+    for n, body in enumerate(objs, 1):
+        offsets.append(len(out))
+        out += b"%d 0 obj\n%s\nendobj\n" % (n, body)
+    xref = len(out)
+    out += b"xref\n0 %d\n0000000000 65535 f \n" % (len(objs) + 1)
+    out += b"".join(b"%010d 00000 n \n" % o for o in offsets)
+    out += b"trailer\n<< /Size %d /Root 1 0 R >>\nstartxref\n%d\n%%%%EOF\n" % (len(objs) + 1, xref)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(bytes(out))
+    return path

@@ -55,7 +55,7 @@ def test_the_code_grade_beside_the_demo(tmp_path: Path) -> None:
     code = grade_code(teams, plan.out_root, None)
     assert set(code) == {"alpha", "copy"}  # a Python mission has no package: no code grade
     assert code["alpha"].points == code["alpha"].max_points == 57
-    assert code["alpha"].similar == ("copy (0.91)",)
+    assert code["alpha"].similar == ("copy (0.96)",)
     for name in ("code.json", "code.csv", "code.html"):
         assert (plan.out_root / name).is_file()
     grades = replace(collect(plan, {"w": 60.0}), code=code)
@@ -65,7 +65,7 @@ def test_the_code_grade_beside_the_demo(tmp_path: Path) -> None:
         ("alpha", "60", "57", "57"), ("copy", "60", "45", "57"), ("py", "60", "", "")
     ]  # fmt: skip
     table = to_table(grades)
-    assert "  alpha: 57/57; similar to copy (0.91) (see code.html)" in table
+    assert "  alpha: 57/57; similar to copy (0.96) (see code.html)" in table
     assert "  py: no catkin package" in table
 
     results = gradescope_results(grades, "copy", {"w": "w"}, execution_time_s=1.0)
@@ -73,15 +73,37 @@ def test_the_code_grade_beside_the_demo(tmp_path: Path) -> None:
     assert (demo["score"], demo["max_score"]) == (60.0, 60.0)
     assert code_test["name"] == "code submission: the code rubric"
     assert (code_test["score"], code_test["max_score"]) == (45.0, 57.0)
-    assert "Similar to (for a person to review, never points): alpha (0.91)" in code_test["output"]
+    assert "Similar to (for a person to review, never points): alpha (0.96)" in code_test["output"]
     assert (results["score"], results["max_score"]) == (105.0, 117.0)
 
     page = class_page(grades, lambda _t, _w: None)
-    assert "<th>code</th>" in page and "<a href='code.html'>similar to copy (0.91)</a>" in page
+    assert "<th>code</th>" in page and "<a href='code.html'>similar to copy (0.96)</a>" in page
     # `usar report OUT` rebuilds the class from the folder: the code grades come back
     (plan.out_root / CLASS_FILE).write_text(class_json(grades))
     back = from_folder(plan.out_root)
     assert back is not None and back.code == code
+
+
+@needs
+def test_a_team_of_long_pdfs_holds_the_others_no_longer_than_its_budget(tmp_path: Path) -> None:
+    """Six PDFs of 1,500 pages in a team's doc/ (issue 50: the batch's code grade took 108 s
+    against 12 s): that team is graded within its budget, its verdict line in code.json, and
+    every other team's grade is written with it."""
+    import time
+
+    from usar_replay.code.budget import DEFAULT
+
+    plan, teams = _class(tmp_path)
+    for n in range(6):
+        codetools.many_pages_pdf(teams[1][1] / "doc" / f"part{n}.pdf", 1500)
+    start = time.monotonic()
+    code = grade_code(teams, plan.out_root, None, jobs=2)
+    assert time.monotonic() - start < DEFAULT.wall_s
+    assert set(code) == {"alpha", "copy"}
+    doc = json.loads((plan.out_root / CODE_JSON).read_text())
+    findings = {p["team"]: p["findings"] for p in doc["packages"]}
+    assert findings["copy"][0].startswith(f"budget spent: its {DEFAULT.pdfs} PDFs tried")
+    assert not findings["alpha"]
 
 
 def test_without_code_nothing_changes(tmp_path: Path) -> None:

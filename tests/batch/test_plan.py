@@ -141,6 +141,26 @@ def test_a_team_that_is_a_link_is_a_bad_submission_never_read(tmp_path: Path) ->
     assert "linked is a link: usar reads only real folders" in subs["linked"].problem
 
 
+def test_a_committed_catkin_workspace_is_read_without_catkins_link(tmp_path: Path) -> None:
+    """``catkin_make`` links ``src/CMakeLists.txt`` to catkin's ``toplevel.cmake``: catkin's
+    link, left out (the team is graded on the rest); any other link out keeps refusing it."""
+    from tests.class_folder import package
+
+    root = tmp_path / "subs"
+    team = root / "ws_team"
+    package(team / "catkin_ws" / "src" / "rescue", "rescue", {"go.py": "pass\n"}, {})
+    top = team / "catkin_ws" / "src" / "CMakeLists.txt"
+    top.symlink_to("/opt/ros/noetic/share/catkin/cmake/toplevel.cmake")
+    [sub] = p.discover(root)
+    assert sub.problem_outcome != "bad_submission" and len(sub.sha256) == 64
+    assert sub.target == "ros1:" + str(team)
+    top.unlink()
+    top.symlink_to("/etc/hostname")  # not catkin's: the present verdict
+    [sub] = p.discover(root)
+    assert sub.problem_outcome == "bad_submission"
+    assert "catkin_ws/src/CMakeLists.txt: a link leaving the team's folder" in sub.problem
+
+
 def _empty(path: Path) -> Path:
     path.mkdir()
     return path

@@ -81,3 +81,36 @@ def test_a_failed_build_does_not_compile_and_says_where() -> None:
     cmake = "CMake Error at pkg/CMakeLists.txt:3 (find_package):\n  Could not find nope\n"
     assert from_build(cmake, ROOT, True, WARNING_FLAGS).where == "CMakeLists.txt:3"
     assert from_build("make: *** [all] Error 2\n", ROOT, True, ()).where == ""
+
+
+@needs
+def test_an_unterminated_comment_does_not_compile_with_the_compilers_first_error() -> None:
+    """A header that opens a comment it never closes compiles nowhere: ``compiles`` false with
+    the compiler's first error, even where a header it includes is also missing (issue 51)."""
+    header = Source("include/pkg/robot.h", "#pragma once\n/* the robot\nclass Robot {};\n")
+    unit = Source("src/main.cpp", '#include "pkg/robot.h"\nint main() { return 0; }\n')
+    got = compile_check([header, unit])
+    assert got.compiles is False and got.where == "include/pkg/robot.h:2"
+    assert got.note == "include/pkg/robot.h:2: error: unterminated comment"
+    also = Source("src/main.cpp", '#include "pkg/robot.h"\n#include <nope/Nope.h>\nint x;\n')
+    assert compile_check([header, also]).compiles is False
+
+
+@needs
+@pytest.mark.slow
+def test_a_course_package_compiles_against_usars_underlay() -> None:
+    """``fiducial_msgs`` (which Debian lacks) from usar's underlay, the course machine usar
+    builds the demo on: the course package compiles, its warnings counted (issue 51: every
+    real package stopped at ``fiducial_msgs/FiducialTransformArray.h not found``)."""
+    from pathlib import Path
+
+    from usar_replay.code.compile import message_includes
+    from usar_replay.code.sources import read_submission
+
+    includes = message_includes()
+    assert includes and (includes[0] / "fiducial_msgs" / "FiducialTransformArray.h").is_file()
+    sub = read_submission(Path(__file__).resolve().parents[2] / "examples/ros1/usar_course")
+    assert any("fiducial_msgs/FiducialTransformArray.h" in s.text for s in sub.sources)
+    got = compile_check(sub.sources, includes)
+    assert got.compiles is True, got
+    assert "not found" not in got.problem

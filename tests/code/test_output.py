@@ -33,10 +33,10 @@ def test_the_outputs(tmp_path: Path) -> None:
         done.grades, done.similar, rubric="r", template=None, threshold=done.threshold)
     rows = list(csv.DictReader(io.StringIO(to_csv(done.grades, done.similar))))
     assert [r["team"] for r in rows] == ["alpha", "copy", "proc"]
-    assert rows[0]["format"] == FORMAT and rows[0]["similar_to"] == "copy (0.91)"
+    assert rows[0]["format"] == FORMAT and rows[0]["similar_to"] == "copy (0.96)"
     text = to_text(done.grades, done.similar, done.threshold)
     assert all(len(line) <= 100 for line in text.splitlines())
-    assert "0.91  alpha ~ copy" in text
+    assert "0.96  alpha ~ copy" in text
 
 
 def test_a_line_without_a_value_says_why_beside_its_place(tmp_path: Path) -> None:

@@ -90,3 +90,39 @@ def test_a_ligature_is_its_letters(tmp_path: Path) -> None:
     codetools.pdf(pkg / "report.pdf", ["1 Introduction\nThe \ufb01ducal marker is found."])
     got = report(read_submission(pkg))
     assert got.misspelled == ("fiducal",)
+
+
+@needs
+def test_six_long_pdfs_are_chosen_among_by_first_page_within_the_budget(tmp_path: Path) -> None:
+    """Six PDFs of 1,500 pages sharing one content stream (a full pdftotext of each: tens of
+    seconds): at most the budget's PDFs are looked at, by page count and first page, the one
+    whose first page reads as a report is the one read, its first READ_PAGES pages only, and
+    the PDFs left are said (issue 50)."""
+    from usar_replay.code.budget import Budget, spending
+
+    team = tmp_path / "team"
+    codetools.beta(team / "final_project")
+    for n in range(5):
+        codetools.many_pages_pdf(team / "doc" / f"notes{n}.pdf", 1500)
+    codetools.many_pages_pdf(team / "doc" / "Group 7.pdf", 1500, "Approach")  # smallest: last
+    sub = read_submission(team)
+    with spending(Budget(pdfs=6)) as spend:
+        got = report(sub)
+    assert got.file == "doc/Group 7.pdf" and got.pages == 1500
+    assert "doc/Group 7.pdf: the first 30 of its 1500 pages read" in got.problems
+    assert spend.calls == 6 * 2 + 2  # pdfinfo and one page each; the chosen read; hunspell
+    with spending(Budget(pdfs=3)) as spend:
+        got = report(sub)
+    assert spend.spent == "its 3 PDFs tried" and spend.calls == 3 * 2 + 2
+    assert "3 more PDFs not tried (a team's budget: 3 PDFs), first doc/notes3.pdf" in got.problems
+    assert got.file == "doc/notes0.pdf"  # the report was not among the PDFs tried
+
+
+@needs
+def test_a_pdf_poppler_cannot_read_is_said_and_passed_over(tmp_path: Path) -> None:
+    pkg = codetools.beta(tmp_path / "t")
+    (pkg / "report.pdf").write_bytes(b"%PDF-1.4\nnot a pdf\n")
+    codetools.pdf(pkg / "doc" / "mine.pdf", codetools.REPORT_PAGES)
+    got = report(read_submission(pkg))
+    assert got.file == "doc/mine.pdf"
+    assert got.problems[0].startswith("report.pdf: pdfinfo could not read it (exit ")

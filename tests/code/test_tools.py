@@ -6,7 +6,15 @@ from pathlib import Path
 
 import pytest
 
-from usar_replay.code.tools import DEBIAN, OUTPUT_CAP, ToolLimits, missing, run_tool, write_copy
+from usar_replay.code.tools import (
+    DEBIAN,
+    OUTPUT_CAP,
+    Ran,
+    ToolLimits,
+    missing,
+    run_tool,
+    write_copy,
+)
 
 
 def test_a_missing_tool_names_its_debian_package(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -43,3 +51,30 @@ def test_the_tools_output_says_when_it_was_cut(tmp_path: Path) -> None:
     ran = run_tool(["head", "-c", str(OUTPUT_CAP + 10), "/dev/zero"], tmp_path)
     assert ran.cut and len(ran.output) == OUTPUT_CAP
     assert not run_tool(["echo", "hi"], tmp_path).cut
+
+
+def test_stop_all_ends_a_running_tool_and_refuses_the_next(tmp_path: Path) -> None:
+    """On a signal, ``usar code`` calls stop_all: the running tool's process group is killed
+    at once (not at its 30 s limit) and no tool starts after it."""
+    import threading
+    import time
+
+    from usar_replay.code import tools
+
+    got: list[Ran] = []
+    worker = threading.Thread(
+        target=lambda: got.append(run_tool(["sleep", "30"], tmp_path, sandbox=False))
+    )
+    worker.start()
+    while not tools._LIVE:  # the tool is running
+        time.sleep(0.01)
+    start = time.monotonic()
+    try:
+        tools.stop_all()
+        worker.join(timeout=10)
+        assert time.monotonic() - start < 2.0
+        assert got[0].limit == "usar's stop (a signal)"
+        assert run_tool(["true"], tmp_path, sandbox=False).limit == "usar's stop (a signal)"
+    finally:
+        tools._resume()
+    assert run_tool(["true"], tmp_path, sandbox=False).limit == ""

@@ -85,3 +85,33 @@ def test_a_linked_team_is_told_in_one_line_what_to_do() -> None:
     )
     many = linked([f"t{i}" for i in range(6)])
     assert many.startswith("t0, t1, t2, t3 and 2 more are links:") and "copy each" in many
+
+
+@pytest.mark.parametrize(
+    "target",
+    ["/opt/ros/noetic/share/catkin/cmake/toplevel.cmake",
+     "/opt/ros/melodic/share/catkin/cmake/toplevel.cmake",
+     "/usr/share/catkin/cmake/toplevel.cmake"],
+)  # fmt: skip
+def test_catkins_own_link_is_left_out_and_said(tmp_path: Path, target: str) -> None:
+    """A committed ``catkin_make`` workspace keeps ``src/CMakeLists.txt`` -> catkin's
+    ``toplevel.cmake``: catkin's, not the team's; never followed, left out (issue 51)."""
+    root = _folder(tmp_path / "ws")
+    (root / "src" / "CMakeLists.txt").symlink_to(target)
+    said: list[str] = []
+    assert [e.rel for e in walk(root, left_out=said)] == [b"CMakeLists.txt", b"src/main.cpp"]
+    assert said == ["src/CMakeLists.txt: catkin's link out of the workspace, left out"]
+
+
+@pytest.mark.parametrize(
+    ("name", "target"),
+    [("CMakeLists.txt", "/etc/passwd"),  # catkin's name, another target
+     ("toplevel.cmake", "/opt/ros/noetic/share/catkin/cmake/toplevel.cmake"),  # another name
+     ("CMakeLists.txt", "/opt/ros/noetic/share/catkin/cmake/toplevel.cmake/../../../x"),
+     ("CMakeLists.txt", "../../../../opt/ros/noetic/share/catkin/cmake/toplevel.cmake")],
+)  # fmt: skip
+def test_other_links_out_keep_their_verdict(tmp_path: Path, name: str, target: str) -> None:
+    root = _folder(tmp_path / "ws")
+    (root / "src" / name).symlink_to(target)
+    with pytest.raises(UnusableSubmission, match=rf"src/{name}: a link leaving the folder"):
+        walk(root)

@@ -9,7 +9,9 @@ every team folder that holds a catkin package is graded as ``usar code`` grades 
 passages side by side) are written. A team without a package (a Python mission) has no code
 grade. Each team's :class:`CodeCell` is what the class's reports show: its own points and
 maximum (a separate Gradescope test with its own ``max_score``), the rubric lines as text, and
-the teams it is similar to (for a person; never points).
+the teams it is similar to (for a person; never points). Each team is graded under its budget
+(:mod:`usar_replay.code.budget`: tool calls, PDFs looked at, wall time), so no team's files hold
+the other teams' results for longer than that (issue 50: six long PDFs held a batch 96 s).
 
 Why the demo's build for "builds without warnings": the batch has built every package already
 (catkin_make, ``-Wall -Wextra`` added), so each ROS 1 run's record keeps what that build's

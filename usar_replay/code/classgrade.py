@@ -21,7 +21,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from usar_replay.code import similarity
+from usar_replay.code import budget, similarity, tools
 from usar_replay.code.compile import Compiled
 from usar_replay.code.grade import Options, PackageGrade, grade, refused
 from usar_replay.code.rubric import Rubric
@@ -31,7 +31,7 @@ from usar_replay.core.errors import NoPackage, SeveralPackages, UsageError, Usar
 from usar_replay.core.folder_walk import linked, shown
 from usar_replay.ros1.building.workspace import find_package
 
-__all__ = ["ClassCode", "grade_class", "grade_teams", "teams"]
+__all__ = ["ClassCode", "grade_class", "grade_teams", "spent_line", "teams"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -103,7 +103,16 @@ def _one(team: str, folder: Path, rubric: Rubric, template: Template, options: O
         sub = read_submission(folder, team)
     except UsarError as err:
         return refused(team, str(folder), str(err).removeprefix("--ros1 "), rubric), None
-    return grade(sub, rubric, template, options), sub
+    with budget.spending(options.budget) as spend:
+        got = grade(sub, rubric, template, options)
+    if spend.spent:
+        got = replace(got, findings=(spent_line(spend), *got.findings))
+    return got, sub
+
+
+def spent_line(spend: budget.Spend) -> str:
+    """The verdict line of a team whose budget was spent (first of its findings)."""
+    return f"budget spent: {spend.spent} (of {spend.budget.words()}); the lines say what it cut"
 
 
 def grade_class(
@@ -139,8 +148,14 @@ def grade_teams(
         mine = replace(opts, built=builds[team]) if team in builds else opts
         return _one(team, folder, rubric, template, mine)
 
-    with ThreadPoolExecutor(max(1, jobs)) as pool:
+    pool = ThreadPoolExecutor(max(1, jobs))
+    try:
         done = list(pool.map(lambda t: one(*t), found))
+    except BaseException:  # a signal (Terminated) or a bug: end now, the tools with it
+        tools.stop_all()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
     pairs: list[similarity.Pair] = []
     subs = [s for _, s in done if s is not None]
     if len(subs) > 1:

@@ -1,5 +1,13 @@
 """Does the package compile, and without warnings? A syntax-only build of each C++ file.
 
+Why the underlay: a course package includes ``fiducial_msgs/FiducialTransformArray.h``, which
+Debian does not have; usar's underlay (``fiducial_msgs`` and the stand-ins, the course machine
+usar builds the demo on) does, so its include folder is on the path (:func:`message_includes`,
+built once if no run built it), and ``compiles`` is measured on every package that builds for
+the demo (issue 51: every real package stopped at that header). A package whose own files do
+not compile (a header opening a comment it never closes) is ``compiles = false`` with the
+compiler's first error in the note, even where a header is also missing.
+
 Why syntax-only and not catkin_make: a catkin build costs ~15 s of wall time and ~45 s of CPU
 a package, past the code grade's 5 s budget, and its warnings are the compiler's anyway. Each
 translation unit is checked with ``g++ -fsyntax-only -Wall -Wextra`` (the warnings a course
@@ -16,6 +24,7 @@ the package's own files, nothing measured twice.
 
 from __future__ import annotations
 
+import contextvars
 import posixpath
 import re
 import tempfile
@@ -47,6 +56,11 @@ _CMAKE_ERROR = r"^CMake Error at (?:{root}/|{name}/)(?P<file>[^:\n]+):(?P<line>\
 """CMake's error in one of the package's files (named from the workspace's ``src/``)."""
 _EVIDENCE = 4
 """``file:line`` places a build's evidence names."""
+_GXX = ToolLimits(wall_s=90.0, cpu_s=60)
+"""A unit with roscpp's headers takes g++ ~4 s of CPU; on a machine busy with a class's runs
+its wall time was over 30 s (the tools' default), which would score a clean package 0."""
+_ERROR_CHARS = 160
+"""Of the compiler's first error, what the note keeps."""
 _NO_HEADER = re.compile(r"fatal error: ([\w/.+-]+): No such file or directory")
 
 
@@ -139,13 +153,21 @@ def from_build(output: str, root: str, failed: bool, flags: Sequence[str]) -> Co
 
 
 def message_includes() -> list[Path]:
-    """usar's built message headers (``fiducial_msgs``), when the ROS 1 build has made its
-    underlay here (never built for the code grade)."""
-    from usar_replay.ros1.building.workspace import cache_root
+    """The include folder of usar's underlay (``fiducial_msgs``' generated headers, and the
+    stand-ins' packages: :mod:`usar_replay.ros1.building.standins`), the course machine usar
+    builds the demo on: built here once if no run has built it yet (cached, the batch's own
+    entry: :func:`usar_replay.ros1.building.workspace.underlay`), in the sandbox when there
+    is one. ``[]`` where it cannot be built (no ROS 1 here): a header of it is then "not
+    found here", said, never a false "does not compile"."""
+    from usar_replay.core.errors import UsarError
+    from usar_replay.ros1.building.workspace import underlay
 
-    root = cache_root()
-    found = sorted(root.glob("underlay-*/ws/devel/include")) if root.is_dir() else []
-    return [p for p in found if (p / "fiducial_msgs").is_dir()][:1]
+    try:
+        ws = underlay(fixed=True)
+    except (UsarError, OSError):
+        return []
+    include = ws / "devel" / "include"
+    return [include] if (include / "fiducial_msgs").is_dir() else []
 
 
 def compile_check(
@@ -168,20 +190,25 @@ def compile_check(
                  *(f"-I{p}" for p in extra)]  # fmt: skip
 
         def one(unit: str) -> tuple[str, int, str]:
-            ran = run_tool(["g++", *flags, f"src/{unit}"], work, limits, ro_binds=extra)
+            ran = run_tool(["g++", *flags, f"src/{unit}"], work, limits or _GXX, ro_binds=extra)
             return ran.limit, ran.code, ran.errors
 
+        # each unit in a copy of this thread's context: the team's budget holds in the pool
+        runs = [(contextvars.copy_context(), u) for u in units]
         with ThreadPoolExecutor(max(1, jobs)) as pool:
-            results = list(pool.map(one, units))
+            results = list(pool.map(lambda r: r[0].run(one, r[1]), runs))
     errors = warnings = 0
-    where = ""
+    where = first_error = ""
     for unit, (limit, code, output) in zip(units, results, strict=True):
         if limit:
             return Compiled(None, 0, "", f"g++ exceeded {limit} on {unit}")
         e, w, first, header = parse_output(output)
-        if header:
+        said = [d for d in diagnostics(output) if d.kind != "warning"]
+        if header and not [d for d in said if header not in d.message]:
             return Compiled(None, 0, "", f"{unit}: header {header} not found here")
         errors += e + (1 if code != 0 and not e else 0)
         warnings += w
         where = where or first
-    return Compiled(errors == 0, warnings, where)
+        if said and not first_error:  # the compiler's first error, as it said it
+            first_error = f"{said[0].where}: {said[0].kind}: {said[0].message}"[:_ERROR_CHARS]
+    return Compiled(errors == 0, warnings, where, note=first_error)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from usar_replay.code.budget import DEFAULT, Budget
 from usar_replay.code.comments import commented_out
 from usar_replay.code.compile import Compiled, compile_check
 from usar_replay.code.cppcheck import UNREAD, UNUSED, findings
@@ -49,6 +50,8 @@ class Options:
     built: Compiled | None = None
     """The package's own build, as ``usar batch`` ran it for the demo
     (:func:`usar_replay.code.compile.from_build`): scored instead of a syntax-only build."""
+    budget: Budget = DEFAULT
+    """What grading one team may cost (:mod:`usar_replay.code.budget`)."""
 
 
 @dataclass(frozen=True, slots=True)

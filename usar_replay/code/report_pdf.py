@@ -10,6 +10,12 @@ program's input like any other); words are checked by hunspell with Debian's en_
 and the shipped ``allowed_words.txt`` (ROS and C++ terms). The course's handout, which the
 template ships in ``doc/``, is not a report: a PDF that is the template's (same bytes) or reads
 as the handout (its "Grading Rubric" and "Deliverables" sections) is passed over.
+
+Why the report is chosen before it is read: a team may hold any number of PDFs of any page
+count (six of 1,500 pages sharing one content stream took pdftotext 30 s each: issue 50). So
+each candidate is first looked at cheaply, ``pdfinfo`` (the page count) and ``pdftotext -l 1``
+(the first page), at most the team's budget of PDFs (:mod:`usar_replay.code.budget`), and only
+the one chosen by its name and first page is read, its first :data:`READ_PAGES` pages.
 """
 
 from __future__ import annotations
@@ -22,15 +28,19 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path, PurePosixPath
 
+from usar_replay.code import budget
 from usar_replay.code.sources import Submission
-from usar_replay.code.tools import ToolLimits, missing, run_tool
+from usar_replay.code.tools import Ran, ToolLimits, missing, run_tool
 from usar_replay.core.folder_walk import Entry, shown, stream
 
-__all__ = ["MAX_PAGES", "OUTLINE", "Report", "allowed_words", "find_reports", "report",
-           "sections", "cpp_lines", "words"]  # fmt: skip
+__all__ = ["MAX_PAGES", "OUTLINE", "READ_PAGES", "Report", "allowed_words", "find_reports",
+           "report", "sections", "cpp_lines", "words"]  # fmt: skip
 
 MAX_PAGES = 15
 """The handout's limit."""
+READ_PAGES = 2 * MAX_PAGES
+"""Pages of the report whose text is read (twice the limit: a report over it is flagged by
+its page count, and its text past that adds nothing a flag needs)."""
 OUTLINE: dict[str, re.Pattern[str]] = {
     "Introduction": re.compile(r"introduction|problem statement|overview", re.I),
     "Approach": re.compile(r"approach|methodology|method|implementation|solution", re.I),
@@ -145,11 +155,69 @@ def _copy_pdf(entry: Entry, dest: Path) -> None:
         stream(entry, out.write)
 
 
-def _read_pdf(entry: Entry, limits: ToolLimits | None) -> tuple[list[str] | None, str]:
+@dataclass(frozen=True, slots=True)
+class _Probe:
+    """What the cheap look at one PDF saw: its page count and first page's text."""
+
+    entry: Entry
+    pages: int | None
+    first: str
+    problem: str = ""
+
+    def rank(self) -> tuple[bool, bool, bool, int, bytes]:
+        """Sort key, likeliest report first: a name that says "report", a first page that
+        says it or names a section of the outline, a page count the handout allows, then the
+        largest."""
+        name = "report" in shown(self.entry.rel).lower()
+        said = bool(re.search(r"\breport\b", self.first, re.I)) or bool(sections([self.first]))
+        fits = self.pages is not None and self.pages <= MAX_PAGES
+        return (not name, not said, not fits, -self.entry.size, self.entry.rel)
+
+
+def _run_on_copy(entry: Entry, argvs: list[list[str]], limits: ToolLimits | None) -> list[Ran]:
+    """Each of ``argvs`` run on one copy of the PDF (``report.pdf``), in order; stops at the
+    first that went past a limit."""
+    out: list[Ran] = []
     with tempfile.TemporaryDirectory(prefix="usar-pdf-") as tmp:
         work = Path(tmp)
         _copy_pdf(entry, work / "report.pdf")
-        ran = run_tool(["pdftotext", "-enc", "UTF-8", "report.pdf", "-"], work, limits)
+        for argv in argvs:
+            out.append(run_tool(argv, work, limits))
+            if out[-1].limit:
+                break
+    return out
+
+
+_PROBE = ToolLimits(wall_s=10.0, cpu_s=10)
+"""A look at one page is quick (tens of ms); a first page that is not is the team's PDF's."""
+
+
+def _probe(entry: Entry, limits: ToolLimits | None) -> _Probe:
+    """The page count (``pdfinfo``) and the first page's text (``pdftotext -l 1``): both read
+    only the page tree and one page, whatever the PDF holds (under :data:`_PROBE`'s limits
+    unless ``limits`` are given)."""
+    ran = _run_on_copy(
+        entry,
+        [["pdfinfo", "report.pdf"], ["pdftotext", "-l", "1", "-enc", "UTF-8", "report.pdf", "-"]],
+        limits or _PROBE,
+    )
+    info = ran[0]
+    if info.limit:
+        return _Probe(entry, None, "", f"pdfinfo exceeded {info.limit}")
+    if info.code != 0 or len(ran) < 2:
+        return _Probe(entry, None, "", f"pdfinfo could not read it (exit {info.code})")
+    found = re.search(r"^Pages:\s+(\d+)\s*$", info.output, re.MULTILINE)
+    pages = int(found.group(1)) if found else None
+    first = ran[1]
+    if first.limit:
+        return _Probe(entry, pages, "", f"pdftotext exceeded {first.limit}")
+    return _Probe(entry, pages, unicodedata.normalize("NFKC", first.output))
+
+
+def _read_pdf(entry: Entry, limits: ToolLimits | None) -> tuple[list[str] | None, str]:
+    """The text of the first :data:`READ_PAGES` pages, a list of pages."""
+    argv = ["pdftotext", "-l", str(READ_PAGES), "-enc", "UTF-8", "report.pdf", "-"]
+    [ran] = _run_on_copy(entry, [argv], limits)
     if ran.limit:
         return None, f"pdftotext exceeded {ran.limit}"
     if ran.code != 0:
@@ -174,25 +242,55 @@ def _misspelled(all_words: set[str], limits: ToolLimits | None) -> tuple[set[str
     return {w.strip() for w in ran.output.splitlines() if w.strip()}, ""
 
 
+def _chosen(
+    candidates: list[Entry], limits: ToolLimits | None, problems: list[str]
+) -> list[_Probe]:
+    """The candidates the team's budget lets be looked at (:data:`usar_replay.code.budget`:
+    PDFs tried), each probed cheaply, likeliest report first; the others said."""
+    spend = budget.current()
+    probes: list[_Probe] = []
+    for n, entry in enumerate(candidates):
+        if spend is not None and not spend.pdf():
+            left = len(candidates) - n
+            problems.append(
+                f"{left} more PDF{'s' if left > 1 else ''} not tried "
+                f"(a team's budget: {spend.budget.pdfs} PDFs), first {shown(entry.rel)}"
+            )
+            break
+        probe = _probe(entry, limits)
+        if probe.problem:
+            problems.append(f"{shown(entry.rel)}: {probe.problem}")
+        else:
+            probes.append(probe)
+    return sorted(probes, key=_Probe.rank)
+
+
 def report(
     sub: Submission, template_pdfs: frozenset[str] = frozenset(), limits: ToolLimits | None = None
 ) -> Report:
-    """The flags of the submission's report (the first PDF that reads as one)."""
+    """The flags of the submission's report: the PDFs that could be one, likeliest first by
+    name and size (:func:`find_reports`), as many as the team's budget allows looked at
+    cheaply (page count, first page: :func:`_probe`), ranked by what that shows
+    (:meth:`_Probe.rank`); the full text (its first :data:`READ_PAGES` pages) is read of the
+    first that is not the handout only."""
     problems: list[str] = []
     candidates = find_reports(sub, template_pdfs, problems)
     if not candidates:
         return Report(None, problems=tuple(problems))
-    gone = missing("pdftotext")
+    gone = missing("pdftotext") or missing("pdfinfo")
     if gone:
         return Report(shown(candidates[0].rel), problems=(gone,))
-    for entry in candidates:
-        name = shown(entry.rel)
-        pages, why = _read_pdf(entry, limits)
+    for probe in _chosen(candidates, limits, problems):
+        name = shown(probe.entry.rel)
+        pages, why = _read_pdf(probe.entry, limits)
         if pages is None:
             problems.append(f"{name}: {why}")
             continue
         if _is_handout(pages):
             continue
+        total = probe.pages if probe.pages is not None else len(pages)
+        if total > len(pages):
+            problems.append(f"{name}: the first {len(pages)} of its {total} pages read")
         found = sections(pages)
         code, where = cpp_lines(pages)
         allowed = allowed_words()
@@ -211,7 +309,7 @@ def report(
             common = tuple(sorted(counts, key=lambda w: (-counts[w], w))[:10])
         return Report(
             name,
-            len(pages),
+            total,
             tuple(found),
             tuple(n for n in OUTLINE if n not in found),
             code >= 3,

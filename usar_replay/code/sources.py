@@ -125,14 +125,16 @@ def read_submission(
         if need_package or not root.is_dir():
             raise
         pkg = Package(root, root.name)
+    findings: list[str] = []
     try:
-        entries = walk(root, skip_dirs=SKIP_DIRS, what=f"the folder {shown(root.name)}")
+        entries = walk(
+            root, skip_dirs=SKIP_DIRS, what=f"the folder {shown(root.name)}", left_out=findings
+        )
     except UnusableSubmission as err:
         raise UnusableSubmission(f"{shown(root.name)}: {err}") from None
     prefix = shown(pkg.path.relative_to(root).as_posix()) if pkg.path != root else ""
     prefix = "" if prefix == "." else prefix
     sources: list[Source] = []
-    findings: list[str] = []
     files: list[str] = []
     for e in entries:
         rel = shown(e.rel)
@@ -162,4 +164,3 @@ def read_submission(
         findings=tuple(findings),
         entries=tuple(entries),
     )
-

@@ -14,6 +14,12 @@ code-rubric.md says so.
 
 A tool that is not installed is one line naming the Debian package (:func:`missing`); the
 rubric lines that need it say so instead of scoring.
+
+Each call also takes from its team's budget (:mod:`usar_replay.code.budget`: tool calls and
+wall time, where a grade set one), so a team bounds not only each call but their sum. And
+every running tool is known here by its process group: :func:`stop_all` (``usar code`` and
+``usar batch`` on SIGTERM or Ctrl-C) kills each group and refuses new calls, so the command
+ends within a second or two, its tools with it, not when the last tool's 30 s are up.
 """
 
 from __future__ import annotations
@@ -24,12 +30,14 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = [
-    "DEBIAN", "OUTPUT_CAP", "Ran", "ToolLimits", "missing", "run_tool", "sandboxed", "write_copy"
+    "DEBIAN", "OUTPUT_CAP", "Ran", "ToolLimits", "missing", "run_tool", "sandboxed", "stop_all",
+    "write_copy",
 ]  # fmt: skip
 
 DEBIAN: dict[str, str] = {
@@ -110,6 +118,28 @@ def write_copy(files: Iterable[tuple[str, str]], dest: Path) -> None:
             f.write(text)
 
 
+_LIVE: set[int] = set()
+"""Process groups of the tools running now (their leaders' pids)."""
+_LIVE_LOCK = threading.Lock()
+_STOPPED = threading.Event()
+
+
+def stop_all() -> None:
+    """Kill every running tool's process group and refuse every later call (the command is
+    ending: a signal arrived). Safe from any thread, and to call twice."""
+    _STOPPED.set()
+    with _LIVE_LOCK:
+        groups = sorted(_LIVE)
+    for pgid in groups:
+        with contextlib.suppress(OSError):
+            os.killpg(pgid, signal.SIGKILL)
+
+
+def _resume() -> None:
+    """Accept calls again (tests that stop and then grade again in one process)."""
+    _STOPPED.clear()
+
+
 _ENV = {"PATH": "/usr/bin:/bin", "HOME": "/tmp", "TMPDIR": "/tmp", "LANG": "C.UTF-8"}
 
 
@@ -124,7 +154,18 @@ def run_tool(
     """Run ``argv`` in ``work`` (a folder of usar's making holding the copy: the only one the
     tool may write) under ``limits``; its stdout is read from a file outside ``work``;
     ``ro_binds``: folders of usar's the sandbox shows read-only (usar's built messages)."""
+    from usar_replay.code import budget
+
     lim = limits or ToolLimits()
+    if _STOPPED.is_set():
+        return Ran(-int(signal.SIGKILL), "", "", "usar's stop (a signal)")
+    spend = budget.current()
+    wall = lim.wall_s
+    if spend is not None:
+        left, spent = spend.call()
+        if spent:
+            return Ran(-int(signal.SIGKILL), "", "", f"the team's budget ({spent})")
+        wall = min(wall, left)
     box = sandboxed() if sandbox is None else sandbox
     cmd = [*_prlimit(lim), *argv]
     if box:
@@ -146,17 +187,28 @@ def run_tool(
                 stderr=err,
                 start_new_session=True,
             )
+            with _LIVE_LOCK:
+                _LIVE.add(proc.pid)
             try:
-                code = proc.wait(timeout=lim.wall_s)
+                if _STOPPED.is_set():  # a stop that came while it started: it never runs on
+                    os.killpg(proc.pid, signal.SIGKILL)
+                code = proc.wait(timeout=wall)
             except subprocess.TimeoutExpired:
                 timed_out = True
                 with contextlib.suppress(OSError):
                     os.killpg(proc.pid, signal.SIGKILL)
                 code = proc.wait()
+            finally:
+                with _LIVE_LOCK:
+                    _LIVE.discard(proc.pid)
         output, cut_out = _read(out_path)
         errors, cut_err = _read(err_path)
     limit = ""
-    if timed_out:
+    if _STOPPED.is_set():
+        limit = "usar's stop (a signal)"
+    elif timed_out and wall < lim.wall_s and spend is not None:
+        limit = f"the team's budget ({spend.timed_out()})"
+    elif timed_out:
         limit = f"its {lim.wall_s:g} s wall limit"
     elif code in (-signal.SIGXCPU, -signal.SIGKILL) or "CPU time limit" in errors:
         limit = f"its CPU limit ({lim.cpu_s} s)"

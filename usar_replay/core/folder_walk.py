@@ -9,10 +9,11 @@ every reader (:mod:`usar_replay.batch.team_files`,
 list: what is checked is what is hashed, copied and built.
 
 The rules: links are never followed (one that stays inside is kept as its text, one that
-leaves refuses the folder), hidden names, ``.pyc`` files and cache or version-control folders
-are left out unread, any other entry that is not a folder or a regular file (a FIFO, a
-socket, a device) refuses the folder, and the number of entries, each file's size and the
-total are capped from ``lstat`` before a byte is read (a sparse file is refused unread).
+leaves refuses the folder, except catkin's own, left out: :func:`catkin_link`), hidden names,
+``.pyc`` files and cache or version-control folders are left out unread, any other entry
+that is not a folder or a regular file (a FIFO, a socket, a device) refuses the folder, and the
+number of entries, each file's size and the total are capped from ``lstat`` before a byte is
+read (a sparse file is refused unread).
 Files are then read from a descriptor opened ``O_NOFOLLOW | O_NONBLOCK`` and checked to be
 the regular file of the size the walk saw. Names are bytes: a name that is not UTF-8 (an
 old zip's ``caf\\xe9.txt``) is hashed as its bytes and quoted escaped, never a crash. A rule
@@ -22,6 +23,7 @@ broken raises :class:`~usar_replay.core.errors.UnusableSubmission` whose text is
 from __future__ import annotations
 
 import os
+import re
 import stat
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,6 +38,7 @@ __all__ = [
     "MAX_TOTAL_BYTES",
     "SKIP_DIRS",
     "Entry",
+    "catkin_link",
     "linked",
     "shown",
     "stream",
@@ -51,6 +54,14 @@ MAX_FILES = 20_000
 SKIP_DIRS = frozenset({"__pycache__", ".git", ".hg", ".svn"})
 """Folders left out unread (caches, version control), as are hidden names and ``.pyc``."""
 _CHUNK = 1024 * 1024
+_CATKIN_LINKS: dict[bytes, re.Pattern[bytes]] = {
+    b"CMakeLists.txt": re.compile(
+        rb"(/opt/ros/[A-Za-z0-9_-]+|/usr)/share/catkin/cmake/toplevel\.cmake"
+    ),
+}
+"""The links a catkin workspace ships that leave it, by name and target: ``catkin_make`` (and
+``catkin_init_workspace``) link ``src/CMakeLists.txt`` to catkin's ``toplevel.cmake`` of the
+ROS install (``/opt/ros/<distro>/...``, Debian's ``/usr/share/catkin/...``)."""
 
 
 def linked(names: list[str]) -> str:
@@ -63,6 +74,15 @@ def linked(names: list[str]) -> str:
         f"{first} {'is a link' if one else 'are links'}: usar reads only real folders, never "
         f"through a link; copy {'it' if one else 'each'} in its place (cp -rL) and grade again"
     )
+
+
+def catkin_link(rel: bytes, target: bytes) -> bool:
+    """Is the link ``rel`` (to ``target``, as ``readlink`` gives it) one that catkin itself
+    puts in every workspace (:data:`_CATKIN_LINKS`), not the team's? Such a link is left out
+    of the walk, never followed nor copied, and the team read on the rest (issue 51): a
+    committed ``catkin_make`` workspace is a normal hand-in. Decided on the link's text only."""
+    pattern = _CATKIN_LINKS.get(os.path.basename(rel))
+    return pattern is not None and pattern.fullmatch(target) is not None
 
 
 def shown(name: str | bytes) -> str:
@@ -93,11 +113,14 @@ def _skipped(name: bytes) -> bool:
     return name.startswith(b".") or name.endswith(b".pyc")
 
 
-def _link(root: Path, rel: bytes, path: Path, what: str) -> bytes:
-    """A link's target, when it stays inside ``root`` (resolved without opening anything)."""
+def _link(root: Path, rel: bytes, path: Path, what: str) -> bytes | None:
+    """A link's target, when it stays inside ``root`` (resolved without opening anything);
+    None for catkin's own link out (:func:`catkin_link`)."""
     target = os.readlink(os.fsencode(path))
     real = Path(os.path.realpath(path))
     if not real.is_relative_to(os.path.realpath(root)):
+        if catkin_link(rel, target):
+            return None
         raise UnusableSubmission(f"{shown(rel)}: a link leaving {what} (to {shown(target)})")
     return target
 
@@ -110,9 +133,11 @@ def walk(
     max_file_bytes: int = MAX_FILE_BYTES,
     max_total_bytes: int = MAX_TOTAL_BYTES,
     what: str = "the folder",
+    left_out: list[str] | None = None,
 ) -> list[Entry]:
     """Every file and link under ``root`` by the module's rules, sorted by relative path (as
-    bytes); folders named in ``skip_dirs`` are left out unread. Raises
+    bytes); folders named in ``skip_dirs`` are left out unread, and catkin's own links out
+    (:func:`catkin_link`) too, each said in ``left_out`` when given. Raises
     :class:`UnusableSubmission` at the first rule broken (``what``: the folder, in its words)."""
     top = os.fsencode(root)
     skip = frozenset(os.fsencode(d) for d in skip_dirs)
@@ -143,7 +168,14 @@ def walk(
                 continue
             path = Path(os.fsdecode(e.path))
             if stat.S_ISLNK(st.st_mode):
-                found.append(Entry(rel, path, 0, _link(Path(os.fsdecode(top)), rel, path, what)))
+                target = _link(Path(os.fsdecode(top)), rel, path, what)
+                if target is None:  # catkin's own: left out, never followed nor copied
+                    if left_out is not None:
+                        left_out.append(
+                            f"{shown(rel)}: catkin's link out of the workspace, left out"
+                        )
+                    continue
+                found.append(Entry(rel, path, 0, target))
             elif stat.S_ISREG(st.st_mode):
                 if st.st_size > max_file_bytes:
                     raise UnusableSubmission(

@@ -13,7 +13,7 @@ import pytest
 
 from usar_replay.cli.main import main
 
-TOOLS = ("doxygen", "cppcheck", "clang-format", "g++", "pdftotext", "hunspell")
+TOOLS = ("doxygen", "cppcheck", "clang-format", "g++", "pdftotext", "pdfinfo", "hunspell")
 pytestmark = pytest.mark.skipif(
     any(shutil.which(t) is None for t in TOOLS), reason="needs the code grade's tools"
 )
