@@ -751,7 +751,10 @@ def _still(
     the base again), and a wake that took something in reads or faults. Without it a tf2
     listener's thread, waking every 10 ms of wall time, took the base again every 10 ms, and on
     a loaded machine a spinner moved aside could not spin its 2 ms of CPU in between: every
-    fourth tick of a team busy-waiting after its mission ended at its cap (issue 51)."""
+    fourth tick of a team busy-waiting after its mission ended at its cap (issue 51). Not
+    covered (as a loop counting its passes is not): a spinner that wakes such a wait itself
+    (a futex wake moves none of its counters), whose partner then reacts as often as the
+    spinner's CPU lets it."""
     if any(now[tid].watched for tid in set(now) - set(base)):
         return False
     for tid, s in base.items():
