@@ -1,6 +1,7 @@
 """A class's ROS 1 packages on the course world, at a glance (printed, never asserted).
 
     python bench/bench_class.py [FOLDER] [--world course|room] [--max-sim-time S] [--keep DIR]
+                                [--no-compare] [--with-idle SHAPE]
     python bench/bench_class.py --logs DIR        # grade kept logs again: rubric v2 against v3
 
 Each sub-folder of FOLDER (default: examples/ros1) that holds one catkin package is built and
@@ -12,7 +13,13 @@ graded as ``usar grade`` does it, one package after the other. Then one row per 
 * ``outcome``: how the run ended (``done``, ``time_limit``, ``crashed``, ``build_failed``, ...);
 * ``verdict``, ``points``: the rubric's (docs/reports.md), PASS only with every required line;
 * ``sim s``: the run's sim time; ``wall s``: build + run + grade, the instructor's wait;
-* ``failed lines``: the ids of the rubric lines that failed (wrapped under the column).
+* ``failed lines``: the ids of the rubric lines that failed (wrapped under the column);
+* under each row, ``start:`` the command the package was started with and where it was read
+  (``doc/instructions.txt line 3``, ``README.md``, the package's only launch file, ...).
+
+``--with-idle SHAPE`` adds the package of ``tests/idle_package.py`` (a node that idles after a
+short mission, ``silent``: a busy wait with no call, as a team whose last goal aborted) as one
+more team, started as its ``doc/instructions.txt`` says: a team that never ends by itself.
 
 Why a script and not ``usar batch``: a batch grades Python and ROS 1 teams on many worlds into a
 folder of files; this is the one-screen view of a folder of packages on one world, for
@@ -52,6 +59,7 @@ from usar_replay.world.scenario import Scenario, course_world
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+import idle_package  # noqa: E402
 from conftest import one_room  # noqa: E402
 
 COLUMNS = (
@@ -82,6 +90,8 @@ class Row:
     sim_s: float
     wall_s: float
     failed: tuple[str, ...]
+    start: str = ""
+    """How it was started and where that was read (the grade's ``started_with``)."""
 
 
 def packages(folder: Path) -> list[Path]:
@@ -120,6 +130,7 @@ def run_one(scenario: Scenario, pkg: Path, out: Path, settings: RunSettings) -> 
         sim_s=result.sim_duration_s,
         wall_s=wall,
         failed=tuple(c.id for c in report.checks if not c.passed),
+        start=report.started_with,
     )
 
 
@@ -146,6 +157,9 @@ def table(rows: list[Row]) -> list[str]:
         )
         lines.append(left + wrapped[0])
         lines += [" " * fixed + more for more in wrapped[1:]]
+        lines += textwrap.wrap(
+            f"start: {r.start or '-'}", WIDTH, initial_indent="  ", subsequent_indent="    "
+        )
     return lines
 
 
@@ -212,6 +226,12 @@ def main() -> None:
     ap.add_argument("--world", choices=("course", "room"), default="course")
     ap.add_argument("--max-sim-time", type=float, help="stop each run at this sim time (s)")
     ap.add_argument("--keep", type=Path, help="write the logs into this folder and keep them")
+    ap.add_argument("--no-compare", action="store_true", help="leave out rubric v2 against v3")
+    ap.add_argument(
+        "--with-idle",
+        choices=idle_package.SHAPES,
+        help="add tests/idle_package.py as a team started with this shape (not 'done': never ends)",
+    )
     args = ap.parse_args()
     if args.logs is not None:
         found = sorted(args.logs.rglob("*.mcap"))
@@ -220,6 +240,9 @@ def main() -> None:
         print("\n".join(compare(found)))
         return
     pkgs = packages(Path(args.folder))
+    if args.with_idle:
+        extra = Path(tempfile.mkdtemp(prefix="usar-bench-class-idle-")) / idle_package.NAME
+        pkgs.append(idle_package.write(extra, default=args.with_idle))
     if not pkgs:
         sys.exit(f"usar: error: {args.folder}: no catkin package in it or in its sub-folders")
     scenario = course_world() if args.world == "course" else one_room()
@@ -235,8 +258,11 @@ def main() -> None:
         load1 = os.getloadavg()
         print()
         print("\n".join(table(rows)))
-        print()
-        print("\n".join(compare([logs / f"{pkg.name}.mcap" for pkg in pkgs])))
+        wall, sim = sum(r.wall_s for r in rows), sum(r.sim_s for r in rows)
+        print(f"total: wall {wall:.0f} s, sim {sim:.0f} s")
+        if not args.no_compare:
+            print()
+            print("\n".join(compare([logs / f"{pkg.name}.mcap" for pkg in pkgs])))
     print(
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {args.world} world, "
         f"{os.cpu_count()} CPUs, load average {load0[0]:.1f} before, {load1[0]:.1f} after"

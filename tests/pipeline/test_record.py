@@ -184,3 +184,32 @@ def test_ctrl_c_in_the_cli_exits_130_with_a_closed_log(tmp_path: Path) -> None:
     r = bag.BagReader(out)
     assert r.has_summary and r.status == "interrupted" and r.message_count > 0
     assert not Path(str(out) + ".part").exists()
+
+
+IDLE_MISSION = """from usar_replay.node.node import Node
+
+
+def main():
+    Node("idle")  # never says it is done
+"""
+
+
+@pytest.mark.slow
+def test_a_mission_that_never_ends_stops_at_the_time_limit_and_its_grace(tmp_path: Path) -> None:
+    """Issue 51: the TA's clock, not 1.5 x it; ``--max-sim-time`` still overrides."""
+    from dataclasses import replace
+
+    from usar_replay.core.settings import RecordSettings, RunSettings
+    from usar_replay.pipeline.record import TIME_LIMIT_GRACE_S, hard_limit_s
+
+    assert hard_limit_s(600.0) == 610.0 and TIME_LIMIT_GRACE_S == 10.0
+    mission = tmp_path / "idle.py"
+    mission.write_text(IDLE_MISSION, encoding="utf-8")
+    world = replace(one_room(), time_limit_s=1.0)
+    result = record(world, tmp_path / "idle.mcap", mission=str(mission))
+    assert result.outcome == "time_limit"
+    assert result.sim_duration_s == pytest.approx(11.0, abs=0.06)
+    over = RunSettings(record=RecordSettings(max_sim_time_s=12.5))
+    longer = record(world, tmp_path / "longer.mcap", over, mission=str(mission))
+    assert longer.outcome == "max_sim_time"
+    assert longer.sim_duration_s == pytest.approx(12.5, abs=0.06)

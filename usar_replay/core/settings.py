@@ -130,7 +130,8 @@ class RecordSettings:
     control_hz: int = setting(20, unit="Hz", lo=1, hi=1_000)
     """How often the simulator publishes ``/tf`` and odometry and takes ``cmd_vel``."""
     max_sim_time_s: float | None = setting(None, unit="s", lo=0.0, lo_open=True, hi=86_400.0)
-    """Hard stop; unset: 1.5 x the scenario's time limit (a run past the limit fails grading)."""
+    """Hard stop; unset: the scenario's time limit and 10 s of grace (a TA's stopwatch; what
+    happens after the limit does not score)."""
     renderer: str = setting("auto", choices=RENDERERS)
     actuation_latency_ticks: int | None = setting(None, unit="ticks", lo=0, hi=1)
     """1: a tick's ``cmd_vel`` acts from the step after the next one, so the mission thinks

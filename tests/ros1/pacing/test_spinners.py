@@ -19,7 +19,7 @@ import pytest
 from proctools import child as start_child
 from proctools import wait_for
 
-from usar_replay.ros1.pacing.quiescence import Quiescence
+from usar_replay.ros1.pacing.quiescence import Quiescence, ThreadState, _still
 from usar_replay.ros1.pacing.spinners import Spinners, spin_key
 
 SPINNER_C = r"""
@@ -152,3 +152,82 @@ def test_the_allowance_is_counted_from_the_first_reading_that_moved() -> None:
     spin.update({})  # blocked now
     got, _ = spin.update({7: (2_800_000, (2, 2, 3, 0))})
     assert got == frozenset()
+
+
+TICKER_C = SPINNER_C.replace(
+    "int main(void) {\n  pthread_t t;\n  pthread_create(&t, 0, reader, 0);",
+    """static void* ticker(void* arg) {  // a tf2 listener's thread: a 10 ms wait, for nothing
+  (void)arg;
+  pthread_mutex_t m = PTHREAD_MUTEX_INITIALIZER;
+  pthread_cond_t c = PTHREAD_COND_INITIALIZER;
+  pthread_mutex_lock(&m);
+  for (;;) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    ts.tv_nsec += 10000000;
+    if (ts.tv_nsec >= 1000000000) { ts.tv_sec += 1; ts.tv_nsec -= 1000000000; }
+    pthread_cond_timedwait(&c, &m, &ts);
+  }
+}
+
+int main(void) {
+  pthread_t t, u;
+  pthread_create(&t, 0, reader, 0);
+  pthread_create(&u, 0, ticker, 0);""",
+).replace("#include <unistd.h>", "#include <time.h>\n#include <unistd.h>")
+
+
+def test_a_thread_waking_on_its_own_timeout_leaves_the_spinners_allowance_running(
+    tmp_path: Path,
+) -> None:
+    """Issue 51: a spinner beside a thread that wakes every 10 ms of wall time for nothing (a
+    tf2 listener's) counts as waiting once it spun its allowance (50 ms of CPU, five of its
+    wakes) and still reacts in the wait its cause came in; the thread's wait is noted as a
+    timer (:func:`test_a_wake_for_nothing_keeps_the_base_and_a_wake_that_read_does_not`)."""
+    (tmp_path / "tick.c").write_text(TICKER_C, encoding="utf-8")
+    subprocess.run(["gcc", "-O1", "-o", "tick", "tick.c", "-lpthread"], cwd=tmp_path, check=True)
+    with (tmp_path / "out").open("wb") as out:
+        proc = subprocess.Popen([str(tmp_path / "tick")], stdin=subprocess.PIPE, stdout=out)
+    quiet = Quiescence(own_tid=threading.get_native_id())
+    try:
+        wait_for(
+            lambda: proc.pid in quiet.refresh() and len(os.listdir(f"/proc/{proc.pid}/task")) == 3,
+            "it",
+        )
+        quiet.refresh(package=[proc.pid])
+        quiet.spinners = Spinners(allowance_s=0.05)
+        assert quiet.wait(10.0)  # not the cap
+        assert quiet.spun >= 1 and quiet.spinners.demoted
+        quiet.wait(10.0)
+        timers = [t.last.timer for t in quiet._threads.values() if t.last is not None]
+        assert sum(timer is not None for timer in timers) == 1  # the ticker's, not the reader's
+        assert proc.stdin is not None
+        for n in range(1, 4):
+            proc.stdin.write(b"x")
+            proc.stdin.flush()
+            assert quiet.wait(10.0)
+            assert (tmp_path / "out").read_text().splitlines()[-1] == f"saw {n}"
+    finally:
+        quiet.close()
+        proc.kill()
+        proc.wait()
+        if proc.stdin is not None:
+            proc.stdin.close()
+
+
+def test_a_wake_for_nothing_keeps_the_base_and_a_wake_that_read_does_not() -> None:
+    """:func:`_still` beside a spinner: a thread back in the same timed wait, having read,
+    written and faulted nothing, woke on its timeout; one that read (a message came) or waits
+    on another futex reacted; without a spinner any run counts, as before."""
+    spinner = ThreadState(True, 10, False, True, 5_000_000, (1, 2, 3, 4))
+    timer = (0x7F00, 8, 4, 57)
+    base = {1: spinner, 2: ThreadState(False, 5, False, True, 100, timer=timer)}
+    woke = {1: spinner, 2: ThreadState(False, 6, False, True, 120, timer=timer)}
+    assert _still(base, woke, {1}, woke_ok=True)
+    assert not _still(base, woke, {1})
+    read = {1: spinner, 2: ThreadState(False, 6, False, True, 120, timer=(0x7F00, 9, 4, 57))}
+    assert not _still(base, read, {1}, woke_ok=True)
+    other = {1: spinner, 2: ThreadState(False, 6, False, True, 120, timer=(0x7F08, 8, 4, 57))}
+    assert not _still(base, other, {1}, woke_ok=True)
+    untimed = {1: spinner, 2: ThreadState(False, 6, False, True, 120)}
+    assert not _still(base, untimed, {1}, woke_ok=True)

@@ -126,9 +126,11 @@ def _why_not_done(result: RecordResult, args: argparse.Namespace) -> str:
             f"stopped by --max-sim-time {args.max_sim_time:g} s before the mission said it was done"
         )
     if result.outcome == "time_limit":
+        from usar_replay.pipeline.record import TIME_LIMIT_GRACE_S
+
         return (
-            "stopped at the world's hard time limit (1.5 x its time_limit_s) before the "
-            "mission said it was done"
+            f"stopped at the world's time limit (its time_limit_s and {TIME_LIMIT_GRACE_S:g} s "
+            "of grace) before the mission said it was done"
         )
     return f"the mission did not say it was done ({result.outcome})"
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from usar_replay.core import contract
+from usar_replay.core import contract, msgs
 from usar_replay.grading.usar.broadcast import (
     frame_places,
     marker_broadcast,
@@ -23,7 +23,7 @@ from usar_replay.grading.usar.follower import (
 from usar_replay.grading.usar.observations import GRADE_TOPICS, REQUIRED_TOPICS, Observations
 from usar_replay.grading.usar.rules import RUBRIC_VERSION
 from usar_replay.grading.usar.targets import explorer_targets, in_order, last_reached
-from usar_replay.grading.usar.timing import time_limit
+from usar_replay.grading.usar.timing import seen_by_the_ta, time_limit
 from usar_replay.grading.verdict import Check, FoundMarker, GradeReport, Rubric
 
 __all__ = ["RUBRIC", "Grader", "judge"]
@@ -31,6 +31,13 @@ __all__ = ["RUBRIC", "Grader", "judge"]
 
 class Grader(Observations):
     """The observations with the rubric's report: :meth:`report` gives the grade."""
+
+    def feed(self, topic: str, msg: msgs.Message | None, t_ns: int) -> None:
+        """One message of the log, observed only when a TA would have seen it (within the
+        time limit: :func:`seen_by_the_ta`); a run stopped in the recorder's grace after it
+        scores nothing there."""
+        if seen_by_the_ta(self, t_ns):
+            super().feed(topic, msg, t_ns)
 
     def found_markers(self) -> tuple[FoundMarker, ...]:
         """The markers broadcast, as :func:`marker_broadcast` judges them, with the error of

@@ -41,7 +41,8 @@ at a target.
 goal tolerance widens the radii by at most :data:`MAX_GOAL_TOLERANCE_M`; a stand-off frame earns
 its half only where it follows the detections (:mod:`.follow`), a frame that ignores them breaks
 ``only_on_detection`` and earns nothing; a ROS 1 package's detections count only where one of
-its frames follows them."""
+its frames follows them; (issue 51, the TA's clock) nothing observed after the world's time limit
+scores on any line (:func:`.timing.seen_by_the_ta`)."""
 TEMPLATE_GOAL_TOLERANCE_M = 0.05
 """The course template's move_base ``xy_goal_tolerance`` (``dwa_local_planner_params.yaml``):
 a robot's goal tolerance where neither the thresholds nor the log say another."""

@@ -119,6 +119,12 @@ class ThreadState:
     """Its CPU time in ns (schedstat's first field)."""
     spin: Key | None = None
     """A runnable package thread's :func:`.spinners.spin_key` (None for any other)."""
+    timer: tuple[int, int, int, int] | None = None
+    """Beside a spinner moved aside: a package thread blocked in a timed futex wait that is
+    no poll, as (the futex's address, read calls, write calls, page faults); None otherwise.
+    The same value at two samples with runs between is a thread that woke on its own timeout
+    and went back to the same wait without taking anything in or putting anything out (a tf2
+    listener's thread, 10 ms of wall time at a time): see :func:`_still`."""
 
 
 def children_map(pid: int) -> dict[int, list[int]]:
@@ -451,6 +457,7 @@ class Quiescence:
                             stat = b""
                         running = stat[stat.rfind(b")") + 2 : stat.rfind(b")") + 3] == b"D"
             polling = False
+            timer = None
             t.poll, t.untimed = None, False
             if not running and t.role == "node" and nr in _TIMED:
                 call = [nr, *(int(a, 16) for a in text.split()[1:7])]
@@ -459,9 +466,13 @@ class Quiescence:
                 polling = t.poll is not None and t.poll.now()
                 if t.untimed:
                     untimed.add(t.pid)
+                if self.spinners.demoted and nr == _FUTEX and call[4] and not polling:
+                    timer = _timer(call[1], t.spin_key())
             # a runnable thread of the package: is it in a run without a pause (:mod:`.spinners`)
             spin = t.spin_key() if running and t.role == "node" else None
-            out[tid] = t.last = ThreadState(running, runs, polling, t.role != "infra", cpu, spin)
+            out[tid] = t.last = ThreadState(
+                running, runs, polling, t.role != "infra", cpu, spin, timer
+            )
             busy = busy or running
         self.samples += 1
         self.untimed = frozenset(untimed)
@@ -630,8 +641,10 @@ class Quiescence:
                     deadline = time.perf_counter() + cap_s
             short = 0.0
             aside = False  # a thread moved aside is runnable and reacting: let it have the CPU
-            if any(s.running and tid not in spin for tid, s in now.items()):
-                base = None
+            others = [tid for tid, s in now.items() if s.running and tid not in spin]
+            if others:
+                if not (spin and base is not None and _timers(base, others)):
+                    base = None  # a thread reacting (one waking on its timer: see :func:`_still`)
                 aside = any(now[tid].running for tid in self.spinners.demoted if tid in now)
             elif (
                 not spin
@@ -646,7 +659,7 @@ class Quiescence:
                     self.snapshots += 1
                     return True
                 base = None
-            elif base is None or not _still(base, now, spin):
+            elif base is None or not _still(base, now, spin, woke_ok=bool(spin)):
                 base = now
                 self.spinners.based({tid: now[tid].cpu for tid in spin})
             elif _pollers_cycled(base, now):
@@ -708,12 +721,40 @@ def _untimed_wait(call: list[int]) -> bool:
     return (call[2] & 127) in (_FUTEX_WAIT, _FUTEX_WAIT_BITSET)
 
 
+def _timers(base: dict[int, ThreadState], tids: Collection[int]) -> bool:
+    """Every one of ``tids`` was in a timed futex wait at ``base`` (:attr:`ThreadState.timer`):
+    found running now, it may be waking on its timeout (the next sample tells)."""
+    return all(tid in base and base[tid].timer is not None for tid in tids)
+
+
+def _timer(addr: int, key: Key | None) -> tuple[int, int, int, int] | None:
+    """:attr:`ThreadState.timer` of a thread in a timed futex wait on ``addr``."""
+    return None if key is None else (addr, key[1], key[2], key[3])
+
+
 def _still(
-    base: dict[int, ThreadState], now: dict[int, ThreadState], spinning: Collection[int] = ()
+    base: dict[int, ThreadState],
+    now: dict[int, ThreadState],
+    spinning: Collection[int] = (),
+    *,
+    woke_ok: bool = False,
 ) -> bool:
     """No watched thread appeared, and none but the pollers of ``base`` ran since, or the
     ``spinning`` threads (:mod:`.spinners`: runnable at ``base`` and in one run without a pause
-    since, their run counts moved by preemption only)."""
+    since, their run counts moved by preemption only).
+
+    ``woke_ok`` (while a thread spins): a thread that ran since but is back in the same timed
+    futex wait having read, written and faulted nothing (:attr:`ThreadState.timer` unchanged)
+    woke on its own wall-clock timeout for nothing, and the spinner's allowance goes on. Why
+    that keeps the spinner's reaction where it was: what such a thread does is decided by the
+    wall clock anyway (nothing of the graph woke it: a thread that signals it runs, and takes
+    the base again), and a wake that took something in reads or faults. Without it a tf2
+    listener's thread, waking every 10 ms of wall time, took the base again every 10 ms, and on
+    a loaded machine a spinner moved aside could not spin its 2 ms of CPU in between: every
+    fourth tick of a team busy-waiting after its mission ended at its cap (issue 51). Not
+    covered (as a loop counting its passes is not): a spinner that wakes such a wait itself
+    (a futex wake moves none of its counters), whose partner then reacts as often as the
+    spinner's CPU lets it."""
     if any(now[tid].watched for tid in set(now) - set(base)):
         return False
     for tid, s in base.items():
@@ -721,8 +762,12 @@ def _still(
             if tid in spinning:
                 continue
             return False  # runnable at the base, and it blocked or wrote since
-        if not (s.polling or not s.watched or now.get(tid, s).runs == s.runs):
-            return False
+        n = now.get(tid, s)
+        if s.polling or not s.watched or n.runs == s.runs:
+            continue
+        if woke_ok and s.timer is not None and n.timer == s.timer and not n.running:
+            continue  # woke on its own timeout, for nothing
+        return False
     return True
 
 
