@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
+import subprocess
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -321,3 +324,40 @@ def test_a_robot_hidden_behind_a_wall_does_not_render_and_changes_no_pixel(rende
             fresh.teleport("explorer", -4.0, 2.5, 0.0)
             fresh.teleport("follower", x, y, yaw)
             assert np.array_equal(fresh.render_camera(), img), (x, y)
+
+
+def test_an_egl_plugin_that_kills_its_process_is_probed_in_a_child(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A plugin whose load ends the process (llvmpipe under qemu's emulated CPU dies with
+    SIGSEGV) is answered 'does not load' by a child process: the caller lives on, and the answer
+    is handed to its children through the environment."""
+    from usar_replay.sim import simulator
+
+    src = tmp_path / "crash.c"
+    src.write_text(
+        "#include <signal.h>\n"
+        "__attribute__((constructor)) static void die(void) { raise(SIGSEGV); }\n"
+    )
+    lib = tmp_path / "crash.so"
+    subprocess.run(["gcc", "-shared", "-fPIC", "-o", str(lib), str(src)], check=True)
+    monkeypatch.delenv(simulator.EGL_PROBE_ENV, raising=False)
+    simulator.egl_loads_safely.cache_clear()
+    try:
+        assert simulator.egl_loads_safely(str(lib)) is False
+        assert os.environ[simulator.EGL_PROBE_ENV] == f"no:{lib}"
+    finally:
+        simulator.egl_loads_safely.cache_clear()
+
+
+def test_an_egl_probe_handed_down_is_not_run_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A child process takes its parent's answer for the same plugin path (no second probe)."""
+    from usar_replay.sim import simulator
+
+    monkeypatch.setenv(simulator.EGL_PROBE_ENV, "ok:/nowhere/eglRenderer.so")
+    simulator.egl_loads_safely.cache_clear()
+    try:
+        assert simulator.egl_loads_safely("/nowhere/eglRenderer.so") is True  # no file: not probed
+        assert simulator.egl_loads_safely("/elsewhere/eglRenderer.so") is False  # probed: fails
+    finally:
+        simulator.egl_loads_safely.cache_clear()

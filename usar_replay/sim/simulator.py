@@ -49,6 +49,7 @@ import functools
 import math
 import os
 import pkgutil
+import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator
@@ -97,6 +98,7 @@ from usar_replay.sim.course_view import CourseCamera, Region  # noqa: E402
 from usar_replay.world.scenario import Scenario  # noqa: E402
 
 __all__ = [
+    "EGL_PROBE_ENV",
     "CAMERA_MOUNT",
     "FOOTPRINT",
     "LIMITS",
@@ -104,6 +106,7 @@ __all__ = [
     "SimRobot",
     "Simulator",
     "camera_intrinsics",
+    "egl_loads_safely",
     "pybullet_api_version",
 ]
 
@@ -208,6 +211,46 @@ class _RobotState:
     refused: int = 0
 
 
+EGL_PROBE_ENV = "USAR_EGL_PROBE"
+"""Where a probe's answer is handed to child processes (``ok:PATH`` or ``no:PATH``), so a batch
+or a test run probes once, not once per recording."""
+
+_PROBE = (
+    "import sys, pybullet as p\n"
+    "p.connect(p.DIRECT)\n"
+    "sys.exit(0 if p.loadPlugin(sys.argv[1], '_eglRendererPlugin') >= 0 else 3)\n"
+)
+
+
+@functools.cache
+def egl_loads_safely(path: str) -> bool:
+    """Whether pybullet's EGL plugin at ``path`` loads without taking the process with it.
+
+    Why a probe in a child process: on some machines the plugin does not fail, it kills its
+    process (Mesa's llvmpipe JIT under qemu's emulated CPUs dies with SIGSEGV on load; softpipe
+    without a context makes the plugin call ``exit``), and ``--renderer auto`` would then end the
+    recorder, not fall back to the tiny renderer. The answer is kept for the process and handed
+    to its children through :data:`EGL_PROBE_ENV`."""
+    told = os.environ.get(EGL_PROBE_ENV, "")
+    verdict, _, probed = told.partition(":")
+    if probed == path and verdict in ("ok", "no"):
+        return verdict == "ok"
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", _PROBE, path],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            timeout=120,
+            check=False,
+        )
+        ok = done.returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        ok = False
+    os.environ[EGL_PROBE_ENV] = f"{'ok' if ok else 'no'}:{path}"
+    return ok
+
+
 class Simulator:
     """The scenario in pybullet (DIRECT mode, a private client), stepped on a sim clock."""
 
@@ -303,8 +346,10 @@ class Simulator:
     def _try_egl(self, *, required: bool) -> None:
         loader = pkgutil.get_loader("eglRenderer")
         plugin = -1
+        path = ""
         if loader is not None:
             path = loader.get_filename()  # type: ignore[attr-defined]
+        if path and egl_loads_safely(path):
             with _quiet_stdout():
                 plugin = p.loadPlugin(path, "_eglRendererPlugin", physicsClientId=self._client)
         if plugin < 0:
