@@ -120,6 +120,17 @@ def _shown(value: float) -> str:
     return f"{value:g}"
 
 
+def class_run_options(p: argparse.ArgumentParser) -> None:
+    """The settings, hard stop and thresholds a class's runs share (``usar batch`` and ``usar
+    gradescope`` grade a team the same way, so they take the same words for it)."""
+    p.add_argument("--settings", metavar="TOML", help="settings from [record]/[mission]/[detector]")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="a setting (as record)")
+    p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
+    p.add_argument(
+        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
+    )
+
+
 def grade_outputs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"

@@ -34,12 +34,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--jobs", type=int, metavar="N", help="runs at a time (default: one per core)")
     p.add_argument("--engine", choices=["local", "ray"], default="local", help="where runs run")
     p.add_argument("--address", metavar="ADDR", help="Ray cluster address (--engine ray)")
-    p.add_argument("--settings", metavar="TOML", help="settings from [record]/[mission]/[detector]")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="a setting (as record)")
-    p.add_argument("--max-sim-time", type=float, metavar="S", help="hard stop in sim seconds")
-    p.add_argument(
-        "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"
-    )
+    parser_parts.class_run_options(p)
     parser_parts.limit_options(p, "batch", BATCH_LIMITS)
     p.add_argument(
         "--no-sandbox",
