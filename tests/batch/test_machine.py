@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.batch import machine
-from usar_replay.sandbox import cpu_sets, kernel_pools, kernel_sandbox
+from usar_replay.sandbox import cgroups, container, cpu_sets, kernel_pools, kernel_sandbox
 
 
 def test_this_machine_as_ci_has_it() -> None:
@@ -13,6 +13,7 @@ def test_this_machine_as_ci_has_it() -> None:
     found = {f.name: f for f in machine.check()}
     assert list(found) == [
         "kernel sandbox",
+        "container",
         "cgroups",
         "CPU sets",
         "real-time priority",
@@ -29,15 +30,13 @@ def test_this_machine_as_ci_has_it() -> None:
 
 def test_no_cpu_sets_is_said_with_what_it_means(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(cpu_sets, "usable_cpus", lambda: [])
-    real = kernel_sandbox._controller_root
-    monkeypatch.setattr(
-        kernel_sandbox, "_controller_root", lambda c: None if c == "cpuset" else real(c)
-    )
+    monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(1, ("memory", "pids")))
+    monkeypatch.setattr(container, "read", lambda: container.Signs())
     findings = machine.check()
     assert not machine.isolated(findings)
-    cgroups = next(f for f in findings if f.name == "cgroups")
-    assert not cgroups.ok and "not cpuset" in cgroups.said
-    assert "a neighbour can change a ROS 1 run's log" in cgroups.means
+    line = next(f for f in findings if f.name == "cgroups")
+    assert not line.ok and "not cpuset" in line.said
+    assert "a neighbour can change a ROS 1 run's log" in line.means
     line = machine.warning(findings)
     assert line.startswith("usar: warning: isolation is partial here (cgroups, CPU sets")
     assert "usar doctor" in line and "\n" not in line

@@ -135,14 +135,12 @@ def require_sandbox() -> None:
     """Refuse to grade untrusted code without the kernel sandbox
     (sandbox.kernel_sandbox): a :class:`UsageError` (exit 2) that says how to get it, or to
     go without on purpose."""
-    from usar_replay.sandbox.kernel_sandbox import INSTALL_HINT, bwrap_available
+    from usar_replay.sandbox.confinement import refusal
+    from usar_replay.sandbox.kernel_sandbox import bwrap_available
 
     ok, why = bwrap_available()
     if not ok:
-        raise UsageError(
-            f"{why}: usar batch will not grade untrusted code without a kernel sandbox; "
-            f"install it ({INSTALL_HINT}) or pass --no-sandbox"
-        )
+        raise UsageError(refusal(why, "usar batch"))
 
 
 class _Progress:

@@ -17,7 +17,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from usar_replay.ros1.building import debian
-from usar_replay.sandbox import cpu_sets, kernel_pools, kernel_sandbox
+from usar_replay.sandbox import (
+    cgroup_v2,
+    cgroups,
+    container,
+    cpu_sets,
+    kernel_pools,
+    kernel_sandbox,
+)
 
 __all__ = ["Finding", "check", "isolated", "warning"]
 
@@ -32,33 +39,80 @@ class Finding:
     """What there is (``cgroup v1: memory, pids, cpuset writable``)."""
     means: str = ""
     """Where not ok: what it means for a run and its grade, and what to do."""
+    fix: tuple[str, ...] = ()
+    """Lines to show as they are (a file to write, the flags to run with), after :attr:`means`."""
+
+
+_COSTS = {
+    "memory": "no memory limit for a run as a whole (each process keeps its own)",
+    "pids": "no process limit for a run as a whole (RLIMIT_NPROC instead)",
+    "cpuset": "no CPU set per run: a neighbour can change a ROS 1 run's log, so run one at a "
+    "time (--jobs 1)",
+}
 
 
 def _cgroup() -> Finding:
-    v2 = Path("/sys/fs/cgroup/cgroup.controllers").exists()
-    writable = []
-    for controller in ("memory", "pids", "cpuset"):
-        root = kernel_sandbox._controller_root(controller)  # the runs' own lookup
-        if root is not None and os.access(root, os.W_OK):
-            writable.append(controller)
-    version = "v2" if v2 else "v1"
-    if len(writable) == 3:
-        return Finding("cgroups", True, f"cgroup {version}: memory, pids, cpuset writable")
-    missing = [c for c in ("memory", "pids", "cpuset") if c not in writable]
+    got = cgroups.support()
+    writable = got.writable
+    if len(writable) == len(cgroups.CONTROLLERS):
+        where = f" in {got.where}" if got.version == 2 else ""
+        return Finding("cgroups", True, f"cgroup v{got.version}: memory, pids, cpuset{where}")
+    missing = [c for c in cgroups.CONTROLLERS if c not in writable]
     shown = ", ".join(writable) or "none"
+    said = f"cgroup v{got.version}: writable {shown}; not {', '.join(missing)}"
+    costs = "; ".join(_COSTS[c] for c in missing)
+    if got.version == 2 and got.user_manager and writable:
+        # a user's systemd manager delegates what user@.service is given (stock: memory pids)
+        return Finding(
+            "cgroups",
+            False,
+            said,
+            f"the user's systemd manager does not delegate {', '.join(missing)}: {costs}. To "
+            "delegate it, as root write this file, run `systemctl daemon-reload`, and log in "
+            "again:",
+            (
+                f"{cgroup_v2.DROP_IN_PATH}:",
+                *(f"  {line}" for line in cgroup_v2.DROP_IN.splitlines()),
+            ),
+        )
+    why = f" ({got.why})" if got.why else ""
     return Finding(
         "cgroups",
         False,
-        f"cgroup {version}: writable {shown}; not {', '.join(missing)}",
-        "without delegation (run as root, or delegate the controllers): "
-        + "; ".join(
-            {
-                "memory": "no memory limit for a run as a whole (each process keeps its own)",
-                "pids": "no process limit for a run as a whole (RLIMIT_NPROC instead)",
-                "cpuset": "no CPU set per run: a neighbour can change a ROS 1 run's log, so "
-                "run one at a time (--jobs 1)",
-            }[c]
-            for c in missing
+        said,
+        f"without delegation{why}: {costs}; run as root, or as a user whose systemd delegates "
+        "cpuset memory pids (`usar doctor` as that user names the file)",
+    )
+
+
+def _container() -> Finding:
+    signs = container.read()
+    name = container.kind(signs)
+    if not name:
+        return Finding("container", True, "none: usar runs on the machine itself")
+    sandbox_ok, _ = kernel_sandbox.bwrap_available()
+    full = len(cgroups.support().writable) == len(cgroups.CONTROLLERS)
+    lacking = container.needs(signs, sandbox_ok=sandbox_ok, cgroups_ok=full)
+    if not lacking:
+        return Finding("container", True, f"{name}: run with what the sandbox and cgroups need")
+    seen = [
+        *(["a seccomp filter"] if signs.seccomp == 2 else []),
+        *([f"AppArmor {signs.apparmor}"] if signs.apparmor else []),
+        *(["/proc masked"] if signs.proc_masked else []),
+        *(["/sys/fs/cgroup read-only"] if signs.cgroup_read_only else []),
+    ]
+    width = max(len(n.docker) for n in lacking)
+    return Finding(
+        "container",
+        False,
+        f"{name}: {', '.join(seen) or 'its runtime refuses what the sandbox needs'}",
+        "run the container with these flags (or --privileged, which gives them all); beside "
+        "each, what a run lacks without it. Without the sandbox usar batch refuses to grade; "
+        "without cgroups, run one at a time (--jobs 1)",
+        (
+            *(f"{n.docker.ljust(width)}  {n.cost}" for n in lacking),
+            "Kubernetes, the container's securityContext:",
+            *(f"  {n.kubernetes}" for n in lacking),
         ),
     )
 
@@ -71,8 +125,7 @@ def _cpus() -> Finding:
         "CPU sets",
         False,
         "no cpuset hierarchy usar can write",
-        "runs share every CPU: a ROS 1 run's log may depend on what else runs; run one at a "
-        "time",
+        "runs share every CPU: a ROS 1 run's log may depend on what else runs; run one at a time",
     )
 
 
@@ -100,7 +153,7 @@ def _sandbox() -> Finding:
         False,
         why or "bubblewrap cannot make its sandbox here",
         "missions would run outside a sandbox: usar batch refuses to (apt-get install "
-        "bubblewrap; allow user namespaces)",
+        "bubblewrap; allow user namespaces; in a container, the flags its line names)",
     )
 
 
@@ -164,7 +217,16 @@ def _read_int(path: str) -> int | None:
 
 def check() -> list[Finding]:
     """Every part, in the order ``usar doctor`` prints them."""
-    return [_sandbox(), _cgroup(), _cpus(), _realtime(), _folders(), _pools(), _ros1()]
+    return [
+        _sandbox(),
+        _container(),
+        _cgroup(),
+        _cpus(),
+        _realtime(),
+        _folders(),
+        _pools(),
+        _ros1(),
+    ]
 
 
 def isolated(findings: list[Finding]) -> bool:

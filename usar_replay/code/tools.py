@@ -77,12 +77,9 @@ def missing(tool: str) -> str:
 def sandboxed() -> bool:
     """Does a tool run in the kernel sandbox here (bubblewrap works, ``USAR_SANDBOX`` is not
     ``off``)?"""
-    from usar_replay.sandbox import kernel_sandbox
+    from usar_replay.sandbox import confinement
 
-    if os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
-        return False
-    ok, _ = kernel_sandbox.bwrap_available()
-    return ok
+    return confinement.confined()
 
 
 def _prlimit(limits: ToolLimits) -> list[str]:

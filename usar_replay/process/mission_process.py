@@ -49,7 +49,7 @@ from usar_replay.process.log_budget import DEFAULT_MAX_LOG_MIB, LogBudget
 from usar_replay.process.mission_target import MissionTarget
 from usar_replay.process.protocol import FrameKind, Wire
 from usar_replay.process.wire_io import send_within
-from usar_replay.sandbox import cpu_sets, hide, kernel_sandbox
+from usar_replay.sandbox import confinement, cpu_sets, hide, kernel_sandbox
 from usar_replay.sandbox.audit_guard import GuardPolicy
 from usar_replay.sandbox.kernel_sandbox import KernelSandbox, SandboxLimits
 from usar_replay.sandbox.run_folder import DEFAULT_RUN_FOLDER_MB, RunFolder
@@ -152,9 +152,6 @@ def hide_from_mission(limits: MissionLimits | None, *paths: str) -> MissionLimit
     return replace(base, hidden=(*base.hidden, *paths))
 
 
-_warned = False
-
-
 def uses_kernel_sandbox(limits: MissionLimits) -> bool:
     """Will a mission under ``limits`` run in the kernel sandbox? (what a ROS 1 build asks
     before it builds: a workspace built for the sandbox's fixed paths runs only there)"""
@@ -162,30 +159,9 @@ def uses_kernel_sandbox(limits: MissionLimits) -> bool:
 
 
 def _use_kernel_sandbox(limits: MissionLimits) -> bool:
-    """Run this mission in the kernel sandbox? (see :attr:`MissionLimits.kernel_sandbox`)"""
-    global _warned
-    mode = limits.kernel_sandbox
-    if mode == "auto" and os.environ.get("USAR_SANDBOX", "").strip().lower() == "off":
-        mode = "off"
-    if mode == "off":
-        return False
-    ok, why = kernel_sandbox.bwrap_available()
-    if ok:
-        return True
-    hint = kernel_sandbox.INSTALL_HINT
-    if mode == "required":
-        raise UsageError(
-            f"{why}: usar will not run untrusted mission code without a kernel sandbox; "
-            f"install it ({hint}) or pass --no-sandbox"
-        )
-    if not _warned:
-        _warned = True
-        print(
-            f"usar: warning: {why}; the mission runs without a kernel sandbox "
-            f"({hint} to get one; USAR_SANDBOX=off silences this)",
-            file=sys.stderr,
-        )
-    return False
+    """Run this mission in the kernel sandbox? (see :attr:`MissionLimits.kernel_sandbox`; the
+    one policy: :func:`usar_replay.sandbox.confinement.confined`)"""
+    return confinement.confined(limits.kernel_sandbox, warn=True)
 
 
 def _mission_env(target: MissionTarget) -> dict[str, str]:

@@ -14,8 +14,14 @@ it and its graph run in lockstep, so they share the set without slowing each oth
 The claim is machine-wide: every usar process takes the lock on the ``usar`` folder
 (``flock``), reads the CPUs its live siblings hold, and takes free ones; a set whose owner
 process is gone is removed first. With no free CPU the claim waits (a batch never asks for more
-sets than there are CPUs: :func:`free_cpus`). Where there is no writable cpuset hierarchy (not
-root, cgroup v2 only) :func:`claim` returns None and the run goes on without a set (docs/batch.md).
+sets than there are CPUs: :func:`free_cpus`). Where usar can write no cpuset cgroup (not root
+on v1; on v2, a subtree whose manager does not delegate ``cpuset``) :func:`claim` returns None
+and the run goes on without a set (docs/batch.md).
+
+cgroup v2 (:mod:`.cgroup_v2`): a run's set is its one cgroup (below usar's delegated subtree,
+which differs from one usar process to the next: each has its own systemd scope), so the claims
+are recorded apart, in :func:`registry` (``/run/usar/cpu-sets`` as root): a folder per claim
+holding its ``cpuset.cpus`` and its cgroup's path, under the same lock and liveness rule.
 """
 
 from __future__ import annotations
@@ -23,15 +29,17 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import os
-import signal
+import shutil
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from usar_replay.sandbox import cgroup_v1, cgroups
+
 __all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus", "remove_cgroup"]
 
-ROOT = "/sys/fs/cgroup/cpuset"
+ROOT = cgroup_v1.CPUSET_ROOT
 """cgroup v1's cpuset hierarchy (the one this project's machines and CI have)."""
 GROUP = "usar"
 """The folder under :data:`ROOT` that holds every run's set."""
@@ -60,6 +68,8 @@ class CpuSet:
 
     path: str
     cpus: tuple[int, ...]
+    record: str = ""
+    """cgroup v2: the claim's folder in :func:`registry` (v1: the cgroup is the record)."""
     _saved: dict[int, set[int]] = field(default_factory=dict)
 
     @property
@@ -88,6 +98,8 @@ class CpuSet:
                 os.sched_setaffinity(tid, cpus)
         self._saved.clear()
         remove_cgroup(self.path)
+        if self.record:
+            shutil.rmtree(self.record, ignore_errors=True)
 
 
 def _threads() -> list[int]:
@@ -98,15 +110,31 @@ def _threads() -> list[int]:
 
 
 def _root_cpus() -> tuple[list[int], str] | None:
-    """(CPUs, memory nodes) of the cpuset root, or None without a writable v1 hierarchy."""
+    """(CPUs, memory nodes) runs' sets are carved from, or None without a cpuset cgroup to
+    write (:func:`.cgroups.cpu_root`)."""
+    root = cgroups.cpu_root()
+    if root is None:
+        return None
     try:
-        cpus = parse_cpus(Path(ROOT, "cpuset.effective_cpus").read_text())
-        mems = Path(ROOT, "cpuset.effective_mems").read_text().strip()
-    except (OSError, ValueError):
+        return parse_cpus(root[0]), root[1]
+    except ValueError:
         return None
-    if not os.access(ROOT, os.W_OK):
-        return None
-    return cpus, mems
+
+
+def registry() -> str:
+    """cgroup v2: the folder of the claims (made if missing): ``/run/usar/cpu-sets`` as root,
+    else the user's runtime folder's (``$XDG_RUNTIME_DIR``), else one in ``/tmp`` of the user's."""
+    if os.geteuid() == 0 and os.access("/run", os.W_OK):
+        base = "/run/usar"
+    elif os.environ.get("XDG_RUNTIME_DIR"):
+        base = os.path.join(os.environ["XDG_RUNTIME_DIR"], "usar")
+    else:
+        base = f"/tmp/usar-{os.geteuid()}"
+    path = os.path.join(base, "cpu-sets")
+    os.makedirs(path, mode=0o700, exist_ok=True)
+    if os.stat(base).st_uid != os.geteuid():  # another user's folder: not a record of ours
+        raise OSError(f"{base} is not this user's")
+    return path
 
 
 def usable_cpus() -> list[int]:
@@ -119,11 +147,13 @@ def usable_cpus() -> list[int]:
 
 @contextlib.contextmanager
 def _locked() -> Iterator[str]:
-    """The ``usar`` folder, made if missing, held under an exclusive ``flock``."""
+    """The folder of the claims (v1: the ``usar`` cpuset cgroup, made if missing; v2:
+    :func:`registry`), held under an exclusive ``flock``."""
     root = _root_cpus()
     if root is None:
-        raise OSError("no writable cpuset hierarchy")
-    group = os.path.join(ROOT, GROUP)
+        raise OSError("no cpuset cgroup usar can write")
+    v1 = cgroups.version() == 1
+    group = os.path.join(ROOT, GROUP) if v1 else registry()
     with contextlib.suppress(FileExistsError):
         os.mkdir(group)
     fd = os.open(group, os.O_RDONLY | os.O_DIRECTORY)
@@ -131,7 +161,7 @@ def _locked() -> Iterator[str]:
         fcntl.flock(fd, fcntl.LOCK_EX)
         cpus, mems = root
         # a new v1 cpuset starts with no CPU and no memory node: give the folder all of them
-        if not Path(group, "cpuset.mems").read_text().strip():
+        if v1 and not Path(group, "cpuset.mems").read_text().strip():
             Path(group, "cpuset.cpus").write_text(",".join(map(str, cpus)))
             Path(group, "cpuset.mems").write_text(mems)
         yield group
@@ -148,11 +178,24 @@ def _held(group: str) -> set[int]:
             continue
         owner = name.split("-")[1]
         if owner.isdigit() and not _alive(int(owner)):
-            remove_cgroup(path)
+            _forget(path)
             continue
         with contextlib.suppress(OSError, ValueError):
             out |= set(parse_cpus(Path(path, "cpuset.cpus").read_text()))
     return out
+
+
+def _forget(path: str) -> None:
+    """Remove a dead run's claim: its cgroup (v1: ``path`` itself; v2: the one its record
+    names) and, in v2, the record."""
+    if cgroups.version() == 1:
+        remove_cgroup(path)
+        return
+    with contextlib.suppress(OSError):
+        named = Path(path, "cgroup").read_text().strip()
+        if named.startswith("/sys/fs/cgroup/"):
+            remove_cgroup(named)
+    shutil.rmtree(path, ignore_errors=True)
 
 
 def _alive(pid: int) -> bool:
@@ -188,16 +231,7 @@ def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
                 take = free[: count or WANT] if len(free) >= max(count, 1) else []
                 if take:
                     _counter += 1
-                    path = os.path.join(group, f"run-{os.getpid()}-{_counter}")
-                    os.mkdir(path)
-                    try:
-                        Path(path, "cpuset.cpus").write_text(",".join(map(str, take)))
-                        mems = Path(group, "cpuset.mems").read_text().strip()
-                        Path(path, "cpuset.mems").write_text(mems)
-                    except OSError:
-                        remove_cgroup(path)
-                        raise
-                    return CpuSet(path, tuple(take))
+                    return _make(group, f"run-{os.getpid()}-{_counter}", tuple(take))
         except OSError:
             return None
         if time.monotonic() > deadline:
@@ -205,18 +239,36 @@ def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
         time.sleep(0.2)  # another usar run gives its set back when it ends
 
 
+def _make(group: str, name: str, take: tuple[int, ...]) -> CpuSet:
+    """The set ``name`` of CPUs ``take`` (under the claims' lock): v1 a cpuset cgroup in the
+    claims' folder; v2 the run's cgroup below usar's subtree and its record in the registry."""
+    if cgroups.version() == 2:
+        path = cgroups.new_run(name, take)
+        if path is None:
+            raise OSError(f"no cgroup for the run's CPU set {name}")
+        record = os.path.join(group, name)
+        try:
+            os.mkdir(record)
+            Path(record, "cgroup").write_text(path)
+            Path(record, "cpuset.cpus").write_text(",".join(map(str, take)))
+        except OSError:
+            remove_cgroup(path)
+            shutil.rmtree(record, ignore_errors=True)
+            raise
+        return CpuSet(path, take, record)
+    path = os.path.join(group, name)
+    os.mkdir(path)
+    try:
+        Path(path, "cpuset.cpus").write_text(",".join(map(str, take)))
+        mems = Path(group, "cpuset.mems").read_text().strip()
+        Path(path, "cpuset.mems").write_text(mems)
+    except OSError:
+        remove_cgroup(path)
+        raise
+    return CpuSet(path, take)
+
+
 def remove_cgroup(path: str) -> None:
     """Remove one of a run's cgroups (its CPU set, its memory or pids group), killing what is
     left in it first (nothing, normally): a cgroup with members cannot be removed."""
-    for _ in range(200):
-        try:
-            os.rmdir(path)
-            return
-        except FileNotFoundError:
-            return
-        except OSError:
-            with contextlib.suppress(OSError):
-                for pid in Path(path, "cgroup.procs").read_text().split():
-                    with contextlib.suppress(OSError):
-                        os.kill(int(pid), signal.SIGKILL)
-            time.sleep(0.01)  # the kernel reaps the killed processes
+    cgroups.remove(path)

@@ -12,10 +12,11 @@ its first process, so a ``setsid`` daemon dies with it).
 
 What bwrap does not do: resource limits. rlimits (address space, CPU time, file size, open
 files, no core files) are set by the sandboxed program on itself before any untrusted code runs
-(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count is a
-``pids`` cgroup where one can be made (root, a writable cgroup file system), else RLIMIT_NPROC
-(a per-run count in the run's user namespace; the kernel does not apply it to processes that
-are root outside, which is why the cgroup comes first).
+(:func:`apply_rlimits`; nothing in the sandbox may raise them again); the process count and
+the run's memory are cgroups where they can be made (:mod:`.cgroups`: v1 as root, v2 in a
+subtree delegated to usar), else RLIMIT_NPROC (a per-run count in the run's user namespace;
+the kernel does not apply it to processes that are root outside, which is why the cgroup comes
+first) and RLIMIT_AS per process.
 
 Reusable: :func:`sandbox_argv` builds the command for any program (the ROS 1 bridge runs its graph
 with ``network="loopback"``), :class:`KernelSandbox` holds one run's cgroup and limits.
@@ -37,12 +38,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from usar_replay.sandbox import kernel_pools
+from usar_replay.sandbox import cgroups, kernel_pools
+from usar_replay.sandbox.cgroup_v1 import TCP_LIMIT_FILE, TCP_PEAK_FILE, tcp_limit_mb
 from usar_replay.sandbox.cpu_sets import CpuSet, remove_cgroup
 from usar_replay.sandbox.kernel_pools import PoolLimits, succeeds
 
 __all__ = [
     "INSTALL_HINT",
+    "TCP_LIMIT_FILE",
+    "TCP_PEAK_FILE",
     "KernelSandbox",
     "SandboxLimits",
     "apply_rlimits",
@@ -53,6 +57,7 @@ __all__ = [
     "sandbox_argv",
     "signal_of_exit",
     "succeeds",
+    "tcp_limit_mb",
 ]
 
 INSTALL_HINT = "apt-get install bubblewrap"
@@ -66,6 +71,9 @@ _SYSTEM_BINDS = ("/usr", "/bin", "/lib", "/lib32", "/lib64", "/libx32", "/sbin")
 _SYSTEM_FILES = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/alternatives")
 
 Network = Literal["none", "loopback"]
+
+_counter = 0
+"""Runs made by this process so far (each run's cgroups get a name of their own)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -339,8 +347,17 @@ class KernelSandbox:
         self.cpus = cpus
         """The run's CPU set (:mod:`.cpu_sets`): its processes start in it and cannot leave;
         :meth:`close` gives it back."""
-        self.cgroup = _make_pids_cgroup(self.limits.processes) if self.limits.processes else None
-        self.memory_cgroup = _make_memory_cgroup(self.cgroup, self.limits.run_memory_mb)
+        global _counter
+        _counter += 1
+        self.cgroup, self.memory_cgroup = cgroups.run_groups(
+            f"usar-mission-{os.getpid()}-{_counter}",
+            processes=self.limits.processes,
+            memory_mb=self.limits.run_memory_mb,
+            cpuset=cpus.path if cpus and cgroups.version() == 2 else None,
+        )
+        """The run's pids cgroup (limited to :attr:`SandboxLimits.processes`; None where none
+        can be made here: then RLIMIT_NPROC). In cgroup v2 it is the run's one cgroup: the
+        same folder as :attr:`memory_cgroup` and the CPU set's (:mod:`.cgroups`)."""
         """The run's memory cgroup (limited to :attr:`SandboxLimits.run_memory_mb`): where the
         kernel counts the run's processes it killed for memory (:meth:`oom_killed`); None when
         none can be made here (then RLIMIT_AS per process is the only memory limit)."""
@@ -502,99 +519,3 @@ class KernelSandbox:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-_counter = 0
-
-
-def _pids_root() -> str | None:
-    """The folder of this process's pids cgroup (v1 ``pids`` hierarchy, or v2 with the pids
-    controller delegated), or None."""
-    return _controller_root("pids")
-
-
-def _controller_root(controller: str) -> str | None:
-    """The folder of this process's cgroup with ``controller`` (its v1 hierarchy, or v2 with
-    the controller delegated), or None."""
-    try:
-        lines = Path("/proc/self/cgroup").read_text().splitlines()
-    except OSError:
-        return None
-    for line in lines:
-        _, controllers, path = line.split(":", 2)
-        if controller in controllers.split(","):
-            return os.path.join("/sys/fs/cgroup", controller, path.lstrip("/"))
-    for line in lines:
-        if line.startswith("0::"):
-            base = os.path.join("/sys/fs/cgroup", line[3:].lstrip("/"))
-            try:
-                enabled = Path(base, "cgroup.subtree_control").read_text().split()
-            except OSError:
-                return None
-            return base if controller in enabled else None
-    return None
-
-
-def _make_memory_cgroup(pids_cgroup: str | None, limit_mb: int) -> str | None:
-    """The run's memory cgroup, limited to ``limit_mb`` MiB (0: no limit) and read for its OOM
-    count: in cgroup v2 the pids cgroup itself when the memory controller is on there; in v1 a
-    fresh one in the memory hierarchy; else None."""
-    if pids_cgroup and os.path.exists(os.path.join(pids_cgroup, "memory.events")):
-        path = pids_cgroup
-        limits = ["memory.max", "memory.swap.max"]
-    else:
-        root = _controller_root("memory")
-        if root is None or not os.access(root, os.W_OK):
-            return None  # no memory controller of ours: no per-run record
-        global _counter
-        _counter += 1
-        path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
-        try:
-            os.mkdir(path)
-        except OSError:
-            return None
-        # memory, then memory + swap (v1 wants the second no lower than the first)
-        limits = ["memory.limit_in_bytes", "memory.memsw.limit_in_bytes"]
-    if limit_mb > 0:
-        for name in limits:
-            value = str(limit_mb * 1024 * 1024) if "swap.max" not in name else "0"
-            with contextlib.suppress(OSError):
-                Path(path, name).write_text(value)
-        if "memory.limit_in_bytes" in limits:  # v1: TCP buffers are charged only once capped
-            with contextlib.suppress(OSError):
-                Path(path, TCP_LIMIT_FILE).write_text(str(tcp_limit_mb(limit_mb) * 1024 * 1024))
-    return path
-
-
-TCP_LIMIT_FILE = "memory.kmem.tcp.limit_in_bytes"
-TCP_PEAK_FILE = "memory.kmem.tcp.max_usage_in_bytes"
-"""The peak of the run's TCP buffers: the kernel lets TCP go past its limit (it charges by
-force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so the peak
-reaching the limit is the verdict."""
-
-
-def tcp_limit_mb(run_memory_mb: int) -> int:
-    """The run's TCP socket buffers, MiB, where cgroup v1 counts them apart from its memory
-    (``memory.kmem.tcp``, and not at all until a limit is set: a red team held 1.2 GiB of
-    loopback buffers under ``--run-memory 700``, in the host's TCP pool every other run's ROS
-    graph shares, issue 44): a quarter of the run's memory, at least 64 MiB (a ROS graph's
-    loopback traffic holds a few MiB). cgroup v2 counts socket memory in the run's own."""
-    return max(64, run_memory_mb // 4)
-
-
-def _make_pids_cgroup(limit: int) -> str | None:
-    """A fresh pids cgroup with ``pids.max = limit`` (None when this machine gives none)."""
-    global _counter
-    root = _pids_root()
-    if root is None or not os.access(root, os.W_OK):
-        return None
-    _counter += 1
-    path = os.path.join(root, f"usar-mission-{os.getpid()}-{_counter}")
-    try:
-        os.mkdir(path)
-        Path(path, "pids.max").write_text(str(limit))
-    except OSError:
-        with contextlib.suppress(OSError):
-            os.rmdir(path)
-        return None
-    return path

@@ -6,14 +6,22 @@ from __future__ import annotations
 import pytest
 
 from usar_replay.cli.main import main
-from usar_replay.sandbox import cpu_sets
+from usar_replay.sandbox import cgroups, container, cpu_sets, kernel_sandbox
+from usar_replay.sandbox.cgroups import CONTROLLERS
 
 
 def test_doctor_says_each_part(capsys: pytest.CaptureFixture[str]) -> None:
     code = main(["doctor"])
     out = capsys.readouterr().out
     assert code in (0, 1)
-    for part in ("kernel sandbox", "cgroups", "CPU sets", "real-time priority", "ROS 1"):
+    for part in (
+        "kernel sandbox",
+        "container",
+        "cgroups",
+        "CPU sets",
+        "real-time priority",
+        "ROS 1",
+    ):
         assert part in out
     assert all(len(line) <= 100 for line in out.splitlines())
     assert out.rstrip().endswith("isolation here" if code == 0 else "isolation is partial here")
@@ -26,3 +34,79 @@ def test_a_missing_part_exits_1_and_says_what_to_do(
     assert main(["doctor"]) == 1
     out = capsys.readouterr().out
     assert "MISS CPU sets" in out and "run one at a time" in " ".join(out.split())
+
+
+def _lines(out: str) -> list[str]:
+    lines = out.splitlines()
+    assert all(len(line) <= 100 for line in lines), [x for x in lines if len(x) > 100]
+    return lines
+
+
+def test_cgroup_v2_with_a_delegated_subtree_is_ok(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    where = "transient scope usar-7.scope (systemd, Delegate=yes)"
+    monkeypatch.setattr(container, "read", lambda: container.Signs())
+    monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(2, CONTROLLERS, where))
+    main(["doctor"])
+    line = next(x for x in _lines(capsys.readouterr().out) if x.split()[1:2] == ["cgroups"])
+    assert line.startswith("ok   cgroups") and "cgroup v2: memory, pids, cpuset in" in line
+
+
+def test_a_user_without_cpuset_is_given_the_drop_in(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    got = cgroups.Support(2, ("memory", "pids"), "transient scope", "cpuset not delegated", True)
+    monkeypatch.setattr(cgroups, "support", lambda: got)
+    monkeypatch.setattr(container, "read", lambda: container.Signs())
+    assert main(["doctor"]) == 1
+    lines = _lines(capsys.readouterr().out)
+    text = " ".join(" ".join(lines).split())
+    assert "MISS cgroups               cgroup v2: writable memory, pids; not cpuset" in lines
+    assert "does not delegate cpuset" in text and "systemctl daemon-reload" in text
+    assert "log in again" in text
+    at = lines.index(next(x for x in lines if x.strip().endswith("delegate.conf:")))
+    assert lines[at].strip() == "/etc/systemd/system/user@.service.d/delegate.conf:"
+    assert [x.strip() for x in lines[at + 1 : at + 3]] == [
+        "[Service]", "Delegate=cpu cpuset io memory pids",
+    ]  # fmt: skip
+
+
+def test_a_container_without_the_flags_names_each_and_its_cost(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    signs = container.Signs(
+        dockerenv=True, seccomp=2, apparmor="docker-default (enforce)", proc_masked=True,
+        cgroup_read_only=True,
+    )  # fmt: skip
+    monkeypatch.setattr(container, "read", lambda: signs)
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, "bwrap: no userns"))
+    monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(2, (), "", "read-only"))
+    assert main(["doctor"]) == 1
+    lines = _lines(capsys.readouterr().out)
+    line = next(x for x in lines if x.startswith("MISS container"))
+    assert "docker: a seccomp filter, AppArmor docker-default (enforce), /proc masked" in line
+    for flag, cost in [
+        ("--security-opt seccomp=unconfined", "namespaces refused"),
+        ("--security-opt apparmor=unconfined", "mounts refused"),
+        ("--security-opt systempaths=unconfined", "/proc masked"),
+        ("--cgroupns=private", "no memory, process, CPU bound"),
+    ]:
+        assert any(flag in x and cost in x for x in lines), flag
+    at = lines.index(next(x for x in lines if "Kubernetes" in x))
+    kube = [x.strip() for x in lines[at + 1 : at + 5]]
+    assert kube == [
+        "seccompProfile: {type: Unconfined}", "appArmorProfile: {type: Unconfined}",
+        "procMount: Unmasked", "privileged: true",
+    ]  # fmt: skip
+    # wherever the sandbox is said to be missing, no way around it is offered without its cost
+    for x in lines:
+        assert "--no-sandbox" not in x or "world key" in x, x
+
+
+def test_no_container_is_ok(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(container, "read", lambda: container.Signs())
+    main(["doctor"])
+    assert "ok   container" in capsys.readouterr().out

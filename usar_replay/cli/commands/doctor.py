@@ -14,9 +14,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "doctor",
         help="say what this machine gives a run (sandbox, cgroups, CPU sets, ROS 1)",
         description=(
-            "Check what a run gets here: bubblewrap's sandbox, cgroup v1 or v2 and which "
-            "controllers usar may write, CPU sets, real-time priority, size-limited folders, "
-            "the kernel's per-user pools, Debian's ROS 1 packages; for each part missing, "
+            "Check what a run gets here: bubblewrap's sandbox, the container usar runs in "
+            "(and the flags it lacks), cgroup v1 or v2 and which controllers usar may write "
+            "(on v2, a subtree delegated to usar), CPU sets, real-time priority, size-limited "
+            "folders, the kernel's per-user pools, Debian's ROS 1 packages; for each part missing, "
             "what it means for a run's grade. Exit 0 when a run gets all of its isolation, "
             "1 when it is partial."
         ),
@@ -32,9 +33,19 @@ def run(args: argparse.Namespace) -> int:
     for f in findings:
         mark = "ok  " if f.ok else "MISS"
         print(f"{mark} {f.name.ljust(width)}  {f.said}"[:100])
+        lead = " " * (width + 7)
         if f.means:
-            lead = " " * (width + 7)
-            print(textwrap.fill(f.means, 100, initial_indent=lead, subsequent_indent=lead))
+            print(
+                textwrap.fill(
+                    f.means,
+                    100,
+                    initial_indent=lead,
+                    subsequent_indent=lead,
+                    break_on_hyphens=False,
+                )
+            )
+        for line in f.fix:  # a file's lines, flags: as they are, indented under the words
+            print(f"{lead}  {line}"[:100])
     whole = isolated(findings)
     print("every run gets its whole isolation here" if whole else "isolation is partial here")
     return 0 if whole else 1

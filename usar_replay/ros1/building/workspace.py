@@ -322,10 +322,9 @@ def sandboxed() -> bool:
     """Does a build run in the kernel sandbox here? (bubblewrap works, ``USAR_SANDBOX`` is not
     ``off``): only then can it be built at :mod:`~usar_replay.ros1.building.layout`'s fixed
     paths."""
-    from usar_replay.sandbox import kernel_sandbox
+    from usar_replay.sandbox import confinement
 
-    ok, _ = kernel_sandbox.bwrap_available()
-    return ok and os.environ.get("USAR_SANDBOX", "").strip().lower() != "off"
+    return confinement.confined()
 
 
 def warning_flags(folder: Path) -> tuple[str, ...]:

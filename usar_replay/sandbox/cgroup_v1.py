@@ -1,0 +1,122 @@
+"""cgroup v1 (a hierarchy per controller), the backend :mod:`.cgroups` picks where
+``/sys/fs/cgroup`` is not the unified (v2) file system: Debian 12 with v1 mounted, the
+developers' machines and CI.
+
+Why its own module: a v1 run has up to three cgroups, one per hierarchy (``pids``, ``memory``,
+``cpuset``), each made below usar's own cgroup of that hierarchy; v2 has one (:mod:`.cgroup_v2`).
+The memory cgroup also caps the run's TCP socket buffers, which v1 counts apart from its memory
+(``memory.kmem.tcp``) and not at all until a limit is set.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import time
+from pathlib import Path
+
+__all__ = [
+    "CPUSET_ROOT",
+    "TCP_LIMIT_FILE",
+    "TCP_PEAK_FILE",
+    "controller_root",
+    "make_memory",
+    "make_pids",
+    "remove",
+    "tcp_limit_mb",
+]
+
+MOUNT = "/sys/fs/cgroup"
+CPUSET_ROOT = "/sys/fs/cgroup/cpuset"
+"""cgroup v1's cpuset hierarchy (the one this project's machines and CI have)."""
+
+TCP_LIMIT_FILE = "memory.kmem.tcp.limit_in_bytes"
+TCP_PEAK_FILE = "memory.kmem.tcp.max_usage_in_bytes"
+"""The peak of the run's TCP buffers: the kernel lets TCP go past its limit (it charges by
+force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so the peak
+reaching the limit is the verdict."""
+
+
+def controller_root(controller: str, proc_cgroup: str | None = None) -> str | None:
+    """The folder of this process's cgroup in ``controller``'s v1 hierarchy, or None
+    (``proc_cgroup``: the text of ``/proc/self/cgroup``, read when not given)."""
+    if proc_cgroup is None:
+        try:
+            proc_cgroup = Path("/proc/self/cgroup").read_text()
+        except OSError:
+            return None
+    for line in proc_cgroup.splitlines():
+        _, controllers, path = line.split(":", 2)
+        if controller in controllers.split(","):
+            return os.path.join(MOUNT, controller, path.lstrip("/"))
+    return None
+
+
+def writable(controller: str) -> bool:
+    """Whether usar can make a cgroup in ``controller``'s hierarchy (below its own)."""
+    root = controller_root(controller)
+    return root is not None and os.access(root, os.W_OK)
+
+
+def make_pids(name: str, limit: int) -> str | None:
+    """A fresh pids cgroup ``name`` with ``pids.max = limit`` (None when none can be made)."""
+    root = controller_root("pids")
+    if root is None or not os.access(root, os.W_OK):
+        return None
+    path = os.path.join(root, name)
+    try:
+        os.mkdir(path)
+        Path(path, "pids.max").write_text(str(limit))
+    except OSError:
+        with contextlib.suppress(OSError):
+            os.rmdir(path)
+        return None
+    return path
+
+
+def make_memory(name: str, limit_mb: int) -> str | None:
+    """A fresh memory cgroup ``name`` limited to ``limit_mb`` MiB (0: no limit), memory plus
+    swap and the TCP buffers (:func:`tcp_limit_mb`) too; None when none can be made."""
+    root = controller_root("memory")
+    if root is None or not os.access(root, os.W_OK):
+        return None  # no memory controller of ours: no per-run record
+    path = os.path.join(root, name)
+    try:
+        os.mkdir(path)
+    except OSError:
+        return None
+    if limit_mb > 0:
+        # memory, then memory + swap (v1 wants the second no lower than the first)
+        for file in ("memory.limit_in_bytes", "memory.memsw.limit_in_bytes"):
+            with contextlib.suppress(OSError):
+                Path(path, file).write_text(str(limit_mb * 1024 * 1024))
+        with contextlib.suppress(OSError):  # TCP buffers are charged only once capped
+            Path(path, TCP_LIMIT_FILE).write_text(str(tcp_limit_mb(limit_mb) * 1024 * 1024))
+    return path
+
+
+def tcp_limit_mb(run_memory_mb: int) -> int:
+    """The run's TCP socket buffers, MiB, where cgroup v1 counts them apart from its memory
+    (``memory.kmem.tcp``, and not at all until a limit is set: a red team held 1.2 GiB of
+    loopback buffers under ``--run-memory 700``, in the host's TCP pool every other run's ROS
+    graph shares, issue 44): a quarter of the run's memory, at least 64 MiB (a ROS graph's
+    loopback traffic holds a few MiB). cgroup v2 counts socket memory in the run's own."""
+    return max(64, run_memory_mb // 4)
+
+
+def remove(path: str) -> None:
+    """Remove one of a run's cgroups, killing what is left in it first (nothing, normally): a
+    cgroup with members cannot be removed."""
+    for _ in range(200):
+        try:
+            os.rmdir(path)
+            return
+        except FileNotFoundError:
+            return
+        except OSError:
+            with contextlib.suppress(OSError):
+                for pid in Path(path, "cgroup.procs").read_text().split():
+                    with contextlib.suppress(OSError):
+                        os.kill(int(pid), signal.SIGKILL)
+            time.sleep(0.01)  # the kernel reaps the killed processes
