@@ -32,6 +32,8 @@ from conftest import one_room
 from usar_replay.world.scenario_toml import save
 
 pytestmark = pytest.mark.vm
+ANY = tuple(range(256))
+"""Exit codes a step may end with and the script go on (its own assertion comes after)."""
 
 _V2 = "tests/sandbox/test_cgroup_v2.py::test_"
 _SETS = "tests/sandbox/test_cpu_sets.py::test_"
@@ -56,13 +58,24 @@ INNER = (
     f"{_OOM}[True]",
     f"{_OOM}[False]",
     "tests/cli/commands/test_doctor.py::test_doctor_says_each_part",
+)
+"""The sandbox's own tests run inside the VM: each must pass there (a skip fails the check)."""
+
+RUNS = (
     # whole runs through the recorder and `usar batch`, as a class is graded
     f"{_LIMITS}a_memory_hog_over_children_and_tmpfs_is_out_of_memory",
     f"{_LIMITS}a_fork_bomb_is_refused_at_the_process_limit",
     f"{_LIMITS}a_mission_cannot_leave_its_cpu_set_or_see_its_cgroup",
     "tests/redteam/test_isolation.py::test_a_teams_log_is_the_same_whoever_runs_beside_it",
 )
-"""The isolation tests run inside the VM: each must pass there (a skip fails the check)."""
+"""The red-team runs, in a pytest process of their own (a fresh process, as `usar` is)."""
+
+RENDERER = (
+    "import pkgutil, pybullet as p; p.connect(p.DIRECT); "
+    "print('egl plugin', p.loadPlugin(pkgutil.get_loader('eglRenderer').get_filename(), "
+    "'_eglRendererPlugin'))"
+)
+"""Says in the log whether pybullet's EGL renderer loads in a fresh process (diagnosis only)."""
 
 FACTS = "stat -fc %T /sys/fs/cgroup && ps -o comm= -p 1 && systemctl --version | head -1"
 """What makes the VM the machine issue 49 is about: cgroup2fs, systemd as PID 1."""
@@ -82,17 +95,14 @@ def _is_the_real_thing(run: vmtools.VmRun) -> None:
 def test_isolation_holds_as_root_on_a_stock_debian12(tmp_path: Path) -> None:
     _fail_without(vmtools.VENV_IMAGE)
     folder = vmtools.copy_checkout(tmp_path / "usar-replay")
-    inner = " ".join(shlex.quote(i) for i in INNER)
+    pytest = "PATH=/opt/venv/bin:$PATH python -m pytest -p no:cacheprovider -n 0 -m '' -q -rs"
     script = "".join([
         vmtools.step("facts", FACTS),
         vmtools.step("install", "/opt/venv/bin/pip install -q --no-deps --no-build-isolation ."),
         vmtools.step("doctor", "/opt/venv/bin/usar doctor", (0, 1)),
-        vmtools.step(
-            "pytest",
-            f"PATH=/opt/venv/bin:$PATH python -m pytest -p no:cacheprovider -n 0 -m '' -q -rs "
-            f"{inner}",
-            (0, 1),
-        ),
+        vmtools.step("sandbox", f"{pytest} {' '.join(map(shlex.quote, INNER))}", ANY),
+        vmtools.step("renderer", f"/opt/venv/bin/python -c {shlex.quote(RENDERER)}", ANY),
+        vmtools.step("runs", f"{pytest} {' '.join(map(shlex.quote, RUNS))}", ANY),
     ])  # fmt: skip
     run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=5400)
     print(run.timings())
@@ -100,9 +110,12 @@ def test_isolation_holds_as_root_on_a_stock_debian12(tmp_path: Path) -> None:
     _is_the_real_thing(run)
     doctor = run.steps["doctor"]
     assert doctor.rc == 0 and vmtools.doctor_all_ok(doctor.output), doctor.output
-    tests = run.steps["pytest"]
-    counts = vmtools.pytest_counts(tests.output)
-    assert tests.rc == 0 and counts == {"passed": len(INNER)}, tests.output[-6000:]
+    for name, ids in (("sandbox", INNER), ("runs", RUNS)):
+        tests = run.steps[name]
+        counts = vmtools.pytest_counts(tests.output)
+        assert tests.rc == 0 and counts == {"passed": len(ids)}, (
+            f"{run.steps['renderer'].output}\n{tests.output[-6000:]}"
+        )
 
 
 def test_the_readmes_commands_work_on_a_fresh_debian12(tmp_path: Path) -> None:
