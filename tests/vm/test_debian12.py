@@ -5,9 +5,11 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
 
 * as root on the image with the README's apt packages and the dependencies' venv baked in
   (``debian12-usar-venv``): the checkout installed, ``usar doctor`` says ``ok`` on every line,
-  and the isolation tests that grades rest on pass there, not skipped (:data:`INNER`, selected
-  by node id: a run's memory bound as a whole, its process bound, its own CPU set, one ROS 1
-  team's log the same bytes alone and beside a spinning neighbour under ``usar batch --jobs 2``);
+  and the isolation tests that grades rest on pass there, not skipped, selected by node id:
+  the sandbox's own (:data:`INNER`: the cgroup v2 backend, CPU sets, the kernel's OOM record)
+  in one pytest process, then in a fresh one the red-team runs (:data:`RUNS`: a run's memory
+  bound as a whole, its process bound, its own CPU set, one ROS 1 team's log the same bytes
+  alone and beside a spinning neighbour under ``usar batch --jobs 2``);
 * on the bare base image (``debian12``) with python3-venv removed, as a fresh install has it:
   the README's test command as written up to ``python -m pytest`` (its apt line, the venv,
   ``pip install '.[test]'`` from the host's wheelhouse, which holds the same files as PyPI), then
@@ -15,8 +17,9 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   ``--grade`` (the README's first command, on a world small enough for emulation), ``usar
   doctor``, and the course's ROS 1 package built and recorded there.
 
-Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): some 25 and 35
-minutes. The images are built beforehand (``vmtools.missing`` names the command); without them
+Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took
+9 min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
+line after 32 min with the host's load at 13 (see docs/batch.md). The images are built beforehand (``vmtools.missing`` names the command); without them
 each test fails with that one line.
 """
 
@@ -129,7 +132,7 @@ def test_the_readmes_commands_work_on_a_fresh_debian12(tmp_path: Path) -> None:
     apt, install = vmtools.readme_test_command()
     folder = vmtools.copy_checkout(tmp_path / "usar-replay")
     save(one_room(), folder / "room.toml")
-    usar = ". .venv/bin/activate && usar"
+    usar = f". .venv/bin/activate && {LLVMPIPE} usar"
     script = "".join([
         vmtools.step("facts", FACTS),
         # the image adds python3-venv for its own tools; a stock Debian 12 has no ensurepip
