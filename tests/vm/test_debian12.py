@@ -17,10 +17,11 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   ``--grade`` (the README's first command, on a world small enough for emulation), ``usar
   doctor``, and the course's ROS 1 package built and recorded there.
 
-Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took
-9 min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
-line after 32 min with the host's load at 13 (see docs/batch.md). The images are built beforehand (``vmtools.missing`` names the command); without them
-each test fails with that one line.
+Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took 9
+min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
+line after 32 min with the host's load at 13 (see docs/batch.md). The images are built
+beforehand (``vmtools.missing`` names the command); without them each test fails with that one
+line.
 """
 
 from __future__ import annotations
@@ -80,10 +81,11 @@ RENDERER = (
 )
 """Says in the log whether pybullet's EGL renderer loads in a fresh process (diagnosis only)."""
 
-LLVMPIPE = "LP_NATIVE_VECTOR_WIDTH=128"
-"""Mesa's software renderer kept to 128-bit vectors in the VM: with its default 256 (AVX2) on
-qemu's emulated CPU (TCG, ``-cpu max``), pybullet's EGL plugin died with SIGSEGV right after
-printing ``GL_RENDERER=llvmpipe (LLVM 15.0.6, 256 bits)``, in a fresh process, every time."""
+LLVMPIPE = "GALLIUM_DRIVER=softpipe"
+"""Mesa's software renderer without LLVM's JIT in the VM: on qemu's emulated CPU (TCG, ``-cpu
+max``), pybullet's EGL plugin died with SIGSEGV on load in a fresh process, right after
+printing ``GL_RENDERER=llvmpipe (LLVM 15.0.6, 256 bits)``, every time, and as well with
+``LP_NATIVE_VECTOR_WIDTH=128`` (128 bits); the same packages on this host load it."""
 
 FACTS = "stat -fc %T /sys/fs/cgroup && ps -o comm= -p 1 && systemctl --version | head -1"
 """What makes the VM the machine issue 49 is about: cgroup2fs, systemd as PID 1."""
