@@ -39,7 +39,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from usar_replay.core.errors import TeamFileRefused
+from usar_replay.core.errors import TeamFileRefused, UnusableSubmission
 from usar_replay.core.folder_walk import walk
 from usar_replay.core.safe_text import safe_line
 
@@ -319,8 +319,16 @@ def check_package(folder: str | os.PathLike[str], what: str = "the team's folder
     YAML: :func:`parsed`) within the rules, before usar or roslaunch parses any:
     :class:`TeamFileRefused` (one line) at the first that is not. The folder is walked by
     :func:`usar_replay.core.folder_walk.walk`'s rules (no link followed, caps on files and
-    bytes; :class:`UnusableSubmission` past them); catkin's outputs are left out."""
-    for entry in walk(folder, what=what, skip_dirs=_CATKIN_OUTPUTS):
+    bytes); catkin's outputs are left out. A folder past the walk's own caps is not refused
+    here: the build walks it by the same rules and makes that the run's ``build_failed``, in a
+    closed log, as a batch's digest makes it ``bad_submission``."""
+    try:
+        entries = walk(folder, what=what, skip_dirs=_CATKIN_OUTPUTS)
+    except TeamFileRefused:
+        raise
+    except UnusableSubmission:
+        return
+    for entry in entries:
         rel = entry.rel_path
         if entry.link is None and parsed(rel.name):
             check_file(entry.path, rel.as_posix())

@@ -34,8 +34,9 @@ def test_check_names_exactly_what_is_missing() -> None:
 
 def test_the_documented_apt_lines_install_every_package() -> None:
     """README.md (twice), .ci/run and docs/ros1.md carry the apt-get line verbatim: each
-    installs exactly :data:`debian.APT_PACKAGES` (bubblewrap, libseccomp2 and chromium besides,
-    where the tests run: the sandbox, its filter, and the class page's screenshot)."""
+    installs exactly :data:`debian.APT_PACKAGES` (python3-venv, bubblewrap, libseccomp2 and
+    chromium besides, where the tests run: the venv, the sandbox, its filter, and the class page's
+    screenshot)."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[3]
@@ -46,7 +47,8 @@ def test_the_documented_apt_lines_install_every_package() -> None:
             if "apt-get install" in line and "catkin" in line:
                 found += 1
                 words = line.split("&&")[1].split()
-                kept = (w for w in words if w not in ("bubblewrap", "libseccomp2", "chromium"))
+                extra = ("python3-venv", "bubblewrap", "libseccomp2", "chromium")
+                kept = (w for w in words if w not in extra)
                 assert " ".join(kept) == want, name
     assert found == 4
 

@@ -33,6 +33,8 @@ DIST_PACKAGES = Path("/usr/lib/python3/dist-packages")
 APT_PACKAGES: dict[str, str] = {
     "g++": "the C++ compiler",
     "cmake": "catkin_make's build system",
+    "make": "the build program cmake generates for (cmake only recommends it: a fresh Debian 12 "
+    "with --no-install-recommends has none)",
     "catkin": "catkin_make and the catkin CMake macros",
     "ros-message-generation": "message_generation (fiducial_msgs is generated at build time)",
     "ros-std-msgs": "std_msgs .msg definitions (fiducial_msgs' Header)",
@@ -82,6 +84,7 @@ a reason for :func:`check` to refuse a run (``usar code`` names a missing one it
 _PROBES: dict[str, str] = {
     "g++": "/usr/bin/g++",
     "cmake": "/usr/bin/cmake",
+    "make": "/usr/bin/make",
     "catkin": "/usr/bin/catkin_make",
     "ros-message-generation": "/usr/share/message_generation/package.xml",
     "ros-std-msgs": "/usr/share/std_msgs/msg/Header.msg",
