@@ -14,6 +14,7 @@ import contextlib
 import os
 import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 __all__ = [
@@ -105,9 +106,18 @@ def tcp_limit_mb(run_memory_mb: int) -> int:
     return max(64, run_memory_mb // 4)
 
 
-def remove(path: str) -> None:
-    """Remove one of a run's cgroups, killing what is left in it first (nothing, normally): a
-    cgroup with members cannot be removed."""
+def kill_members(path: str) -> None:
+    """SIGKILL to every process of a cgroup (``cgroup.procs``: either version's file)."""
+    with contextlib.suppress(OSError):
+        for pid in Path(path, "cgroup.procs").read_text().split():
+            with contextlib.suppress(OSError):
+                os.kill(int(pid), signal.SIGKILL)
+
+
+def rmdir_killing(path: str, kill: Callable[[str], None] = kill_members) -> None:
+    """``rmdir`` a cgroup, calling ``kill`` on it while it still has members (a cgroup with
+    members cannot be removed), for about 2 s at most; gone already is done. Both backends
+    remove a run's cgroup this way, each with its own way to kill."""
     for _ in range(200):
         try:
             os.rmdir(path)
@@ -115,8 +125,10 @@ def remove(path: str) -> None:
         except FileNotFoundError:
             return
         except OSError:
-            with contextlib.suppress(OSError):
-                for pid in Path(path, "cgroup.procs").read_text().split():
-                    with contextlib.suppress(OSError):
-                        os.kill(int(pid), signal.SIGKILL)
+            kill(path)
             time.sleep(0.01)  # the kernel reaps the killed processes
+
+
+def remove(path: str) -> None:
+    """Remove one of a run's cgroups, killing what is left in it first (nothing, normally)."""
+    rmdir_killing(path)

@@ -32,11 +32,12 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
-import signal
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
+from usar_replay.sandbox import cgroup_v1
 
 __all__ = [
     "DROP_IN",
@@ -374,18 +375,13 @@ def remove(path: str) -> None:
             child = os.path.join(path, name)
             if os.path.isdir(child):
                 remove(child)
-    for _ in range(200):
-        try:
-            os.rmdir(path)
-            return
-        except FileNotFoundError:
-            return
-        except OSError:
-            try:
-                Path(path, "cgroup.kill").write_text("1")
-            except OSError:
-                with contextlib.suppress(OSError):
-                    for pid in Path(path, "cgroup.procs").read_text().split():
-                        with contextlib.suppress(OSError):
-                            os.kill(int(pid), signal.SIGKILL)
-            time.sleep(0.01)  # the kernel reaps the killed processes
+    cgroup_v1.rmdir_killing(path, _kill)
+
+
+def _kill(path: str) -> None:
+    """End every process of a cgroup: ``cgroup.kill`` where the kernel has it, else SIGKILL to
+    each member."""
+    try:
+        Path(path, "cgroup.kill").write_text("1")
+    except OSError:
+        cgroup_v1.kill_members(path)
