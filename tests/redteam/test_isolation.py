@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import shutil
+import time
 from pathlib import Path
 
 import pytest
@@ -41,6 +42,11 @@ import os, threading, time
 from usar_replay.api import Node
 
 START = time.monotonic()
+SPIN_S = {spin_s}  # the honest team's run alone, with room: this run lasts at least as long
+
+
+def spinning() -> bool:
+    return time.monotonic() - START < SPIN_S
 
 
 def spin() -> None:
@@ -48,9 +54,8 @@ def spin() -> None:
         os.sched_setaffinity(0, range(os.cpu_count() or 1))
     except OSError:
         pass
-    while time.monotonic() - START < 60:  # longer than the honest team's run
+    while spinning():
         pass
-    os._exit(1)  # then it crashes: the batch ends
 
 
 class Spinner(Node):
@@ -59,15 +64,19 @@ class Spinner(Node):
         self.create_timer(0.1, self.burn)
 
     def burn(self) -> None:
-        n = 0
-        for _ in range(300_000):
-            n += 1
+        t0 = time.monotonic()  # each call burns up to 1 s (the tick timeout is 10 s)
+        while spinning() and time.monotonic() - t0 < 1.0:
+            pass
 
 
 def main() -> None:
     threading.Thread(target=spin, daemon=True).start()
     Spinner()
 """
+"""A team that burns CPU for as long as its neighbour runs: a thread that spins and asks for
+every CPU, and a timer whose callback spins too, which keeps its run going (200 calls of up to
+1 s for 20 sim-s) until ``SPIN_S`` of wall time have passed. ``SPIN_S`` is sized from the honest
+team's run alone, so the two overlap on a fast machine and under emulation alike."""
 
 
 def _ready() -> str:
@@ -97,11 +106,13 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
     room = tmp_path / "room.toml"
     save(one_room(), room)
     alone = tmp_path / "alone.mcap"
+    started = time.monotonic()  # sizes the spinner (below), asserts nothing
     done = usar(
         "record", "--scenario", str(room), "--ros1", str(COURSE), "--out", str(alone),
         "--max-sim-time", SIM_S,
     )  # fmt: skip
     assert done.returncode == 1, done.stdout + done.stderr  # stopped at --max-sim-time
+    alone_s = time.monotonic() - started
     assert "Pacing: " in done.stdout
     expected = messages(alone)
     assert len(expected) > 1000
@@ -118,7 +129,9 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
 
     spun = tmp_path / "spun"
     shutil.copytree(COURSE, spun / "honest")
-    (spun / "spinner.py").write_text(SPINNER, encoding="utf-8")
+    (spun / "spinner.py").write_text(
+        SPINNER.format(spin_s=round(1.5 * alone_s + 10)), encoding="utf-8"
+    )
     code, said = run_batch(spun, room, tmp_path / "spun_out", *limit)
     assert code in (0, 1), said
     got = messages(tmp_path / "spun_out" / "honest" / "room.mcap")
