@@ -369,3 +369,33 @@ def test_a_renamed_output_trusts_the_written_name_until_the_build(tmp_path: Path
         f.write('set_target_properties(final_project_node PROPERTIES OUTPUT_NAME node PREFIX "")\n')
     (pkg / "README.md").write_text("rosrun final_project node\n")
     assert decide(pkg, "final_project").node == "node"
+
+
+def test_a_text_calling_the_package_by_its_old_name_starts_both_commands(tmp_path: Path) -> None:
+    """A package renamed from the template whose instructions still say ``final_project`` for
+    both commands: the launch file is the package's, so the ``rosrun`` of that name is too, and
+    its executable the package's only one, on record (a real Fall 2021 shape: only the launch
+    file was started and the explorer never moved)."""
+    pkg = template(tmp_path / "p", name="urban_search_rescue", nodes=("urban_search_rescue_node",))
+    (pkg / "doc").mkdir()
+    (pkg / "doc" / "instructions.txt").write_text(
+        'Open a new terminal and run the command "roslaunch final_project multiple_robots.launch"\n'
+        'After launching, open a new terminal and run the command "rosrun final_project '
+        'final_project_node"\n'
+    )
+    start = decide(pkg, "urban_search_rescue")
+    assert (start.launch, start.node) == ("multiple_robots.launch", "urban_search_rescue_node")
+    assert start.source == (
+        "doc/instructions.txt lines 1, 2; line 2 names `final_project_node`, which the package "
+        "does not build; started its only executable `urban_search_rescue_node`"
+    )
+
+
+def test_an_old_name_is_not_taken_once_the_text_writes_the_packages_own(tmp_path: Path) -> None:
+    pkg = template(tmp_path / "p", name="group9", nodes=("a", "b"))
+    (pkg / "README.md").write_text(
+        "roslaunch final_project multiple_robots.launch\nrosrun final_project helper\n"
+        "rosrun group9 a\n"
+    )
+    start = decide(pkg, "group9")
+    assert (start.launch, start.node) == ("multiple_robots.launch", "a")

@@ -54,7 +54,7 @@ from pathlib import Path
 from usar_replay.core import team_parse
 from usar_replay.core.errors import TeamFileRefused, UnclearStart
 from usar_replay.core.safe_text import safe_line
-from usar_replay.ros1.start_prose import clean_name, parse_commands, third_command
+from usar_replay.ros1.start_prose import Command, clean_name, parse_commands, third_command
 from usar_replay.ros1.starts_file import InstructorStart
 
 __all__ = [
@@ -241,7 +241,9 @@ def _from_text(text: str, where: str, pkg: _Package) -> Start | None:
     after: list[str] = []
     notes: list[tuple[int, str]] = []
     missing: list[tuple[int, str, str]] = []  # (line, name, what the package lacks)
-    for cmd in parse_commands(text):
+    commands = list(parse_commands(text))
+    aliases = _old_names(commands, pkg)
+    for cmd in commands:
         w, line = cmd.words, cmd.line
         if w[0] == "roslaunch":
             args = _args(w)
@@ -260,7 +262,7 @@ def _from_text(text: str, where: str, pkg: _Package) -> Start | None:
                 launch.append((file, line))
         elif w[0] == "rosrun":
             args = _args(w)
-            if len(args) < 2 or not (args[0] == pkg.name or args[1] in pkg.exes):
+            if len(args) < 2 or not (args[0] in (pkg.name, *aliases) or args[1] in pkg.exes):
                 continue  # another package's (rosrun rviz rviz)
             exe = args[1]
             if not pkg.has_exe(exe):
@@ -306,6 +308,28 @@ def _from_text(text: str, where: str, pkg: _Package) -> Start | None:
         after_launch=tuple(after),
         source=_where(where, lines, notes),
     )
+
+
+def _old_names(commands: list[Command], pkg: _Package) -> tuple[str, ...]:
+    """The names a text calls this package by when it never writes its own: a package whose
+    ``roslaunch`` starts one of this package's launch files (``roslaunch final_project
+    multiple_robots.launch`` in a package since renamed ``urban_search_rescue``). The same
+    text's ``rosrun`` of that name is then the team's, its executable checked as any other
+    (a TA runs the renamed package's node). A launch file this package lacks
+    (``turtlebot3_world.launch`` of turtlebot3_gazebo) never makes one, nor does any command
+    once the text writes the package's own name."""
+    named: dict[str, None] = {}
+    for cmd in commands:
+        args = _args(cmd.words)
+        if not args:
+            continue
+        if args[0] == pkg.name:
+            return ()
+        if cmd.words[0] == "roslaunch" and len(args) >= 2:
+            file = Path(_launch_word(args)).name
+            if file in pkg.launches:
+                named[args[0]] = None
+    return tuple(named)
 
 
 def _where(where: str, lines: list[int], notes: list[tuple[int, str]]) -> str:
