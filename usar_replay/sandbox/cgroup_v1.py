@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import time
 from collections.abc import Callable
@@ -39,18 +40,60 @@ force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so
 reaching the limit is the verdict."""
 
 
-def controller_root(controller: str, proc_cgroup: str | None = None) -> str | None:
+def _unescape(field: str) -> str:
+    """A ``/proc/self/mountinfo`` field with the kernel's octal escapes (space, tab, newline,
+    backslash) undone."""
+    return re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), field)
+
+
+def _mount_of(controller: str, mountinfo: str) -> tuple[str, str] | None:
+    """(mount point, root within the hierarchy) of ``controller``'s v1 mount below
+    :data:`MOUNT`, from the text of ``/proc/self/mountinfo``; None where it has none."""
+    for line in mountinfo.splitlines():
+        head, sep, tail = line.partition(" - ")
+        fields, after = head.split(), tail.split()
+        if not sep or len(fields) < 5 or len(after) < 3 or after[0] != "cgroup":
+            continue
+        point = _unescape(fields[4])
+        if controller in after[2].split(",") and point.startswith(MOUNT + "/"):
+            return point, _unescape(fields[3])
+    return None
+
+
+def controller_root(
+    controller: str, proc_cgroup: str | None = None, mountinfo: str | None = None
+) -> str | None:
     """The folder of this process's cgroup in ``controller``'s v1 hierarchy, or None
-    (``proc_cgroup``: the text of ``/proc/self/cgroup``, read when not given)."""
+    (``proc_cgroup``, ``mountinfo``: the texts of ``/proc/self/cgroup`` and
+    ``/proc/self/mountinfo``, read when not given).
+
+    Why the mount's root: ``/proc/self/cgroup`` names the cgroup from the hierarchy's root (or
+    the cgroup namespace's), but a mount may show only a subtree of it. A container sharing the
+    host's cgroup namespace (Docker's default on v1, ``--privileged`` included) sees
+    ``/docker/<id>`` in ``/proc/self/cgroup`` while its ``/sys/fs/cgroup/memory`` is already
+    that folder (mountinfo's root field ``/docker/<id>``), so the folder is the path less the
+    root. A machine's own mounts have root ``/``: the path as it is. A cgroup outside the
+    mounted subtree has no folder here (None)."""
     if proc_cgroup is None:
         try:
             proc_cgroup = Path("/proc/self/cgroup").read_text()
         except OSError:
             return None
+    if mountinfo is None:
+        try:
+            mountinfo = Path("/proc/self/mountinfo").read_text()
+        except OSError:
+            mountinfo = ""
     for line in proc_cgroup.splitlines():
         _, controllers, path = line.split(":", 2)
-        if controller in controllers.split(","):
-            return os.path.join(MOUNT, controller, path.lstrip("/"))
+        if controller not in controllers.split(","):
+            continue
+        point, root = _mount_of(controller, mountinfo) or (os.path.join(MOUNT, controller), "/")
+        root = root.rstrip("/")
+        if path != root and not path.startswith(root + "/"):
+            return None  # the mount shows another part of the hierarchy than this cgroup's
+        below = path[len(root) :].strip("/")
+        return os.path.join(point, below) if below else point
     return None
 
 
