@@ -4,7 +4,13 @@ flags its sandbox and cgroups need, judged on each shape's own texts."""
 from __future__ import annotations
 
 from usar_replay.sandbox import container
-from usar_replay.sandbox.container import APPARMOR, CGROUPS, SECCOMP, SYSTEMPATHS
+from usar_replay.sandbox.container import (
+    APPARMOR,
+    CGROUPS,
+    CGROUPS_PRIVATE,
+    SECCOMP,
+    SYSTEMPATHS,
+)
 
 # /proc/self/mountinfo of Docker's defaults: masked /proc paths, a read-only cgroup fs
 DOCKER_MOUNTS = """\
@@ -14,6 +20,17 @@ DOCKER_MOUNTS = """\
 591 613 0:59 /bus /proc/bus ro,nosuid,nodev,noexec,relatime - proc proc rw
 597 613 0:60 / /proc/kcore rw,nosuid - tmpfs tmpfs rw,size=0k
 """
+# Docker 20.10's defaults on a cgroup v1 host (measured; options abridged): a writable tmpfs
+# holding read-only controller mounts, each showing the container's folder of the host's tree
+ID = "8c0ff6ccf4db4701620e04ba21028ae389c03beee3696205efe9e9852062cdb7"
+DOCKER_V1_MOUNTS = f"""\
+112 111 0:53 / /proc rw,nosuid,nodev,noexec,relatime - proc proc rw
+116 115 0:57 / /sys/fs/cgroup rw,nosuid,nodev,noexec,relatime - tmpfs tmpfs rw,mode=755
+120 116 0:32 /docker/{ID} /sys/fs/cgroup/memory ro,nosuid,nodev,noexec - cgroup cgroup rw,memory
+124 116 0:36 /docker/{ID} /sys/fs/cgroup/pids ro,nosuid,nodev,noexec - cgroup cgroup rw,pids
+56 112 0:53 /bus /proc/bus ro,nosuid,nodev,noexec,relatime - proc proc rw
+"""
+DOCKER_V1_CGROUP = f"4:memory:/docker/{ID}\n8:pids:/docker/{ID}\n0::/docker/{ID}\n"
 HOST_MOUNTS = """\
 22 1 8:1 / / rw,relatime - ext4 /dev/sda1 rw
 24 22 0:22 / /proc rw,nosuid,nodev,noexec,relatime - proc proc rw
@@ -82,3 +99,35 @@ def test_a_machine_of_its_own_is_no_container() -> None:
         mountinfo=HOST_MOUNTS,
     )
     assert container.kind(signs) == "" and not signs.cgroup_read_only
+
+
+def test_v1s_read_only_controller_mounts_are_a_read_only_cgroup_fs() -> None:
+    signs = container.signs_from(
+        files={"/.dockerenv": True}, mountinfo=DOCKER_V1_MOUNTS, proc_cgroup=DOCKER_V1_CGROUP
+    )
+    assert signs.cgroup_read_only and signs.proc_masked and not signs.cgroupns_private
+    privileged = DOCKER_V1_MOUNTS.replace(" ro,nosuid", " rw,nosuid").replace("/proc/bus", "/x")
+    assert not container.signs_from(files={}, mountinfo=privileged).cgroup_read_only
+    # systemd's v1 hosts mount the tmpfs read-only, their controllers' mounts writable
+    systemd = "25 18 0:22 / /sys/fs/cgroup ro,nosuid - tmpfs tmpfs ro,mode=755\n" + privileged
+    assert not container.signs_from(files={}, mountinfo=systemd).cgroup_read_only
+
+
+def test_the_cgroups_need_privileged_and_a_namespace_only_where_v2_shows_the_hosts_paths() -> None:
+    host_paths = container.signs_from(files={"/.dockerenv": True}, proc_cgroup=DOCKER_V1_CGROUP)
+    private = container.signs_from(files={"/.dockerenv": True}, proc_cgroup="4:memory:/\n0::/\n")
+    assert private.cgroupns_private and not host_paths.cgroupns_private
+    assert CGROUPS.docker == "--privileged" and CGROUPS.kubernetes == "privileged: true"
+    assert container.needs(host_paths, sandbox_ok=True, cgroups_ok=False) == [CGROUPS]
+    for signs in (private, host_paths):  # v1: --privileged alone, either namespace (measured)
+        assert container.needs(signs, sandbox_ok=True, cgroups_ok=False, cgroup_version=1) == [
+            CGROUPS
+        ]
+    v2 = container.signs_from(files={}, proc_cgroup="0::/system.slice/docker-ab12.scope\n")
+    assert container.needs(v2, sandbox_ok=True, cgroups_ok=False, cgroup_version=2) == [
+        CGROUPS_PRIVATE
+    ]
+    assert "--cgroupns=private" in CGROUPS_PRIVATE.docker
+    assert container.needs(private, sandbox_ok=True, cgroups_ok=False, cgroup_version=2) == [
+        CGROUPS
+    ]

@@ -4,11 +4,20 @@ Why: Docker's and Kubernetes' defaults (Gradescope, GitHub Actions' ``container:
 course servers) refuse what bubblewrap and the cgroups need: the default seccomp profile
 refuses the namespace-creating calls to a process without ``CAP_SYS_ADMIN``, AppArmor's
 ``docker-default`` refuses ``mount``, the masked ``/proc`` paths keep the kernel from mounting
-a fresh ``/proc``, and ``/sys/fs/cgroup`` is read-only unless the container is privileged. Each
-has a run flag that lifts it; ``usar doctor`` names those the machine lacks and what each
-costs, instead of a way around the sandbox. (Which of the three ``--security-opt`` flags alone
-suffices depends on the kernel and runtime: measured in a Debian 12 VM with Docker 20.10, the
-three together or ``--privileged`` work, the default does not.)
+a fresh ``/proc``, and the cgroup file systems are mounted read-only unless the container is
+privileged. Each has a run flag that lifts it; ``usar doctor`` names those the machine lacks and
+what each costs, instead of a way around the sandbox.
+
+Measured with Docker 20.10.24 (Debian's ``docker.io``) on a cgroup v1 (hybrid) host without
+systemd or AppArmor: the defaults give neither the sandbox nor the cgroups (a Debian 12 VM with
+Docker 20.10 refused the sandbox too); the three ``--security-opt`` flags give the sandbox
+(there too) and leave the cgroups read-only (``--cgroupns=private`` or ``--cap-add SYS_ADMIN``
+beside them change nothing); ``--privileged`` gives both, with the host's cgroup namespace (v1's
+default) or ``--cgroupns=private``. Binding the host's ``-v /sys/fs/cgroup:/sys/fs/cgroup:rw``
+also gives the cgroups on v1, but with every cgroup of the host writable to the container's
+root: not suggested. cgroup v2 hosts were not measured: there Docker's default is a private
+cgroup namespace, and ``--cgroupns=private`` is named only where the container shows the host's
+cgroup paths (:func:`needs`).
 
 The signs are read from the files the kernel and the runtimes leave (:func:`read`) and judged
 by pure functions of their text (:func:`signs_from`), so the judgement is tested on each shape.
@@ -21,7 +30,19 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Need", "Signs", "kind", "needs", "read", "signs_from"]
+__all__ = [
+    "APPARMOR",
+    "CGROUPS",
+    "CGROUPS_PRIVATE",
+    "SECCOMP",
+    "SYSTEMPATHS",
+    "Need",
+    "Signs",
+    "kind",
+    "needs",
+    "read",
+    "signs_from",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,17 +66,37 @@ class Signs:
     proc_masked: bool = False
     """Parts of ``/proc`` are mounted over (Docker's masked and read-only paths)."""
     cgroup_read_only: bool = False
-    """``/sys/fs/cgroup`` is mounted read-only."""
+    """A cgroup file system at or below ``/sys/fs/cgroup`` is mounted read-only (v2's one
+    mount, or any of v1's per-controller ones; a read-only tmpfs holding them is no sign)."""
+    cgroupns_private: bool = False
+    """Every line of ``/proc/self/cgroup`` is at ``/``: the container has a cgroup namespace of
+    its own (the host's shows ``/docker/<id>`` or the like)."""
 
 
-def _mount_points(mountinfo: str) -> list[tuple[str, list[str]]]:
-    """(mount point, mount options) of each ``/proc/self/mountinfo`` line."""
+def _mounts(mountinfo: str) -> list[tuple[str, list[str], str]]:
+    """(mount point, mount options, file system type) of each ``/proc/self/mountinfo`` line."""
     out = []
     for line in mountinfo.splitlines():
-        fields = line.split()
+        head, _, tail = line.partition(" - ")
+        fields = head.split()
         if len(fields) > 5:
-            out.append((fields[4].replace("\\040", " "), fields[5].split(",")))
+            fstype = (tail.split() or [""])[0]
+            out.append((fields[4].replace("\\040", " "), fields[5].split(","), fstype))
     return out
+
+
+def _cgroup_read_only(mounts: list[tuple[str, list[str], str]]) -> bool:
+    return any(
+        fstype in ("cgroup", "cgroup2")
+        and (point == "/sys/fs/cgroup" or point.startswith("/sys/fs/cgroup/"))
+        and "ro" in options
+        for point, options, fstype in mounts
+    )
+
+
+def _private_cgroupns(proc_cgroup: str) -> bool:
+    paths = [line.split(":", 2)[2] for line in proc_cgroup.splitlines() if line.count(":") >= 2]
+    return bool(paths) and all(p == "/" for p in paths)
 
 
 def signs_from(
@@ -78,7 +119,7 @@ def signs_from(
     for line in status.splitlines():
         if line.startswith("Seccomp:"):
             seccomp = int(line.split()[1])
-    points = _mount_points(mountinfo)
+    mounts = _mounts(mountinfo)
     label = apparmor.strip().strip("\0")
     return Signs(
         dockerenv=files.get("/.dockerenv", False),
@@ -92,8 +133,9 @@ def signs_from(
         ),
         seccomp=seccomp,
         apparmor="" if label in ("", "unconfined") else label,
-        proc_masked=any(p.startswith("/proc/") for p, _ in points),
-        cgroup_read_only=any(p == "/sys/fs/cgroup" and "ro" in o for p, o in points),
+        proc_masked=any(p.startswith("/proc/") for p, _, _ in mounts),
+        cgroup_read_only=_cgroup_read_only(mounts),
+        cgroupns_private=_private_cgroupns(proc_cgroup),
     )
 
 
@@ -164,17 +206,29 @@ SYSTEMPATHS = Need(
     "no sandbox: /proc masked",
 )
 CGROUPS = Need(
-    "--cgroupns=private, cgroup fs rw",
+    "--privileged",
     "privileged: true",
     "no memory, process, CPU bound a run",
 )
+"""What gives a container its cgroups (measured on v1: nothing short of it, module doc)."""
+CGROUPS_PRIVATE = Need(
+    "--privileged --cgroupns=private",
+    "privileged: true",
+    "no memory, process, CPU bound a run",
+)
+"""The same where cgroup v2 shows the host's cgroup paths: privileged in the host's namespace,
+usar's cgroups would be made at the host's root rather than below the container's own (not
+measured: no v2 host here)."""
 
 
-def needs(signs: Signs, *, sandbox_ok: bool, cgroups_ok: bool) -> list[Need]:
+def needs(
+    signs: Signs, *, sandbox_ok: bool, cgroups_ok: bool, cgroup_version: int = 1
+) -> list[Need]:
     """The settings this container's run lacks for the sandbox (where bubblewrap fails here)
     and for the runs' cgroups (where they are not all usar's), each named where its sign is
     seen; all three of the sandbox's where bubblewrap fails without one (a runtime's own
-    profile)."""
+    profile). ``--cgroupns=private`` only on v2 outside a namespace of the container's own: v1
+    needs none (measured), and a v2 container has its own by default."""
     out: list[Need] = []
     if not sandbox_ok:
         seen = [
@@ -188,5 +242,6 @@ def needs(signs: Signs, *, sandbox_ok: bool, cgroups_ok: bool) -> list[Need]:
         ]
         out += seen or [SECCOMP, APPARMOR, SYSTEMPATHS]
     if not cgroups_ok:
-        out.append(CGROUPS)
+        host_paths = cgroup_version == 2 and not signs.cgroupns_private
+        out.append(CGROUPS_PRIVATE if host_paths else CGROUPS)
     return out
