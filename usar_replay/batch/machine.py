@@ -90,24 +90,39 @@ def _container() -> Finding:
     if not name:
         return Finding("container", True, "none: usar runs on the machine itself")
     sandbox_ok, _ = kernel_sandbox.bwrap_available()
-    full = len(cgroups.support().writable) == len(cgroups.CONTROLLERS)
-    lacking = container.needs(signs, sandbox_ok=sandbox_ok, cgroups_ok=full)
+    got = cgroups.support()
+    full = len(got.writable) == len(cgroups.CONTROLLERS)
+    lacking = container.needs(
+        signs, sandbox_ok=sandbox_ok, cgroups_ok=full, cgroup_version=got.version
+    )
     if not lacking:
         return Finding("container", True, f"{name}: run with what the sandbox and cgroups need")
-    seen = [
-        *(["a seccomp filter"] if signs.seccomp == 2 else []),
-        *([f"AppArmor {signs.apparmor}"] if signs.apparmor else []),
-        *(["/proc masked"] if signs.proc_masked else []),
-        *(["/sys/fs/cgroup read-only"] if signs.cgroup_read_only else []),
-    ]
+    seen: list[str] = []  # the signs of what is refused, each where its part is missing
+    if not sandbox_ok:
+        seen += [
+            *(["a seccomp filter"] if signs.seccomp == 2 else []),
+            *([f"AppArmor {signs.apparmor}"] if signs.apparmor else []),
+            *(["/proc masked"] if signs.proc_masked else []),
+        ] or ["its runtime refuses what the sandbox needs"]
+    if not full:
+        seen.append(
+            "/sys/fs/cgroup read-only" if signs.cgroup_read_only else "cgroups not writable"
+        )
+    costs = "; ".join(
+        [
+            *(["without the sandbox usar batch refuses to grade"] if not sandbox_ok else []),
+            *(["without cgroups, run one at a time (--jobs 1)"] if not full else []),
+        ]
+    )
+    how = "this flag" if len(lacking) == 1 else "these flags (--privileged alone gives them all)"
     width = max(len(n.docker) for n in lacking)
     return Finding(
         "container",
         False,
-        f"{name}: {', '.join(seen) or 'its runtime refuses what the sandbox needs'}",
-        "run the container with these flags (or --privileged, which gives them all); beside "
-        "each, what a run lacks without it. Without the sandbox usar batch refuses to grade; "
-        "without cgroups, run one at a time (--jobs 1)",
+        f"{name}: {', '.join(seen)}",
+        f"run the container with {how}; beside each, what a run lacks without it. "
+        + costs[:1].upper()
+        + costs[1:],
         (
             *(f"{n.docker.ljust(width)}  {n.cost}" for n in lacking),
             "Kubernetes, the container's securityContext:",

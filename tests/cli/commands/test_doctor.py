@@ -104,6 +104,27 @@ def test_a_container_without_the_flags_names_each_and_its_cost(
         assert "--no-sandbox" not in x or "world key" in x, x
 
 
+def test_a_container_with_the_sandbox_but_not_the_cgroups_says_the_cgroups_are_refused(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    signs = container.Signs(dockerenv=True, cgroup_read_only=True, cgroupns_private=True)
+    monkeypatch.setattr(container, "read", lambda: signs)
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (True, ""))
+    monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(1, ()))
+    assert main(["doctor"]) == 1
+    lines = _lines(capsys.readouterr().out)
+    text = " ".join(" ".join(lines).split())
+    line = next(x for x in lines if x.startswith("MISS container"))
+    assert line.endswith("docker: /sys/fs/cgroup read-only") and "sandbox" not in line
+    assert "run the container with this flag;" in text and "refuses to grade" not in text
+    assert any("--privileged  no memory, process, CPU bound" in x for x in lines)
+    assert "--cgroupns" not in text and "privileged: true" in text
+    monkeypatch.setattr(container, "read", lambda: container.Signs(dockerenv=True))
+    main(["doctor"])
+    line = next(x for x in _lines(capsys.readouterr().out) if x.startswith("MISS container"))
+    assert line.endswith("docker: cgroups not writable")
+
+
 def test_no_container_is_ok(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
