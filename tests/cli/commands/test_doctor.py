@@ -84,8 +84,9 @@ def test_a_container_without_the_flags_names_each_and_its_cost(
     monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(2, (), "", "read-only"))
     assert main(["doctor"]) == 1
     lines = _lines(capsys.readouterr().out)
-    line = next(x for x in lines if x.startswith("MISS container"))
-    assert "docker: a seccomp filter, AppArmor docker-default (enforce), /proc masked" in line
+    text = " ".join(" ".join(lines).split())
+    said = "docker: a seccomp filter, AppArmor docker-default (enforce), /proc masked, "
+    assert f"MISS container {said}/sys/fs/cgroup read-only run the container" in text
     for flag, cost in [
         ("--security-opt seccomp=unconfined", "namespaces refused"),
         ("--security-opt apparmor=unconfined", "mounts refused"),
@@ -123,6 +124,35 @@ def test_a_container_with_the_sandbox_but_not_the_cgroups_says_the_cgroups_are_r
     main(["doctor"])
     line = next(x for x in _lines(capsys.readouterr().out) if x.startswith("MISS container"))
     assert line.endswith("docker: cgroups not writable")
+
+
+def test_a_long_line_wraps_under_its_text_and_keeps_its_end(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    why = (
+        "/usr/bin/bwrap cannot create namespaces here (bwrap: No permissions to create new "
+        "namespace, likely because the kernel does not allow non-privileged user namespaces)"
+    )
+    signs = container.Signs(dockerenv=True, seccomp=2, proc_masked=True, cgroup_read_only=True)
+    monkeypatch.setattr(container, "read", lambda: signs)
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, why))
+    monkeypatch.setattr(cgroups, "support", lambda: cgroups.Support(1, ()))
+    monkeypatch.setattr(
+        container, "CGROUPS", container.Need("--privileged", "privileged: true", "x " * 60)
+    )
+    main(["doctor"])
+    lines = _lines(capsys.readouterr().out)
+    at = lines.index(next(x for x in lines if x.startswith("MISS kernel sandbox")))
+    lead = lines[at].index("/usr/bin/bwrap")
+    assert lines[at + 1].startswith(" " * lead) and lines[at + 1][lead] != " "
+    said = " ".join(x.strip() for x in lines[at : at + 3])
+    assert "user namespaces)" in said  # the reason's end, not cut at column 100
+    # a flag's cost wraps under the cost column, not under the flag
+    row = next(i for i, x in enumerate(lines) if x.strip().startswith("--privileged "))
+    column = lines[row].index("x x")
+    assert lines[row + 1].startswith(" " * column + "x")
+    kube = next(i for i, x in enumerate(lines) if x.strip().startswith("Kubernetes, the"))
+    assert kube > row + 1 and all(x[column:].startswith("x") for x in lines[row + 1 : kube])
 
 
 def test_no_container_is_ok(

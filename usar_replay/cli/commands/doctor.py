@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import textwrap
 
 __all__ = ["add_parser", "run"]
@@ -25,27 +26,45 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.set_defaults(func=run)
 
 
+WIDTH = 100
+"""The columns every line keeps within."""
+
+
+def _wrap(text: str, first: str, rest: str) -> str:
+    """``text`` filled to :data:`WIDTH` after ``first``, its continuations after ``rest``.
+
+    Why wrap rather than cut: what runs past the edge is what matters most (bubblewrap's own
+    reason at the end of the sandbox line, the last flags of the container's), and a cut line
+    lost it."""
+    return textwrap.fill(
+        text,
+        WIDTH,
+        initial_indent=first,
+        subsequent_indent=rest,
+        break_on_hyphens=False,
+    )
+
+
+def _continuation(line: str) -> int:
+    """Where a shown-as-is line's continuation starts: under its second column (the cost
+    beside a flag, after a gap of two spaces or more), else under its own text."""
+    gap = re.search(r"\S( {2,})(?=\S)", line)
+    return gap.end() if gap else len(line) - len(line.lstrip())
+
+
 def run(args: argparse.Namespace) -> int:
     from usar_replay.batch.machine import check, isolated
 
     findings = check()
     width = max(len(f.name) for f in findings)
+    lead = " " * (width + 7)
     for f in findings:
         mark = "ok  " if f.ok else "MISS"
-        print(f"{mark} {f.name.ljust(width)}  {f.said}"[:100])
-        lead = " " * (width + 7)
+        print(_wrap(f.said, f"{mark} {f.name.ljust(width)}  ", lead))
         if f.means:
-            print(
-                textwrap.fill(
-                    f.means,
-                    100,
-                    initial_indent=lead,
-                    subsequent_indent=lead,
-                    break_on_hyphens=False,
-                )
-            )
+            print(_wrap(f.means, lead, lead))
         for line in f.fix:  # a file's lines, flags: as they are, indented under the words
-            print(f"{lead}  {line}"[:100])
+            print(_wrap(line, f"{lead}  ", " " * (len(lead) + 2 + _continuation(line))))
     whole = isolated(findings)
     print("every run gets its whole isolation here" if whole else "isolation is partial here")
     return 0 if whole else 1
