@@ -35,17 +35,37 @@ def test_without_bwrap_auto_goes_unconfined_and_required_refuses_saying_the_cost
 ) -> None:
     monkeypatch.delenv("USAR_SANDBOX", raising=False)
     monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, "no bwrap here"))
+    monkeypatch.setattr(kernel_sandbox, "installed", lambda: False)
     monkeypatch.setattr(confinement, "_warned", False)
     assert set(_callers().values()) == {False}
     warned = capsys.readouterr().err.strip().splitlines()
     assert len(warned) == 1 and warned[0].startswith("usar: warning: no bwrap here")
-    assert "world key" in warned[0]
+    assert "world key" in warned[0] and "apt-get install bubblewrap" in warned[0]
     with pytest.raises(UsageError) as err:
         confinement.confined("required")
     line = str(err.value)
     assert "\n" not in line and line.startswith("no bwrap here: usar will not run")
     assert "--no-sandbox" in line and "world key" in line and "usar doctor" in line
     assert confinement.confined("off") is False
+
+
+def test_bwrap_installed_but_refused_points_to_doctor_not_to_installing_it(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    why = "/usr/bin/bwrap cannot create namespaces here (bwrap: No permissions to create new ns)"
+    monkeypatch.delenv("USAR_SANDBOX", raising=False)
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, why))
+    monkeypatch.setattr(kernel_sandbox, "installed", lambda: True)
+    monkeypatch.setattr(confinement, "_warned", False)
+    assert confinement.confined(warn=True) is False
+    warned = capsys.readouterr().err.strip().splitlines()
+    assert len(warned) == 1 and "apt-get" not in warned[0]
+    assert "`usar doctor`" in warned[0] and "in a container: the flags it lists" in warned[0]
+    assert "world key" in warned[0]  # going without says its cost in the same line
+    with pytest.raises(UsageError) as err:
+        confinement.confined("required")
+    line = str(err.value)
+    assert "apt-get" not in line and "`usar doctor`" in line and "world key" in line
 
 
 def test_an_unknown_mode_is_refused() -> None:

@@ -40,13 +40,21 @@ def _mode(mode: str) -> str:
     return mode
 
 
+def _remedy() -> str:
+    """How to get the sandbox: installing bubblewrap only where it is not installed (in a
+    container with bwrap, installing it again changes nothing; the run's flags do)."""
+    doctor = "give it what `usar doctor` names (in a container: the flags it lists)"
+    if kernel_sandbox.installed():
+        return doctor
+    return f"install it ({kernel_sandbox.INSTALL_HINT}) or {doctor}"
+
+
 def refusal(why: str, what: str = "usar") -> str:
     """The one line usar stops with where the sandbox cannot start (``why``: bubblewrap's own
     words): how to get it, where to look, and what going without it costs."""
     return (
-        f"{why}: {what} will not run untrusted code without a kernel sandbox; install it "
-        f"({kernel_sandbox.INSTALL_HINT}) or give it what `usar doctor` names (in a container: "
-        f"the flags it lists); --no-sandbox runs it anyway, {UNCONFINED_COST}"
+        f"{why}: {what} will not run untrusted code without a kernel sandbox; {_remedy()}; "
+        f"--no-sandbox runs it anyway, {UNCONFINED_COST}"
     )
 
 
@@ -67,7 +75,7 @@ def confined(mode: str = "auto", *, warn: bool = False) -> bool:
         _warned = True
         print(
             f"usar: warning: {why}; the mission runs without a kernel sandbox ({UNCONFINED_COST};"
-            f" {kernel_sandbox.INSTALL_HINT} to get one; USAR_SANDBOX=off silences this)",
+            f" to get one, {_remedy()}; USAR_SANDBOX=off silences this)",
             file=sys.stderr,
         )
     return False

@@ -51,6 +51,7 @@ __all__ = [
     "SandboxLimits",
     "apply_rlimits",
     "bwrap_available",
+    "installed",
     "own_tables_argv",
     "own_tables_available",
     "python_binds",
@@ -105,6 +106,13 @@ class SandboxLimits:
 
 def _bwrap() -> str | None:
     return shutil.which("bwrap")
+
+
+def installed() -> bool:
+    """Whether bwrap is on PATH at all. Why apart from :func:`bwrap_available`: where it is
+    installed but cannot make its namespaces (a container's defaults), installing it is no
+    advice; what the machine or the container's run lacks is (``usar doctor``)."""
+    return _bwrap() is not None
 
 
 @functools.lru_cache(maxsize=4)
