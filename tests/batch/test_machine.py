@@ -44,9 +44,29 @@ def test_no_cpu_sets_is_said_with_what_it_means(monkeypatch: pytest.MonkeyPatch)
 
 def test_no_bubblewrap_is_said(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, "no bwrap here"))
+    monkeypatch.setattr(kernel_sandbox, "installed", lambda: False)
     sandbox = machine.check()[0]
     assert (sandbox.ok, sandbox.said) == (False, "no bwrap here")
     assert "apt-get install bubblewrap" in sandbox.means
+
+
+def test_a_container_with_bubblewrap_is_pointed_to_its_flags_not_to_installing_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    why = "/usr/bin/bwrap cannot create namespaces here (bwrap: No permissions to create new ns)"
+    monkeypatch.setattr(kernel_sandbox, "bwrap_available", lambda: (False, why))
+    monkeypatch.setattr(kernel_sandbox, "installed", lambda: True)
+    monkeypatch.setattr(container, "read", lambda: container.Signs(dockerenv=True, seccomp=2))
+    monkeypatch.setattr(kernel_pools, "pool_limits_available", lambda: False)
+    found = {f.name: f for f in machine.check()}
+    sandbox, pools = found["kernel sandbox"], found["kernel pools"]
+    assert "apt-get" not in sandbox.means and "the flags the container line names" in sandbox.means
+    assert "unshare --user failed" in pools.said
+    assert "the flags the container line names" in pools.means and "util-linux" not in pools.means
+    monkeypatch.setattr(container, "read", lambda: container.Signs())  # the machine itself
+    found = {f.name: f for f in machine.check()}
+    assert "allow user namespaces" in found["kernel sandbox"].means
+    assert "allow user namespaces" in found["kernel pools"].means
 
 
 def test_without_root_no_folder_is_size_limited(monkeypatch: pytest.MonkeyPatch) -> None:

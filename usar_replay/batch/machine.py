@@ -162,12 +162,18 @@ def _sandbox() -> Finding:
         return Finding(
             "kernel sandbox", True, "bubblewrap: user, PID, IPC, mount and network namespaces"
         )
+    if not kernel_sandbox.installed():
+        fix = f"{kernel_sandbox.INSTALL_HINT}; allow user namespaces; in a container, the flags "
+        fix += "its line names"
+    elif container.kind(container.read()):  # installing it again would change nothing
+        fix = "bubblewrap is installed: run this container with the flags the container line names"
+    else:
+        fix = "bubblewrap is installed: allow user namespaces"
     return Finding(
         "kernel sandbox",
         False,
         why or "bubblewrap cannot make its sandbox here",
-        "missions would run outside a sandbox: usar batch refuses to (apt-get install "
-        "bubblewrap; allow user namespaces; in a container, the flags its line names)",
+        f"missions would run outside a sandbox: usar batch refuses to ({fix})",
     )
 
 
@@ -212,13 +218,17 @@ def _pools() -> Finding:
         *([] if bounded else ["inotify and fanotify (unshare --user failed)"]),
         *([] if refused else ["keys (no libseccomp2)"]),
     ]
+    fix = [] if refused else ["apt-get install libseccomp2"]
+    if not bounded and container.kind(container.read()):  # user namespaces: the run's flags
+        fix.append("run this container with the flags the container line names")
+    elif not bounded:
+        fix.append("apt-get install util-linux; allow user namespaces")
     return Finding(
         "kernel pools",
         False,
         f"not bounded per run: {', '.join(missing)}",
         "one run can take the host user's pool every run shares, and another run's call "
-        "then fails: run one at a time (apt-get install util-linux libseccomp2; allow user "
-        "namespaces)",
+        f"then fails: run one at a time ({'; '.join(fix)})",
     )
 
 
