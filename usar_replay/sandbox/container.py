@@ -208,13 +208,13 @@ SYSTEMPATHS = Need(
 CGROUPS = Need(
     "--privileged",
     "privileged: true",
-    "no memory, process, CPU bound a run",
+    "no per-run memory, pids, CPU set",
 )
 """What gives a container its cgroups (measured on v1: nothing short of it, module doc)."""
 CGROUPS_PRIVATE = Need(
     "--privileged --cgroupns=private",
     "privileged: true",
-    "no memory, process, CPU bound a run",
+    "no per-run memory, pids, CPU set",
 )
 """The same where cgroup v2 shows the host's cgroup paths: privileged in the host's namespace,
 usar's cgroups would be made at the host's root rather than below the container's own (not

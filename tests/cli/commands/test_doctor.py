@@ -91,7 +91,7 @@ def test_a_container_without_the_flags_names_each_and_its_cost(
         ("--security-opt seccomp=unconfined", "namespaces refused"),
         ("--security-opt apparmor=unconfined", "mounts refused"),
         ("--security-opt systempaths=unconfined", "/proc masked"),
-        ("--privileged", "no memory, process, CPU bound"),
+        ("--privileged", "no per-run memory, pids, CPU set"),
     ]:
         assert any(flag in x and cost in x for x in lines), flag
     at = lines.index(next(x for x in lines if "Kubernetes" in x))
@@ -118,7 +118,7 @@ def test_a_container_with_the_sandbox_but_not_the_cgroups_says_the_cgroups_are_r
     line = next(x for x in lines if x.startswith("MISS container"))
     assert line.endswith("docker: /sys/fs/cgroup read-only") and "sandbox" not in line
     assert "run the container with this flag;" in text and "refuses to grade" not in text
-    assert any("--privileged  no memory, process, CPU bound" in x for x in lines)
+    assert any("--privileged  no per-run memory, pids, CPU set" in x for x in lines)
     assert "--cgroupns" not in text and "privileged: true" in text
     monkeypatch.setattr(container, "read", lambda: container.Signs(dockerenv=True))
     main(["doctor"])
