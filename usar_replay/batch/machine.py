@@ -114,13 +114,17 @@ def _container() -> Finding:
             *(["without cgroups, run one at a time (--jobs 1)"] if not full else []),
         ]
     )
-    how = "this flag" if len(lacking) == 1 else "these flags (--privileged alone gives them all)"
+    how = (
+        "this flag; beside it"
+        if len(lacking) == 1
+        else "these flags (--privileged alone gives them all); beside each"
+    )
     width = max(len(n.docker) for n in lacking)
     return Finding(
         "container",
         False,
         f"{name}: {', '.join(seen)}",
-        f"run the container with {how}; beside each, what a run lacks without it. "
+        f"run the container with {how}, what a run lacks without it. "
         + costs[:1].upper()
         + costs[1:],
         (
