@@ -27,6 +27,27 @@ def test_the_v2_path_is_read_from_the_processes_cgroup_line() -> None:
     )  # fmt: skip
 
 
+MOUNTINFO_HOST_NS = (
+    "1190 1189 0:26 /docker/4f2a /sys/fs/cgroup rw,nosuid,nodev,noexec,relatime - cgroup2 "
+    "cgroup rw,nsdelegate,memory_recursiveprot\n"
+    "1191 1189 0:27 / /proc rw - proc proc rw\n"
+)
+"""A container sharing the host's cgroup namespace (``--cgroupns=host``): its mount shows only
+its own subtree, from the root ``/docker/4f2a``."""
+
+
+def test_the_own_folder_is_the_path_less_the_mounts_root() -> None:
+    own = cgroup_v2._own("0::/docker/4f2a/app\n", MOUNTINFO_HOST_NS)
+    assert own == "/sys/fs/cgroup/app"
+    assert cgroup_v2._own("0::/docker/4f2a\n", MOUNTINFO_HOST_NS) == "/sys/fs/cgroup"
+    assert cgroup_v2._own("0::/docker/other\n", MOUNTINFO_HOST_NS) is None  # not mounted here
+    machine = "30 23 0:26 / /sys/fs/cgroup rw - cgroup2 cgroup2 rw,nsdelegate\n"
+    assert cgroup_v2._own("0::/user.slice/s.scope\n", machine) == (
+        "/sys/fs/cgroup/user.slice/s.scope"
+    )
+    assert cgroup_v2._own("0::/a\n", "") == "/sys/fs/cgroup/a"  # no mountinfo: root /
+
+
 def test_the_scope_is_asked_of_systemd_with_delegation_and_this_process() -> None:
     root = cgroup_v2.scope_argv("usar-42.scope", 42, user=False)
     assert root[:2] == ["busctl", "call"] and "--user" not in root

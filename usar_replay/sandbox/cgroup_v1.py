@@ -27,6 +27,7 @@ __all__ = [
     "make_pids",
     "remove",
     "tcp_limit_mb",
+    "unescape",
 ]
 
 MOUNT = "/sys/fs/cgroup"
@@ -40,7 +41,7 @@ force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so
 reaching the limit is the verdict."""
 
 
-def _unescape(field: str) -> str:
+def unescape(field: str) -> str:
     """A ``/proc/self/mountinfo`` field with the kernel's octal escapes (space, tab, newline,
     backslash) undone."""
     return re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), field)
@@ -54,9 +55,9 @@ def _mount_of(controller: str, mountinfo: str) -> tuple[str, str] | None:
         fields, after = head.split(), tail.split()
         if not sep or len(fields) < 5 or len(after) < 3 or after[0] != "cgroup":
             continue
-        point = _unescape(fields[4])
+        point = unescape(fields[4])
         if controller in after[2].split(",") and point.startswith(MOUNT + "/"):
-            return point, _unescape(fields[3])
+            return point, unescape(fields[3])
     return None
 
 

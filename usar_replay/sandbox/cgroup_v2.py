@@ -116,10 +116,35 @@ def _read(path: str) -> str:
         return ""
 
 
-def _own() -> str | None:
-    """This process's cgroup folder."""
-    path = unified_path(_read("/proc/self/cgroup"))
-    return None if path is None else os.path.normpath(MOUNT + "/" + path.lstrip("/"))
+def _mount_root(mountinfo: str) -> str:
+    """The root within the hierarchy of the ``cgroup2`` mount at :data:`MOUNT` (``/`` where
+    mountinfo names none)."""
+    for line in mountinfo.splitlines():
+        head, sep, tail = line.partition(" - ")
+        fields, after = head.split(), tail.split()
+        cgroup2 = sep and len(fields) >= 5 and after[:1] == ["cgroup2"]
+        if cgroup2 and cgroup_v1.unescape(fields[4]) == MOUNT:
+            return cgroup_v1.unescape(fields[3])
+    return "/"
+
+
+def _own(proc_cgroup: str | None = None, mountinfo: str | None = None) -> str | None:
+    """This process's cgroup folder (``proc_cgroup``, ``mountinfo``: the texts of
+    ``/proc/self/cgroup`` and ``/proc/self/mountinfo``, read when not given).
+
+    Why the mount's root, as on v1 (:func:`.cgroup_v1.controller_root`): a container that
+    shares the host's cgroup namespace (``--cgroupns=host``) reads ``0::/docker/<id>`` while
+    its ``/sys/fs/cgroup`` already shows that folder; the folder is the path less the mount's
+    root, and a cgroup outside the mounted subtree has none here."""
+    path = unified_path(_read("/proc/self/cgroup") if proc_cgroup is None else proc_cgroup)
+    if path is None:
+        return None
+    if mountinfo is None:
+        mountinfo = _read("/proc/self/mountinfo")
+    root = _mount_root(mountinfo).rstrip("/")
+    if path != root and not path.startswith(root + "/"):
+        return None
+    return os.path.normpath(MOUNT + "/" + path[len(root) :].lstrip("/"))
 
 
 def _writable(folder: str) -> bool:
