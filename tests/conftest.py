@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import pkgutil
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,7 +22,20 @@ import pytest
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.sim import simulator
 from usar_replay.world.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """pybullet's EGL renderer probed once per test process and handed to every ``usar``
+    subprocess through the environment, as a batch hands it to its runs
+    (:func:`usar_replay.sim.simulator.egl_loads_safely`): each of the suite's hundreds of
+    records would otherwise start a probe of ~1 s for the same answer. The probe's own tests
+    clear it (tests/sim/test_simulator.py)."""
+    del config
+    loader = pkgutil.get_loader("eglRenderer")
+    if loader is not None:
+        simulator.egl_loads_safely(loader.get_filename())  # type: ignore[attr-defined]
 
 
 def one_room() -> Scenario:
