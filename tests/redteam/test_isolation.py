@@ -16,6 +16,7 @@ messages): four ROS 1 runs and a build in about a minute, so CI runs it.
 from __future__ import annotations
 
 import hashlib
+import json
 import shutil
 import time
 from pathlib import Path
@@ -92,6 +93,15 @@ def _ready() -> str:
     return ""
 
 
+def ended(out: Path, team: str) -> str:
+    """How the team's run ended, from its grade (what a failed comparison says first)."""
+    grade = out / team / "room.grade.json"
+    if not grade.is_file():
+        return f"{team}: no grade"
+    data = json.loads(grade.read_text(encoding="utf-8"))
+    return f"{team}: {data.get('outcome')}: {data.get('outcome_reason', '')}"
+
+
 def messages(log: Path) -> list[tuple[str, int, str]]:
     """(topic, log time, digest of the bytes) of every message, in the file's order."""
     return [
@@ -126,7 +136,10 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
     assert code == 0, said  # every run graded
     for team in ("a", "b"):
         got = messages(tmp_path / "pair_out" / team / "room.mcap")
-        assert got == expected, f"team {team} beside itself: {len(got)} vs {len(expected)}"
+        assert got == expected, (
+            f"team {team} beside itself: {len(got)} vs {len(expected)} messages; "
+            + ended(tmp_path / "pair_out", team)
+        )
 
     spun = tmp_path / "spun"
     shutil.copytree(COURSE, spun / "honest")
@@ -134,4 +147,7 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
     code, said = run_batch(spun, room, tmp_path / "spun_out", *limit)
     assert code in (0, 1), said
     got = messages(tmp_path / "spun_out" / "honest" / "room.mcap")
-    assert got == expected, f"beside a spinning team: {len(got)} vs {len(expected)}"
+    assert got == expected, (
+        f"beside a spinning team: {len(got)} vs {len(expected)} messages; "
+        + ended(tmp_path / "spun_out", "honest")
+    )
