@@ -70,12 +70,33 @@ def room_log(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, RecordResu
     return path, result
 
 
+@pytest.fixture(scope="session")
+def _shared_build_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("cache")
+
+
 @pytest.fixture(scope="module")
-def module_build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
-    """A ROS 1 build cache of the test module's own (``XDG_CACHE_HOME``): its packages are built
-    once and its variants reuse them, and no other module's or user's cache is touched."""
+def module_build_cache(_shared_build_cache: Path) -> Iterator[Path]:
+    """The test process's ROS 1 build cache (``XDG_CACHE_HOME``) for the module: usar's underlay
+    and each package are built once per test process and reused by every module that asks
+    (the cache is keyed by content, so a variant is a build of its own), and no user's cache is
+    touched. Tests of the cache itself make one of their own."""
     before = os.environ.get("XDG_CACHE_HOME")
-    home = tmp_path_factory.mktemp("cache")
+    home = _shared_build_cache
+    os.environ["XDG_CACHE_HOME"] = str(home)
+    yield home
+    if before is None:
+        del os.environ["XDG_CACHE_HOME"]
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
+
+
+@pytest.fixture(scope="module")
+def own_build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """A ROS 1 build cache of the module's own (``XDG_CACHE_HOME``), empty at its start: for
+    the tests of building and caching, which ask whether a build was made or reused."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    home = tmp_path_factory.mktemp("own_cache")
     os.environ["XDG_CACHE_HOME"] = str(home)
     yield home
     if before is None:

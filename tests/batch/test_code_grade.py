@@ -186,7 +186,7 @@ def test_a_runs_record_keeps_what_its_build_said(tmp_path: Path) -> None:
 
 
 @needs
-@pytest.mark.usefixtures("module_build_cache")  # the builds in a cache of this module's own
+@pytest.mark.usefixtures("own_build_cache")  # the builds in a cache of this module's own
 def test_usar_batch_code_scores_the_demos_own_build(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

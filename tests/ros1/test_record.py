@@ -32,22 +32,16 @@ PACKAGE = Path(__file__).resolve().parents[2] / "examples" / "ros1" / "usar_two_
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Path, str]]:
+def recorded(
+    tmp_path_factory: pytest.TempPathFactory, module_build_cache: Path
+) -> Iterator[tuple[Path, str]]:
     """The two-node package recorded on the quick one-room world: (log, what `usar record`
     printed)."""
     tmp = tmp_path_factory.mktemp("two_nodes")
-    before = os.environ.get("XDG_CACHE_HOME")
-    os.environ["XDG_CACHE_HOME"] = str(tmp / "cache")
     world = tmp / "room.toml"
     save(quick_room(), world)
     out = tmp / "two.mcap"
-    try:
-        done = usar("record", "--scenario", str(world), "--ros1", str(PACKAGE), "--out", str(out))
-    finally:
-        if before is None:
-            del os.environ["XDG_CACHE_HOME"]
-        else:
-            os.environ["XDG_CACHE_HOME"] = before
+    done = usar("record", "--scenario", str(world), "--ros1", str(PACKAGE), "--out", str(out))
     assert done.returncode == 0, done.stdout + done.stderr
     yield out, done.stdout + done.stderr
 

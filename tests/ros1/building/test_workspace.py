@@ -57,7 +57,7 @@ target_link_libraries(plain_node ${{catkin_LIBRARIES}})
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _cache(module_build_cache: Path) -> None:
+def _cache(own_build_cache: Path) -> None:
     """One build cache for this module (tests/conftest.py)."""
 
 
