@@ -332,12 +332,15 @@ def test_the_instructors_start_wins_over_the_teams_files(tmp_path: Path) -> None
 def test_the_start_is_checked_against_what_the_build_made(tmp_path: Path) -> None:
     """A name usar trusted before the build (a ``${VAR}`` target) that the build did not make:
     its only built executable, said so; among several, one line; a script of the package's
-    own folder is always runnable. The command line's name gets no fallback."""
+    own folder with its x bit is runnable, one committed without it is not (rosrun refuses it:
+    the team's code never ran). The command line's name gets no fallback."""
     from usar_replay.ros1.start import as_built
 
     pkg = template(tmp_path / "src" / "p", nodes=())
     (pkg / "scripts").mkdir()
     (pkg / "scripts" / "go.py").write_text("#!/usr/bin/env python3\n")
+    (pkg / "scripts" / "go.py").chmod(0o755)
+    (pkg / "scripts" / "plain.py").write_text("#!/usr/bin/env python3\n")  # 0644, as unzipped
     devel = tmp_path / "devel"
     lib = devel / "lib" / "final_project"
     lib.mkdir(parents=True)
@@ -351,12 +354,20 @@ def test_the_start_is_checked_against_what_the_build_made(tmp_path: Path) -> Non
         "real_node",
         "README.md line 1; `mystery_node` was not built; started its only executable `real_node`",
     )
-    with pytest.raises(UnclearStart, match=r"^--node: `mystery_node` is not an executable"):
+    got = as_built("plain.py", "README.md line 2", pkg, devel, "final_project")
+    assert (got.node, got.source) == (
+        "real_node",
+        "README.md line 2; `plain.py` is scripts/plain.py with no x bit; started its only "
+        "executable `real_node`",
+    )
+    with pytest.raises(UnclearStart, match=r"^--node: `mystery_node` was not built, so rosrun"):
         as_built("mystery_node", "--node", pkg, devel, "final_project")
     (lib / "other_node").write_text("")
     (lib / "other_node").chmod(0o755)
-    with pytest.raises(UnclearStart, match=r"it built other_node, real_node\); the instructor"):
+    with pytest.raises(UnclearStart, match=r"built other_node, real_node\); the instructor"):
         as_built("mystery_node", "README.md line 1", pkg, devel, "final_project")
+    with pytest.raises(UnclearStart, match=r"`plain.py` is scripts/plain.py with no x bit, so"):
+        as_built("plain.py", "README.md line 2", pkg, devel, "final_project")
     # no devel/ (a build that left none): not judged here
     assert as_built("mystery_node", "s", pkg, tmp_path / "none", "final_project").node == (
         "mystery_node"

@@ -520,15 +520,19 @@ def _found(pkg: _Package, team_dir: Path | None) -> Start:
 
 def as_built(node: str, source: str, pkg_dir: Path, devel: Path, package: str) -> Start:
     """The executable to start, checked against what the build made (``devel/lib/PKG/``) and
-    the package's files (a script ``rosrun`` finds in its folder): a name it did not build is
-    the TA's fallback as in a text (its only built executable, said in the source), or
+    the package's files (a script ``rosrun`` finds in its folder, with its x bit): a name it
+    did not build, or a script committed without its x bit (``rosrun`` finds it and refuses
+    it), is the TA's fallback as in a text (its only built executable, said in the source), or
     :class:`UnclearStart` with that line, never a ``rosrun`` that exits 3 and a team blamed
     for a crash of code that never ran. The command line's and the instructor's names get no
     fallback (a usage error, theirs to fix). A workspace without ``devel/`` is not judged."""
     kept = Start(node=node, source=source)
     lib = devel / "lib" / package
     found = _files(pkg_dir, ("",))
-    if not node or not devel.is_dir() or len(found) > _MAX_FILES or node in {p.name for p in found}:
+    if not node or not devel.is_dir() or len(found) > _MAX_FILES:
+        return kept
+    named = [p for p in found if p.name == node]
+    if any(_runnable(p) for p in named):
         return kept
     try:
         built = sorted(
@@ -539,13 +543,26 @@ def as_built(node: str, source: str, pkg_dir: Path, devel: Path, package: str) -
         built = []
     if node in built:
         return kept
+    why = "was not built"
+    if named:  # rosrun finds it and refuses it: "found ... but not executable"
+        why = f"is {safe_line(named[0].relative_to(pkg_dir).as_posix())} with no x bit"
     if len(built) == 1 and not source.startswith(("--", "the instructor's")):
-        note = f"`{safe_line(node)}` was not built; started its only executable `{built[0]}`"
+        note = f"`{safe_line(node)}` {why}; started its only executable `{built[0]}`"
         return Start(node=built[0], source=f"{source}; {note}")
     raise UnclearStart(
-        f"{source}: `{safe_line(node)}` is not an executable the package built (it built "
+        f"{source}: `{safe_line(node)}` {why}, so rosrun cannot start it (the package built "
         f"{_listed(built)}); the instructor names one with usar batch --starts FILE (or --node)"
     )
+
+
+def _runnable(path: Path) -> bool:
+    """Whether ``rosrun`` would start the package's file ``path``: a regular file with an x
+    bit (as committed: usar keeps a team's modes and never adds one)."""
+    try:
+        st = path.lstat()
+    except OSError:
+        return False
+    return stat.S_ISREG(st.st_mode) and bool(st.st_mode & 0o111)
 
 
 def _listed(names: list[str]) -> str:
