@@ -133,6 +133,11 @@ class RunLimits:
         900.0, flag="--build-timeout", unit="s", lo=0.0, lo_open=True,
         help="a ROS 1 package: wall seconds the catkin build may take",
     )  # fmt: skip
+    connect_s: float = _limit(
+        60.0, flag="--connect-timeout", unit="s", lo=0.0, lo_open=True,
+        help="a ROS 1 package: wall seconds its graph has to start and register its nodes "
+        "(raise it on a slow or emulated machine)",
+    )  # fmt: skip
     build_folder_mb: int = _limit(
         2048, flag="--build-folder", unit="MiB", lo=0, zero="no limit",
         help="a ROS 1 package: its build's workspace while catkin runs, MiB, and 100,000 "

@@ -69,8 +69,6 @@ class Ros1Options:
     as soon as it is idle."""
     settle_ms: float = 3.0
     """The wall cap is at least this many milliseconds, whatever ``rtf``."""
-    connect_timeout_s: float = 60.0
-    """Wall seconds the student's graph has to register a node with the master."""
     isolate: bool = True
     """Run the master and the graph in their own network namespace when possible."""
     keep_workspace: bool = False
@@ -205,19 +203,21 @@ class Ros1Process(MissionProcess):
             if built.at and not uses_kernel_sandbox(limits):
                 raise ValueError(f"{built.workspace} was built for the kernel sandbox's {built.at}")
             # the paths the bridge sees: the sandbox's fixed ones (.layout) or the host's
-            config = {
+            config: dict[str, Any] = {
                 "package": package.name,
                 "workspace": built.run_workspace,
                 "underlays": list(built.run_underlays),
                 "run_dir": str(self.run_dir),
             }
             config.update({k: v for k, v in asdict(options).items()})
+            # wall seconds the graph has to register its nodes (--connect-timeout)
+            config["connect_timeout_s"] = limits.connect_s
             # where the launch file lies in the package, for usar's start file (.graph)
             config["launch_rel"] = start.launch_path(package.path, options.launch)
             self._config_path = self.run_dir / "bridge.json"
             self._config_path.write_text(json.dumps(config), encoding="utf-8")
             # the graph needs time to start: the master, roslaunch, the node's waitForServer
-            startup = max(limits.startup_timeout_s, options.connect_timeout_s + 30.0)
+            startup = max(limits.startup_timeout_s, limits.connect_s + 30.0)
             # the bridge and the whole graph it starts run in the kernel sandbox (bubblewrap) as
             # a Python mission does: reading the built workspace, writing only the run's folder,
             # in a network namespace of their own whose loopback carries the ROS traffic
