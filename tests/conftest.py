@@ -22,17 +22,23 @@ import pytest
 
 from usar_replay.core.settings import RunSettings
 from usar_replay.pipeline.record import RecordResult, record
+from usar_replay.sandbox import cpu_sets
 from usar_replay.sim import simulator
 from usar_replay.world.scenario import Box, CameraSettings, Marker, RobotStart, Scenario
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """pybullet's EGL renderer probed once per test process and handed to every ``usar``
+    """Under xdist, one CPU per run (:data:`usar_replay.sandbox.cpu_sets.WANT_ENV`); and
+    pybullet's EGL renderer probed once per test process and handed to every ``usar``
     subprocess through the environment, as a batch hands it to its runs
     (:func:`usar_replay.sim.simulator.egl_loads_safely`): each of the suite's hundreds of
     records would otherwise start a probe of ~1 s for the same answer. The probe's own tests
     clear it (tests/sim/test_simulator.py)."""
     del config
+    if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+        # each run a CPU of its own, so the workers' runs go side by side: a run that took both
+        # CPUs of a 2-CPU machine made the other worker's next run wait for its end
+        os.environ.setdefault(cpu_sets.WANT_ENV, "1")
     loader = pkgutil.get_loader("eglRenderer")
     if loader is not None:
         simulator.egl_loads_safely(loader.get_filename())  # type: ignore[attr-defined]

@@ -37,7 +37,7 @@ from pathlib import Path
 
 from usar_replay.sandbox import cgroup_v1, cgroups
 
-__all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus", "remove_cgroup"]
+__all__ = ["CpuSet", "claim", "free_cpus", "parse_cpus", "remove_cgroup", "want"]
 
 ROOT = cgroup_v1.CPUSET_ROOT
 """cgroup v1's cpuset hierarchy (the one this project's machines and CI have)."""
@@ -47,6 +47,19 @@ WANT = 2
 """CPUs a run takes when no count is asked for and that many are free: one for the graph, one
 for the idle check's watcher process (:mod:`usar_replay.ros1.pacing.watcher`) and the
 recorder's simulation, which take turns with the graph."""
+
+WANT_ENV = "USAR_RUN_CPUS"
+"""Overrides :data:`WANT` for this process and its children (a whole number from 1). Why: on a
+2-CPU machine a run that takes both makes every other usar run wait for its end; with 1, two
+runs go side by side (two of a user's terminals, or the test suite's two workers), each on a
+CPU of its own. A log's bytes do not depend on it (docs/batch.md, "Isolation")."""
+
+
+def want() -> int:
+    """The CPUs a run takes when no count is asked for: :data:`WANT_ENV`, else :data:`WANT`."""
+    text = os.environ.get(WANT_ENV, "").strip()
+    return int(text) if text.isdigit() and int(text) > 0 else WANT
+
 
 _counter = 0
 
@@ -219,7 +232,7 @@ def free_cpus() -> list[int]:
 
 
 def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
-    """A set of ``count`` CPUs (0: :data:`WANT` when free, else 1) no other usar run holds,
+    """A set of ``count`` CPUs (0: :func:`want` when free, else 1) no other usar run holds,
     waiting up to ``wait_s`` for one to be given back; None without a cpuset hierarchy here.
     Raises TimeoutError when no CPU came free in time."""
     global _counter
@@ -228,7 +241,7 @@ def claim(count: int = 0, wait_s: float = 600.0) -> CpuSet | None:
         try:
             with _locked() as group:
                 free = [c for c in usable_cpus() if c not in _held(group)]
-                take = free[: count or WANT] if len(free) >= max(count, 1) else []
+                take = free[: count or want()] if len(free) >= max(count, 1) else []
                 if take:
                     _counter += 1
                     return _make(group, f"run-{os.getpid()}-{_counter}", tuple(take))
