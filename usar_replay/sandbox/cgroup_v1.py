@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
+
+from usar_replay.sandbox.mountinfo import parse as parse_mounts
+from usar_replay.sandbox.mountinfo import read as read_mountinfo
 
 __all__ = [
     "CPUSET_ROOT",
@@ -27,7 +29,6 @@ __all__ = [
     "make_pids",
     "remove",
     "tcp_limit_mb",
-    "unescape",
 ]
 
 MOUNT = "/sys/fs/cgroup"
@@ -41,23 +42,13 @@ force and only enters memory pressure; ``failcnt`` stays 0 on 6.x, measured), so
 reaching the limit is the verdict."""
 
 
-def unescape(field: str) -> str:
-    """A ``/proc/self/mountinfo`` field with the kernel's octal escapes (space, tab, newline,
-    backslash) undone."""
-    return re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), field)
-
-
 def _mount_of(controller: str, mountinfo: str) -> tuple[str, str] | None:
     """(mount point, root within the hierarchy) of ``controller``'s v1 mount below
     :data:`MOUNT`, from the text of ``/proc/self/mountinfo``; None where it has none."""
-    for line in mountinfo.splitlines():
-        head, sep, tail = line.partition(" - ")
-        fields, after = head.split(), tail.split()
-        if not sep or len(fields) < 5 or len(after) < 3 or after[0] != "cgroup":
-            continue
-        point = unescape(fields[4])
-        if controller in after[2].split(",") and point.startswith(MOUNT + "/"):
-            return point, unescape(fields[3])
+    for m in parse_mounts(mountinfo):
+        mine = m.fstype == "cgroup" and controller in m.super_options
+        if mine and m.point.startswith(MOUNT + "/"):
+            return m.point, m.root
     return None
 
 
@@ -81,10 +72,7 @@ def controller_root(
         except OSError:
             return None
     if mountinfo is None:
-        try:
-            mountinfo = Path("/proc/self/mountinfo").read_text()
-        except OSError:
-            mountinfo = ""
+        mountinfo = read_mountinfo()
     for line in proc_cgroup.splitlines():
         _, controllers, path = line.split(":", 2)
         if controller not in controllers.split(","):

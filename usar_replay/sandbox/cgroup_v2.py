@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from usar_replay.sandbox import cgroup_v1
+from usar_replay.sandbox import mountinfo as mountinfo_
 
 __all__ = [
     "DROP_IN",
@@ -119,12 +120,9 @@ def _read(path: str) -> str:
 def _mount_root(mountinfo: str) -> str:
     """The root within the hierarchy of the ``cgroup2`` mount at :data:`MOUNT` (``/`` where
     mountinfo names none)."""
-    for line in mountinfo.splitlines():
-        head, sep, tail = line.partition(" - ")
-        fields, after = head.split(), tail.split()
-        cgroup2 = sep and len(fields) >= 5 and after[:1] == ["cgroup2"]
-        if cgroup2 and cgroup_v1.unescape(fields[4]) == MOUNT:
-            return cgroup_v1.unescape(fields[3])
+    for m in mountinfo_.parse(mountinfo):
+        if m.fstype == "cgroup2" and m.point == MOUNT:
+            return m.root
     return "/"
 
 
@@ -140,7 +138,7 @@ def _own(proc_cgroup: str | None = None, mountinfo: str | None = None) -> str | 
     if path is None:
         return None
     if mountinfo is None:
-        mountinfo = _read("/proc/self/mountinfo")
+        mountinfo = mountinfo_.read()
     root = _mount_root(mountinfo).rstrip("/")
     if path != root and not path.startswith(root + "/"):
         return None

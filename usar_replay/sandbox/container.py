@@ -30,6 +30,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from usar_replay.sandbox.mountinfo import Mount
+from usar_replay.sandbox.mountinfo import parse as parse_mounts
+from usar_replay.sandbox.mountinfo import read as read_mountinfo
+
 __all__ = [
     "APPARMOR",
     "CGROUPS",
@@ -73,24 +77,12 @@ class Signs:
     its own (the host's shows ``/docker/<id>`` or the like)."""
 
 
-def _mounts(mountinfo: str) -> list[tuple[str, list[str], str]]:
-    """(mount point, mount options, file system type) of each ``/proc/self/mountinfo`` line."""
-    out = []
-    for line in mountinfo.splitlines():
-        head, _, tail = line.partition(" - ")
-        fields = head.split()
-        if len(fields) > 5:
-            fstype = (tail.split() or [""])[0]
-            out.append((fields[4].replace("\\040", " "), fields[5].split(","), fstype))
-    return out
-
-
-def _cgroup_read_only(mounts: list[tuple[str, list[str], str]]) -> bool:
+def _cgroup_read_only(mounts: list[Mount]) -> bool:
     return any(
-        fstype in ("cgroup", "cgroup2")
-        and (point == "/sys/fs/cgroup" or point.startswith("/sys/fs/cgroup/"))
-        and "ro" in options
-        for point, options, fstype in mounts
+        m.fstype in ("cgroup", "cgroup2")
+        and (m.point == "/sys/fs/cgroup" or m.point.startswith("/sys/fs/cgroup/"))
+        and "ro" in m.options
+        for m in mounts
     )
 
 
@@ -119,7 +111,7 @@ def signs_from(
     for line in status.splitlines():
         if line.startswith("Seccomp:"):
             seccomp = int(line.split()[1])
-    mounts = _mounts(mountinfo)
+    mounts = parse_mounts(mountinfo)
     label = apparmor.strip().strip("\0")
     return Signs(
         dockerenv=files.get("/.dockerenv", False),
@@ -133,7 +125,7 @@ def signs_from(
         ),
         seccomp=seccomp,
         apparmor="" if label in ("", "unconfined") else label,
-        proc_masked=any(p.startswith("/proc/") for p, _, _ in mounts),
+        proc_masked=any(m.point.startswith("/proc/") for m in mounts),
         cgroup_read_only=_cgroup_read_only(mounts),
         cgroupns_private=_private_cgroupns(proc_cgroup),
     )
@@ -160,7 +152,7 @@ def read() -> Signs:
         proc_cgroup=_text("/proc/self/cgroup"),
         status=_text("/proc/self/status"),
         apparmor=_text("/proc/self/attr/current"),
-        mountinfo=_text("/proc/self/mountinfo"),
+        mountinfo=read_mountinfo(),
     )
 
 

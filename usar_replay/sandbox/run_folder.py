@@ -21,6 +21,7 @@ import shutil
 import tempfile
 
 from usar_replay.core.limits import RunLimits
+from usar_replay.sandbox import mountinfo
 
 __all__ = [
     "DEFAULT_RUN_FOLDER_MB",
@@ -103,22 +104,8 @@ class RunFolder:
 
 
 def _mount_points() -> list[str]:
-    """This mount namespace's mount points (``/proc/self/mountinfo``'s fifth field, its octal
-    escapes of space, tab, newline and backslash undone)."""
-    try:
-        with open("/proc/self/mountinfo", "rb") as f:
-            lines = f.read().split(b"\n")
-    except OSError:
-        return []
-    out = []
-    for line in lines:
-        fields = line.split(b" ")
-        if len(fields) > 4:
-            raw = fields[4]
-            for esc, char in ((b"\\040", b" "), (b"\\011", b"\t"), (b"\\012", b"\n")):
-                raw = raw.replace(esc, char)
-            out.append(os.fsdecode(raw.replace(b"\\134", b"\\")))
-    return out
+    """This mount namespace's mount points, their escapes undone (:mod:`.mountinfo`)."""
+    return [m.point for m in mountinfo.parse(mountinfo.read())]
 
 
 def unmount_under(folder: str) -> list[str]:
