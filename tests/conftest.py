@@ -87,25 +87,18 @@ def module_build_cache(_shared_build_cache: Path) -> Iterator[Path]:
     and each package are built once per test process and reused by every module that asks
     (the cache is keyed by content, so a variant is a build of its own), and no user's cache is
     touched. Tests of the cache itself make one of their own."""
-    before = os.environ.get("XDG_CACHE_HOME")
-    home = _shared_build_cache
-    os.environ["XDG_CACHE_HOME"] = str(home)
-    yield home
-    if before is None:
-        del os.environ["XDG_CACHE_HOME"]
-    else:
-        os.environ["XDG_CACHE_HOME"] = before
+    yield from _cache_home(_shared_build_cache)
 
 
 @pytest.fixture(scope="module")
 def own_build_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
     """A ROS 1 build cache of the module's own (``XDG_CACHE_HOME``), empty at its start: for
     the tests of building and caching, which ask whether a build was made or reused."""
-    before = os.environ.get("XDG_CACHE_HOME")
-    home = tmp_path_factory.mktemp("own_cache")
-    os.environ["XDG_CACHE_HOME"] = str(home)
-    yield home
-    if before is None:
-        del os.environ["XDG_CACHE_HOME"]
-    else:
-        os.environ["XDG_CACHE_HOME"] = before
+    yield from _cache_home(tmp_path_factory.mktemp("own_cache"))
+
+
+def _cache_home(home: Path) -> Iterator[Path]:
+    """``XDG_CACHE_HOME`` set to ``home`` for a module's tests, put back after them."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("XDG_CACHE_HOME", str(home))
+        yield home
