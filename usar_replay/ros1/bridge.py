@@ -263,7 +263,7 @@ class Bridge:
         self.quiet = Watcher(os.getpid())
         wanted, facts = ([], None) if expected is None else expected.result()
         self._configure_stand_ins(facts)
-        self._wait_for_graph(master, wanted, float(self.config.get("connect_timeout_s", 60.0)))
+        self._wait_for_graph(master, wanted, float(self.config["connect_timeout_s"]))
 
     def _write_launch_plan(self, run: Path) -> Path:
         """The plan roslaunch follows (:mod:`.launch_filter`): usar's stand-ins' nodes dropped,
