@@ -113,7 +113,8 @@ def main() -> None:
                     out,
                     args.package,
                     ros1_settings,
-                    options=Ros1Options(launch=launch, rtf=rtf),
+                    options=Ros1Options(launch=launch),
+                    limits=MissionLimits(rtf=rtf),
                 )
                 wall = time.perf_counter() - start
                 steal = steal_since(stolen)

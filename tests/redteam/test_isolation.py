@@ -33,10 +33,12 @@ from usar_replay.world.scenario_toml import save
 
 ROOT = Path(__file__).resolve().parents[2]
 COURSE = ROOT / "examples" / "ros1" / "usar_course"
-SLOW_OK = ("--build-timeout", "3600", "--connect-timeout", "600")
+SLOW_OK = ("--build-timeout", "3600", "--connect-timeout", "600", "--rtf", "0.02")
 """Wall limits wide enough for a slow machine (the Debian 12 VM under emulation: its build once
-passed 900 s, and once a run of the pair ended at its first tick, the graph's 60 s to connect
-the likely cause): they change no message, and here nothing comes near them."""
+passed 900 s, a run of the pair once ended at its first tick, the graph's 60 s to connect the
+likely cause, and a tick's default wall cap of dt / 0.5 = 100 ms is passed there): they change
+no message, and here nothing comes near them (every run's capped ticks are in what a failed
+comparison says)."""
 SIM_S = "20"
 """Sim seconds of every run (``--max-sim-time``): enough ticks for pacing and scheduling to
 show, short enough for the fast suite."""
@@ -98,12 +100,19 @@ def _ready() -> str:
 
 
 def ended(out: Path, team: str) -> str:
-    """How the team's run ended, from its grade (what a failed comparison says first)."""
-    grade = out / team / "room.grade.json"
+    """How the team's run ended, from its grade, and its pacing (holds, capped ticks: a capped
+    tick is where the machine's pace can reach the log), what a failed comparison says."""
+    grade, run = out / team / "room.grade.json", out / team / "room.run.json"
     if not grade.is_file():
         return f"{team}: no grade"
     data = json.loads(grade.read_text(encoding="utf-8"))
-    return f"{team}: {data.get('outcome')}: {data.get('outcome_reason', '')}"
+    pacing = json.loads(run.read_text(encoding="utf-8")).get("pacing") if run.is_file() else "?"
+    return f"{team}: {data.get('outcome')}: {data.get('outcome_reason', '')}; pacing: {pacing}"
+
+
+def pacing(said: str) -> str:
+    """The recorder's ``Pacing:`` line (holds and capped ticks of the lone run)."""
+    return next((line.strip() for line in said.splitlines() if "Pacing: " in line), "?")
 
 
 def messages(log: Path) -> list[tuple[str, int, str]]:
@@ -129,6 +138,7 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
     assert "Pacing: " in done.stdout
     expected = messages(alone)
     assert len(expected) > 1000
+    print("alone:", pacing(done.stdout))  # shown with -rP: the VM check reads it
 
     pair = tmp_path / "pair"
     for team in ("a", "b"):
@@ -143,6 +153,7 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
         assert got == expected, (
             f"team {team} beside itself: {len(got)} vs {len(expected)} messages; "
             + ended(tmp_path / "pair_out", team)
+            + f"; alone: {pacing(done.stdout)}"
         )
 
     spun = tmp_path / "spun"
@@ -154,4 +165,5 @@ def test_a_teams_log_is_the_same_whoever_runs_beside_it(
     assert got == expected, (
         f"beside a spinning team: {len(got)} vs {len(expected)} messages; "
         + ended(tmp_path / "spun_out", "honest")
+        + f"; alone: {pacing(done.stdout)}"
     )

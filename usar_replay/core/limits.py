@@ -59,6 +59,7 @@ def _limit(
     zero: str = "",
     help: str = "",
     commands: tuple[str, ...] = _ALL,
+    metavar: str = "",
 ) -> Any:
     """A field with its range (``lo``, open when ``lo_open``), what 0 means (``zero``: "none",
     "no budget"), and its flag, help and commands (no ``flag``: set by code only)."""
@@ -70,6 +71,7 @@ def _limit(
         "zero": zero,
         "help": help,
         "commands": commands if flag else (),
+        "metavar": metavar,
     }
     return field(default=default, metadata=meta)
 
@@ -128,6 +130,11 @@ class RunLimits:
     max_capped: int = _limit(
         600, flag="--max-capped", unit="", lo=0, zero="no budget",
         help="ROS 1 ticks that reach their wall cap; past it 'hung'",
+    )  # fmt: skip
+    rtf: float = _limit(
+        0.5, flag="--rtf", unit="", lo=0.0, zero="no cap", metavar="R",
+        help="a ROS 1 package: the slowest pace; a tick waits at most dt/R of wall time for the "
+        "graph to go idle, past it the tick is 'capped' (lower it on a slow or emulated machine)",
     )  # fmt: skip
     build_wall_s: float = _limit(
         900.0, flag="--build-timeout", unit="s", lo=0.0, lo_open=True,
@@ -214,7 +221,7 @@ def _flags() -> tuple[Flag, ...]:
         if not meta["flag"]:
             continue
         kind = hints[str(f.type)]
-        metavar = {"MiB": "MIB", "s": "S"}.get(meta["unit"], "N")
+        metavar = meta["metavar"] or {"MiB": "MIB", "s": "S"}.get(meta["unit"], "N")
         rows.append(
             Flag(
                 f.name,

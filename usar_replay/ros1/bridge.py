@@ -138,7 +138,7 @@ class Bridge:
         self.write_timeout_s = float(setup.get("tick_timeout_s", 10.0))
         self.config = config
         self.parameters: dict[str, Any] = setup["parameters"]
-        self.rtf = float(config.get("rtf", 0.5))
+        self.rtf = float(config["rtf"])  # the run's limits (--rtf)
         self.settle_s = float(config.get("settle_ms", 3.0)) / 1000.0
         run = Path(config["run_dir"])
         self.port = _free_port()

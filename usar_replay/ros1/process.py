@@ -63,12 +63,8 @@ class Ros1Options:
     terminal (``rosservice call /start "data: true"``)."""
     start_source: str = ""
     """Where the start was read (``doc/instructions.txt line 7``; :func:`.start.decide`)."""
-    rtf: float = 0.5
-    """The slowest pace, a safety net: a tick waits at most ``dt / rtf`` of wall time for the
-    graph to go idle (docs/ros1.md, "Pacing"; 0: no cap). The graph sets the pace: a tick ends
-    as soon as it is idle."""
     settle_ms: float = 3.0
-    """The wall cap is at least this many milliseconds, whatever ``rtf``."""
+    """A tick's wall cap (``dt / rtf``, the run's limits) is at least this many milliseconds."""
     isolate: bool = True
     """Run the master and the graph in their own network namespace when possible."""
     keep_workspace: bool = False
@@ -212,6 +208,9 @@ class Ros1Process(MissionProcess):
             config.update({k: v for k, v in asdict(options).items()})
             # wall seconds the graph has to register its nodes (--connect-timeout)
             config["connect_timeout_s"] = limits.connect_s
+            # the slowest pace (--rtf): a tick waits at most dt / rtf of wall time for the graph
+            # to go idle (docs/ros1.md, "Pacing"; 0: no cap); the graph sets the pace below it
+            config["rtf"] = limits.rtf
             # where the launch file lies in the package, for usar's start file (.graph)
             config["launch_rel"] = start.launch_path(package.path, options.launch)
             self._config_path = self.run_dir / "bridge.json"

@@ -55,14 +55,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "('rosservice call /start \"data: true\"'); repeatable. Without --launch/--node the "
         "package starts as its doc/instructions.txt, README or usar.toml says",
     )
-    ros1.add_argument(
-        "--rtf",
-        type=float,
-        default=0.5,
-        metavar="R",
-        help="with --ros1: the slowest pace: a tick waits at most dt/R of wall time for the "
-        "graph to go idle (default 0.5; 0: no cap)",
-    )
     p.set_defaults(func=run)
 
 
@@ -148,13 +140,10 @@ def _record_ros1(
 
     if args.mission:
         raise UsageError("--ros1 and --mission: give one mission")
-    if args.rtf < 0:
-        raise UsageError(f"--rtf {args.rtf:g}: give a factor >= 0 (0: no cap)")
     opts = Ros1Options(
         launch=args.launch or "",
         node=args.node or "",
         after_launch=tuple(args.after_launch),
-        rtf=args.rtf,
         given_settings=options.given_settings(args),
     )
     return record_ros1(
