@@ -83,7 +83,8 @@ def test_one_row_per_flag_and_the_commands_that_take_it() -> None:
     assert len(flags) == len(FLAGS)
     for old in ("--tick-timeout", "--mission-memory", "--max-log-mib", "--wall-limit",
                 "--run-memory", "--processes", "--run-folder", "--max-holds", "--hold-wall",
-                "--max-capped", "--cpu-limit", "--build-folder", "--build-timeout"):  # fmt: skip
+                "--max-capped", "--cpu-limit", "--build-folder", "--build-timeout",
+                "--connect-timeout", "--rtf"):  # fmt: skip
         assert {"record", "replay", "batch", "gradescope"} <= set(flags[old].commands), old
     assert flags["--grade-limit"].commands == ("batch", "gradescope")
     assert {row.dest for row in FLAGS} >= {"tick_timeout", "run_memory", "build_folder"}

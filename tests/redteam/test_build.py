@@ -442,3 +442,7 @@ def test_a_teams_python_never_runs_in_usars_processes(tmp_path: Path) -> None:
     assert "PLANTED" not in result.outcome_reason, result.outcome_reason
     assert result.outcome == "hung", result.outcome_reason
     assert "--max-capped" in result.outcome_reason
+    # the summary says what a capped tick costs and what widens the cap
+    assert "4 capped ticks (this machine's pace may show in the log: a lower --rtf than 0.5" in (
+        result.pacing
+    ), result.pacing

@@ -155,6 +155,12 @@ def record_ros1(
         if holder is not None and not opts.keep_workspace:
             remove_tree(holder)
     pacing = f"{made[0].holds} shutdown holds, {made[0].capped} capped ticks" if made else ""
+    if made and made[0].capped:
+        # a capped tick ended at its wall cap, not when the graph was done: where the graph's
+        # reaction landed is this machine's pace, so another machine may log it a tick apart
+        rtf = (limits or MissionLimits()).rtf
+        pacing += f" (this machine's pace may show in the log: a lower --rtf than {rtf:g} widens"
+        pacing += " the cap)"
     return dataclasses.replace(result, build=note, pacing=pacing, build_log=log)
 
 
