@@ -131,6 +131,34 @@ def class_run_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def class_grade_options(p: argparse.ArgumentParser) -> None:
+    """How a class's runs are confined and graded (``usar batch`` and ``usar gradescope``): one
+    declaration, so the warning of ``--no-sandbox`` and Gradescope's visibilities are the same
+    words in both."""
+    p.add_argument(
+        "--no-sandbox",
+        action="store_true",
+        help="run missions without bwrap and the guard: a mission can then read every file "
+        "usar can, the hidden worlds' key included (only for code you trust)",
+    )
+    p.add_argument(
+        "--visibility",
+        choices=["visible", "hidden", "after_due_date", "after_published"],
+        default="visible",
+        help="Gradescope visibility of the tests (visible)",
+    )
+    p.add_argument(
+        "--code",
+        action="store_true",
+        help="also grade each team's code submission (usar code; docs/code-rubric.md)",
+    )
+    p.add_argument(
+        "--code-template",
+        metavar="DIR",
+        help="with --code: the course template, boilerplate for the code grade",
+    )
+
+
 def grade_outputs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--thresholds", metavar="TOML", help="override rubric thresholds ([thresholds] table)"

@@ -5,16 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from usar_replay.cli import options, parser_parts
 from usar_replay.cli.exits import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK
 from usar_replay.cli.textout import print_wrapped
 from usar_replay.core.errors import UsageError, UsarError
 from usar_replay.core.limits import BATCH_LIMITS
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = ["add_parser", "run"]
 
@@ -36,23 +32,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--address", metavar="ADDR", help="Ray cluster address (--engine ray)")
     parser_parts.class_run_options(p)
     parser_parts.limit_options(p, "batch", BATCH_LIMITS)
-    p.add_argument(
-        "--no-sandbox",
-        action="store_true",
-        help="run missions without bwrap and the guard: a mission can then read every file "
-        "usar can, the world key included (only for code you trust)",
-    )
+    parser_parts.class_grade_options(p)
     p.add_argument("--gradescope", action="store_true", help="write TEAM/results.json per team")
-    p.add_argument(
-        "--visibility",
-        choices=["visible", "hidden", "after_due_date", "after_published"],
-        default="visible",
-        help="Gradescope visibility of the tests (visible)",
-    )
-    p.add_argument("--code", action="store_true",
-                   help="also grade each team's code submission (usar code; docs/code-rubric.md)")
-    p.add_argument("--code-template", metavar="DIR",
-                   help="with --code: the course template, boilerplate for the code grade")
     p.add_argument(
         "--starts",
         metavar="TOML",

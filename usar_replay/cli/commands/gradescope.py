@@ -46,22 +46,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     parser_parts.class_run_options(p)
     parser_parts.limit_options(p, "gradescope", GRADESCOPE_LIMITS)
-    p.add_argument(
-        "--no-sandbox",
-        action="store_true",
-        help="run the mission without bwrap and the guard: it can then read the hidden "
-        "worlds' key and every file of the autograder",
-    )
-    p.add_argument(
-        "--visibility",
-        choices=["visible", "hidden", "after_due_date", "after_published"],
-        default="visible",
-        help="Gradescope visibility of the tests (visible)",
-    )
-    p.add_argument("--code", action="store_true",
-                   help="also grade the code submission (usar code; docs/code-rubric.md)")
-    p.add_argument("--code-template", metavar="DIR",
-                   help="with --code: the course template, boilerplate for the code grade")
+    parser_parts.class_grade_options(p)
     p.add_argument("--quiet", action="store_true", help="no per-run lines")
     p.set_defaults(func=run)
 
