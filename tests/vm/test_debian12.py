@@ -1,7 +1,7 @@
 """On the real thing (issue 49): a stock Debian 12 machine, systemd 252 as PID 1 and the unified
 cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of this checkout.
 
-``python -m pytest -m vm`` runs these two; nothing else does (tests/vm/conftest.py):
+``python -m pytest -m vm`` runs these three; nothing else does (tests/vm/conftest.py):
 
 * as root on the image with the README's apt packages and the dependencies' venv baked in
   (``debian12-usar-venv``): the checkout installed, ``usar doctor`` says ``ok`` on every line,
@@ -15,7 +15,10 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   ``pip install '.[test]'`` from the host's wheelhouse, which holds the same files as PyPI), then
   the built-in mission recorded for 5 sim-seconds on the tests' one-room world and replayed with
   ``--grade`` (the README's first command, on a world small enough for emulation), ``usar
-  doctor``, and the course's ROS 1 package built and recorded there.
+  doctor``, and the course's ROS 1 package built and recorded there;
+* Debian's docker.io in the VM (cgroup v2, systemd's cgroup driver): ``usar doctor`` in a
+  container with Docker's defaults names the flags a run needs, with exactly those (and with
+  ``--privileged`` alone) every line is ok, and a recording made there replays bit for bit.
 
 Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took 9
 min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
@@ -183,3 +186,74 @@ def test_the_readmes_commands_work_on_a_fresh_debian12(tmp_path: Path) -> None:
     assert vmtools.doctor_all_ok(said["doctor"]), said["doctor"]
     assert "Recorded recordings/ros1.mcap" in said["ros1"], said["ros1"]
     assert "Pacing: " in said["ros1"], said["ros1"]
+
+
+IMAGE_ROOT = (
+    "set -e; mkdir -p /tmp/img && cd /tmp/img && mkdir -p tmp var/tmp root run proc sys dev etc "
+    "usr opt work && chmod 1777 tmp var/tmp && for d in bin lib lib64 sbin; do ln -sfn usr/$d $d; "
+    "done && tar -c . | docker import - usar:vm >/dev/null && docker image ls usar:vm"
+)
+"""A container image of the VM's own system without copying it: a root of empty folders (and
+Debian 12's merged-/usr links) that each run binds the VM's ``/usr``, ``/opt`` (the venv with
+usar installed) and ``/etc`` into, read-only. What the container gets from Docker (its seccomp
+filter, AppArmor profile, masked ``/proc``, read-only or private cgroup fs, capabilities) is
+Docker's, as in any image."""
+
+
+def _docker(flags: str, command: str, folder: Path) -> str:
+    """``docker run`` of ``command`` in the VM's own system, with ``flags``, the checkout at
+    /work (read-only) and the EGL plugin hidden as in the VM (:data:`NO_EGL`)."""
+    binds = f"-v /usr:/usr:ro -v /opt:/opt:ro -v /etc:/etc:ro -v {folder}:/work:ro"
+    env = f"-e PYTHONPATH=/work/{NO_EGL} -e PATH=/opt/venv/bin:/usr/bin:/usr/sbin -w /tmp"
+    return f"docker run --rm {flags} {binds} {env} usar:vm {command}"
+
+
+NAMED = r"grep -oE -- '--(security-opt [a-z]+=unconfined|privileged( --cgroupns=private)?)'"
+"""The ``docker run`` flags a ``usar doctor`` output names (its container line's table)."""
+
+
+def test_docker_on_a_stock_debian12_says_what_it_needs_and_runs_with_it(tmp_path: Path) -> None:
+    """Docker (Debian's docker.io) on the cgroup v2 host: with Docker's defaults ``usar doctor``
+    recognises the container and names the flags a run needs (exit 1); with exactly the flags
+    it named, and with ``--privileged`` alone, every line is ok (the v2 backend in the
+    container's own cgroup namespace: usar moves the container's processes into a leaf and
+    enables the controllers below it), and a recording there replays bit for bit."""
+    _fail_without(vmtools.VENV_IMAGE)
+    folder = vmtools.copy_checkout(tmp_path / "usar-replay")
+    _hide_egl(folder)
+    save(one_room(), folder / "room.toml")
+    doctor = "usar doctor"
+    record = (
+        "bash -c 'usar record --scenario /work/room.toml --max-sim-time 2 --out /tmp/r.mcap; "
+        "usar replay --grade /tmp/r.mcap'"
+    )
+    script = "".join([
+        vmtools.step("facts", FACTS),
+        vmtools.step("install", "/opt/venv/bin/pip install -q --no-deps --no-build-isolation ."),
+        vmtools.step(
+            "docker",
+            "apt-get update -q >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -qy "
+            "--no-install-recommends docker.io >/dev/null && docker version --format "
+            "'{{.Server.Version}} {{.Server.Os}}' && docker info --format '{{.CgroupVersion}} "
+            "{{.CgroupDriver}}'",
+        ),
+        vmtools.step("image", IMAGE_ROOT),
+        vmtools.step("defaults", _docker("", doctor, folder) + " | tee /tmp/defaults", (0, 1, 2)),
+        vmtools.step("flags", f"{NAMED} /tmp/defaults | sort -u | tr '\\n' ' ' | tee /tmp/flags"),
+        vmtools.step("named", _docker("$(cat /tmp/flags)", doctor, folder), (0, 1, 2)),
+        vmtools.step("privileged", _docker("--privileged", doctor, folder), (0, 1, 2)),
+        vmtools.step("record", _docker("--privileged", record, folder), ANY),
+    ])  # fmt: skip
+    run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=3600)
+    print(run.timings())
+    assert run.rc == 0, run.tail()
+    _is_the_real_thing(run)
+    said = {name: s.output for name, s in run.steps.items()}
+    assert said["docker"].split()[-2:] == ["2", "systemd"], said["docker"]  # v2, systemd driver
+    defaults = said["defaults"]
+    assert run.steps["defaults"].rc == 1 and "docker" in defaults, defaults
+    assert "--privileged" in defaults and "securityContext" in defaults, defaults
+    assert "--privileged" in said["flags"], said["flags"]  # the flags doctor named, then run
+    for name in ("named", "privileged"):
+        assert run.steps[name].rc == 0 and vmtools.doctor_all_ok(said[name]), said[name]
+    assert "Replay reproduces the recording bit for bit." in said["record"], said["record"]
