@@ -1,7 +1,7 @@
 """On the real thing (issue 49): a stock Debian 12 machine, systemd 252 as PID 1 and the unified
 cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of this checkout.
 
-``python -m pytest -m vm`` runs these three; nothing else does (tests/vm/conftest.py):
+``python -m pytest -m vm`` runs these four; nothing else does (tests/vm/conftest.py):
 
 * as root on the image with the README's apt packages and the dependencies' venv baked in
   (``debian12-usar-venv``): the checkout installed, ``usar doctor`` says ``ok`` on every line,
@@ -18,7 +18,10 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   doctor``, and the course's ROS 1 package built and recorded there;
 * Debian's docker.io in the VM (cgroup v2, systemd's cgroup driver): ``usar doctor`` in a
   container with Docker's defaults names the flags a run needs, with exactly those (and with
-  ``--privileged`` alone) every line is ok, and a recording made there replays bit for bit.
+  ``--privileged`` alone) every line is ok, and a recording made there replays bit for bit;
+* as a user without root, logged in over ssh: ``usar doctor`` names the controller a stock
+  ``user@.service`` does not delegate and the drop-in that adds it; with that drop-in, the
+  cgroups come through the user's own systemd manager, and a recording replays bit for bit.
 
 Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took 9
 min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
@@ -257,3 +260,86 @@ def test_docker_on_a_stock_debian12_says_what_it_needs_and_runs_with_it(tmp_path
     for name in ("named", "privileged"):
         assert run.steps[name].rc == 0 and vmtools.doctor_all_ok(said[name]), said[name]
     assert "Replay reproduces the recording bit for bit." in said["record"], said["record"]
+
+
+STUDENT = "student"
+AS_STUDENT = (
+    "ssh -q -i /root/.ssh/student -o BatchMode=yes -o StrictHostKeyChecking=no "
+    f"-o UserKnownHostsFile=/dev/null {STUDENT}@localhost"
+)
+"""A login of a user without root, as a student has one: ssh, so PAM and systemd-logind give
+it a session scope and start the user's own systemd manager (``user@UID.service``)."""
+
+NEW_USER = (
+    f"useradd -m {STUDENT} && install -d -m 700 -o {STUDENT} -g {STUDENT} /home/{STUDENT}/.ssh && "
+    "ssh-keygen -q -t ed25519 -N '' -f /root/.ssh/student && install -m 600 -o "
+    f"{STUDENT} -g {STUDENT} /root/.ssh/student.pub /home/{STUDENT}/.ssh/authorized_keys && "
+    f"{AS_STUDENT} id -un && systemctl show -p DelegateControllers user@$(id -u {STUDENT}).service"
+)
+
+APPLY_DROP_IN = (
+    "f=$(grep -oE '/etc/systemd/system/[^ ]+\\.conf' /tmp/stock | head -1) && test -n \"$f\" && "
+    'mkdir -p "$(dirname "$f")" && awk -v f="$f:" '
+    "'p && /^  +[^ ]/ {sub(/^ +/, \"\"); print; next} {p = 0} index($0, f) {p = 1}' /tmp/stock "
+    f'> "$f" && cat "$f" && systemctl daemon-reload && systemctl stop user@$(id -u {STUDENT})'
+    ".service"
+)
+"""Writes exactly the drop-in the stock ``usar doctor`` named (its path, then its indented
+lines), reloads systemd and stops the user's manager, so the next login starts it anew."""
+
+
+def test_a_user_without_root_gets_what_their_systemd_delegates(tmp_path: Path) -> None:
+    """A user without root, logged in over ssh: on a stock ``user@.service`` (which delegates
+    ``memory pids``, not ``cpuset``) ``usar doctor`` names the missing controller and the exact
+    drop-in; with that drop-in written as it says (and a new login), the cgroups line is ok
+    through the user's own manager (a transient scope, ``Delegate=yes``), as is the CPU sets
+    line, and a recording made as that user replays bit for bit."""
+    _fail_without(vmtools.VENV_IMAGE)
+    folder = vmtools.copy_checkout(tmp_path / "usar-replay")
+    _hide_egl(folder)
+    save(one_room(), folder / "room.toml")
+    shared = "/tmp/shared"  # the user's readable copy of the world and the EGL hider
+    doctor = f"{AS_STUDENT} /opt/venv/bin/usar doctor"
+    record = (
+        f"{AS_STUDENT} 'cd ~ && export PATH=/opt/venv/bin:$PATH PYTHONPATH={shared}/{NO_EGL} && "
+        f"usar record --scenario {shared}/room.toml --max-sim-time 2 --out s.mcap && "
+        "usar replay --grade s.mcap'"
+    )
+    script = "".join([
+        vmtools.step("facts", FACTS),
+        vmtools.step("install", "/opt/venv/bin/pip install -q --no-deps --no-build-isolation ."),
+        vmtools.step("user", NEW_USER),
+        vmtools.step(
+            "share",
+            f"mkdir -p {shared} && cp -r room.toml {NO_EGL} {shared}/ && chmod -R a+rX {shared}",
+        ),
+        vmtools.step("stock", f"{doctor} | tee /tmp/stock", (0, 1, 2)),
+        vmtools.step("drop-in", APPLY_DROP_IN),
+        vmtools.step("delegated", doctor, (0, 1, 2)),
+        vmtools.step("record", record, ANY),
+    ])  # fmt: skip
+    run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=2400)
+    print(run.timings())
+    assert run.rc == 0, run.tail()
+    _is_the_real_thing(run)
+    said = {name: s.output for name, s in run.steps.items()}
+    assert said["user"].splitlines()[0] == STUDENT, said["user"]
+    stock = _line(said["stock"], "cgroups")
+    assert stock.startswith("MISS") and "cpuset" in stock, said["stock"]
+    assert "writable memory, pids" in stock, said["stock"]  # what user@.service delegates
+    assert "user@.service.d/delegate.conf:" in said["stock"], said["stock"]
+    assert "Delegate=" in said["drop-in"] and "cpuset" in said["drop-in"], said["drop-in"]
+    delegated = said["delegated"]
+    for name in ("kernel sandbox", "cgroups", "CPU sets"):
+        assert _line(delegated, name).startswith("ok"), delegated
+    assert "memory, pids, cpuset in usar-" in _line(delegated, "cgroups"), delegated
+    assert "Delegate=yes" in _line(delegated, "cgroups"), delegated
+    assert "Replay reproduces the recording bit for bit." in said["record"], said["record"]
+
+
+def _line(doctor: str, name: str) -> str:
+    """``usar doctor``'s line for the part ``name`` (its mark and what it says)."""
+    for line in doctor.splitlines():
+        if line[5:].startswith(f"{name}  "):
+            return line
+    raise AssertionError(f"no {name!r} line in:\n{doctor}")
