@@ -201,13 +201,41 @@ def test_the_ways_to_a_subtree_in_order() -> None:
 
     def ways(**given: bool) -> list[str]:
         base = {"in_leaf": False, "delegated": False, "at_mount": False, "root": True}
+        base |= {"machine_root": True}
         return cgroup_v2.plan(**{**base, "systemd": True, **given})
 
     assert ways(in_leaf=True) == ["parent"]  # a batch's run process: the driver's subtree
     assert ways(delegated=True) == ["own"]  # systemd-run --scope -p Delegate=yes usar ...
     assert ways(delegated=True, at_mount=True, systemd=False) == ["root", "own"]  # no systemd
     assert ways(delegated=True, at_mount=True, root=False) == ["own"]
+    # a container's own cgroup namespace (Docker on v2): its root holds processes, moved first
+    assert ways(delegated=True, at_mount=True, machine_root=False) == ["own"]
     assert ways() == ["scope", "top-down"]  # root in a login session's scope
     assert ways(root=False) == ["scope"]  # a user: the user's own manager
     assert ways(systemd=False) == ["top-down"]  # root, a read-only container: tried, refused
     assert ways(root=False, systemd=False) == []
+
+
+def test_a_cgroup_holding_processes_is_not_written_until_they_move(tmp_path: Path) -> None:
+    """Where a cgroup other than the machine's root still holds processes, nothing is enabled
+    (``+cpuset +pids`` there would make it a thread root and ``+memory`` then fails for good);
+    once its processes are gone it is, and the machine's root may hold processes and hand on
+    (the kernel's rules, shown in the VM: tests/vm). A folder of plain files stands in for the
+    cgroup: what is asserted is what usar writes."""
+    base = tmp_path / "docker-1.scope"
+    base.mkdir()
+    (base / "cgroup.controllers").write_text("cpuset cpu io memory hugetlb pids rdma misc\n")
+    (base / "cgroup.subtree_control").write_text("\n")
+    (base / "cgroup.type").write_text("domain\n")
+    (base / "cgroup.procs").write_text("1\n7\n")
+    enabled, why = cgroup_v2._enable(str(base))
+    assert enabled == () and "holds processes" in why, why
+    assert (base / "cgroup.subtree_control").read_text() == "\n"  # not a byte written
+    (base / "cgroup.procs").write_text("")
+    enabled, why = cgroup_v2._enable(str(base))
+    assert set(enabled) == set(cgroup_v2.NEED) and why == "", why
+    (base / "cgroup.type").unlink()  # the machine's root: no cgroup.type, processes allowed
+    (base / "cgroup.procs").write_text("1\n")
+    (base / "cgroup.subtree_control").write_text("\n")
+    enabled, _ = cgroup_v2._enable(str(base))
+    assert set(enabled) == set(cgroup_v2.NEED)

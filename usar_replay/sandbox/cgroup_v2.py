@@ -180,13 +180,31 @@ def _move_all(folder: str, leaf: str) -> None:
                 Path(leaf, "cgroup.procs").write_text(pid)
 
 
+def _machine_root(folder: str) -> bool:
+    """Whether ``folder`` is the machine's root cgroup: the kernel gives every other cgroup a
+    ``cgroup.type`` file, the root none (a container's namespace root has one: it is not)."""
+    return not os.path.exists(os.path.join(folder, "cgroup.type"))
+
+
 def _enable(folder: str) -> tuple[tuple[str, ...], str]:
     """Enable each of :data:`NEED` that ``folder`` has for its children: (enabled, why not the
-    others)."""
+    others).
+
+    Why nothing at all is written where ``folder`` holds processes and is not the machine's
+    root: the kernel would take ``+cpuset`` and ``+pids`` there (threaded controllers may sit
+    beside processes) and so make ``folder`` a thread root, after which ``+memory`` fails with
+    EOPNOTSUPP and no process can move into a child (measured in a privileged Docker container
+    on Debian 12: its processes stayed, memory was refused). Its processes move out first
+    (:func:`_take`)."""
     have = parse_controllers(_read(os.path.join(folder, "cgroup.controllers")))
     done = parse_controllers(_read(os.path.join(folder, "cgroup.subtree_control")))
     enabled: list[str] = []
     said: list[str] = []
+    missing = [n for n in NEED if n not in done]
+    held = _read(os.path.join(folder, "cgroup.procs")).split()
+    if missing and held and not _machine_root(folder):
+        why = f"{folder} holds processes (v2 hands controllers on only from a cgroup without any)"
+        return tuple(n for n in NEED if n in done), why
     for name in NEED:
         if name in done:
             enabled.append(name)
@@ -265,19 +283,25 @@ scope), ``top-down`` (root's ``/sys/fs/cgroup/usar``)."""
 
 
 def plan(
-    *, in_leaf: bool, delegated: bool, at_mount: bool, root: bool, systemd: bool
+    *,
+    in_leaf: bool,
+    delegated: bool,
+    at_mount: bool,
+    root: bool,
+    systemd: bool,
+    machine_root: bool,
 ) -> list[Step]:
     """The ways to a base to try, in order, for a process whose cgroup is ``usar-self`` below
     a base already made (``in_leaf``), is delegated to it (``delegated``), is the mount's root
-    (``at_mount``: the machine's root or a container's cgroup namespace), as root or not,
-    with systemd running or not. The first that gives every controller wins; else the last
-    that gives any."""
+    (``at_mount``: the machine's root or a container's cgroup namespace; ``machine_root``:
+    the former), as root or not, with systemd running or not. The first that gives every
+    controller wins; else the last that gives any."""
     if in_leaf:
         return ["parent"]
     if delegated:
         # at the mount as root: the machine's own root cgroup may hand controllers down while
         # it holds processes; a container namespace's root may not, so its processes move
-        return ["root", "own"] if at_mount and root else ["own"]
+        return ["root", "own"] if at_mount and root and machine_root else ["own"]
     return [*(["scope"] if systemd else []), *(["top-down"] if root else [])]
 
 
@@ -319,6 +343,7 @@ def subtree() -> Subtree:
         and any(n in done for n in NEED),
         delegated=_delegated(own),
         at_mount=own == MOUNT,
+        machine_root=_machine_root(MOUNT),
         root=os.geteuid() == 0,
         systemd=_systemd(),
     )
