@@ -128,9 +128,11 @@ def steps_of(output: str) -> dict[str, Step]:
         if line.startswith("@@start "):
             lines = []
             continue
-        done = re.fullmatch(r"@@step (\S+) rc=(\d+) s=(\d+)", line.strip())
+        # a step whose output has no final newline leaves its last line before the marker
+        done = re.fullmatch(r"(.*?)@@step (\S+) rc=(\d+) s=(\d+)", line.rstrip())
         if done:
-            found[done[1]] = Step(int(done[2]), int(done[3]), "\n".join(lines))
+            lines += [done[1]] if done[1] else []
+            found[done[2]] = Step(int(done[3]), int(done[4]), "\n".join(lines))
         else:
             lines.append(line)
     return found
