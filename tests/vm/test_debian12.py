@@ -226,6 +226,7 @@ def test_docker_on_a_stock_debian12_says_what_it_needs_and_runs_with_it(tmp_path
     _hide_egl(folder)
     save(one_room(), folder / "room.toml")
     doctor = "usar doctor"
+    stock = _docker("", doctor, folder)  # its exit code, not tee's (pipefail)
     record = (
         "bash -c 'usar record --scenario /work/room.toml --max-sim-time 2 --out /tmp/r.mcap; "
         "usar replay --grade /tmp/r.mcap'"
@@ -241,7 +242,7 @@ def test_docker_on_a_stock_debian12_says_what_it_needs_and_runs_with_it(tmp_path
             "{{.CgroupDriver}}'",
         ),
         vmtools.step("image", IMAGE_ROOT),
-        vmtools.step("defaults", _docker("", doctor, folder) + " | tee /tmp/defaults", (0, 1, 2)),
+        vmtools.step("defaults", f"set -o pipefail; {stock} | tee /tmp/defaults", (0, 1, 2)),
         vmtools.step("flags", f"{NAMED} /tmp/defaults | sort -u | tr '\\n' ' ' | tee /tmp/flags"),
         vmtools.step("named", _docker("$(cat /tmp/flags)", doctor, folder), (0, 1, 2)),
         vmtools.step("privileged", _docker("--privileged", doctor, folder), (0, 1, 2)),
@@ -302,7 +303,7 @@ def test_a_user_without_root_gets_what_their_systemd_delegates(tmp_path: Path) -
     doctor = f"{AS_STUDENT} /opt/venv/bin/usar doctor"
     record = (
         f"{AS_STUDENT} 'cd ~ && export PATH=/opt/venv/bin:$PATH PYTHONPATH={shared}/{NO_EGL} && "
-        f"usar record --scenario {shared}/room.toml --max-sim-time 2 --out s.mcap && "
+        f"usar record --scenario {shared}/room.toml --max-sim-time 2 --out s.mcap; "
         "usar replay --grade s.mcap'"
     )
     script = "".join([
