@@ -23,11 +23,11 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   ``user@.service`` does not delegate and the drop-in that adds it; with that drop-in, the
   cgroups come through the user's own systemd manager, and a recording replays bit for bit.
 
-Both run under TCG emulation here (the hosts' KVM cannot boot a stock kernel): the first took 9
-min up to the red-team runs on a busy host (boot 4 min); the second had not finished its apt
-line after 32 min with the host's load at 13 (see docs/batch.md). The images are built
-beforehand (``vmtools.missing`` names the command); without them each test fails with that one
-line.
+All run under TCG emulation here (the hosts' KVM cannot boot a stock kernel). Measured on
+2026-12-02 (docs/batch.md has each step): the isolation check 25 min (the red-team runs 19 of
+them), the README's commands 86 min (the apt line 49), Docker 4 min, the user without root 6
+min. The images are built beforehand (``vmtools.missing`` names the command); without them
+each test fails with that one line.
 """
 
 from __future__ import annotations
