@@ -24,8 +24,8 @@ cgroup v2 hierarchy, booted as a VM by ``../shared/vm/run.sh`` with a copy of th
   cgroups come through the user's own systemd manager, and a recording replays bit for bit.
 
 All run under TCG emulation here (the hosts' KVM cannot boot a stock kernel). Measured on
-2026-12-02 (docs/batch.md has each step): the isolation check 25 min (the red-team runs 19 of
-them), the README's commands 86 min (the apt line 49), Docker 4 min, the user without root 6
+2026-12-02 (docs/batch.md has each step): the isolation check 15-25 min (the red-team runs 12-19
+of them), the README's commands 86 min (the apt line 49), Docker 4 min, the user without root 6
 min. The images are built beforehand (``vmtools.missing`` names the command); without them
 each test fails with that one line.
 """
