@@ -114,9 +114,14 @@ def _fail_without(image: str, wheelhouse: bool = False) -> None:
         pytest.fail(why, pytrace=False)
 
 
-def _is_the_real_thing(run: vmtools.VmRun) -> None:
+def _ran_on_the_real_thing(run: vmtools.VmRun) -> dict[str, str]:
+    """Each step's output by name, once the script ran to its end (its timings printed) on the
+    machine issue 49 is about (its ``facts`` step: cgroup2fs, systemd as PID 1)."""
+    print(run.timings())
+    assert run.rc == 0, run.tail()
     facts = run.steps["facts"].output.split()
     assert facts[:2] == ["cgroup2fs", "systemd"], run.tail()
+    return {name: step.output for name, step in run.steps.items()}
 
 
 def test_isolation_holds_as_root_on_a_stock_debian12(tmp_path: Path) -> None:
@@ -133,9 +138,7 @@ def test_isolation_holds_as_root_on_a_stock_debian12(tmp_path: Path) -> None:
         vmtools.step("runs", f"{pytest} {' '.join(map(shlex.quote, RUNS))}", ANY),
     ])  # fmt: skip
     run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=5400)
-    print(run.timings())
-    assert run.rc == 0, run.tail()
-    _is_the_real_thing(run)
+    _ran_on_the_real_thing(run)
     doctor = run.steps["doctor"]
     assert doctor.rc == 0 and vmtools.doctor_all_ok(doctor.output), doctor.output
     for name, ids in (("sandbox", INNER), ("runs", RUNS)):
@@ -179,10 +182,7 @@ def test_the_readmes_commands_work_on_a_fresh_debian12(tmp_path: Path) -> None:
     run = vmtools.run_in_vm(
         folder, script, vmtools.BASE_IMAGE, timeout_s=5400, wheelhouse=vmtools.WHEELHOUSE
     )
-    print(run.timings())
-    assert run.rc == 0, run.tail()
-    _is_the_real_thing(run)
-    said = {name: s.output for name, s in run.steps.items()}
+    said = _ran_on_the_real_thing(run)
     assert "Recorded recordings/room.mcap" in said["record"], said["record"]
     assert "Replay reproduces the recording bit for bit." in said["replay"], said["replay"]
     assert "Total: " in said["replay"], said["replay"]
@@ -249,10 +249,7 @@ def test_docker_on_a_stock_debian12_says_what_it_needs_and_runs_with_it(tmp_path
         vmtools.step("record", _docker("--privileged", record, folder), ANY),
     ])  # fmt: skip
     run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=3600)
-    print(run.timings())
-    assert run.rc == 0, run.tail()
-    _is_the_real_thing(run)
-    said = {name: s.output for name, s in run.steps.items()}
+    said = _ran_on_the_real_thing(run)
     assert said["docker"].split()[-2:] == ["2", "systemd"], said["docker"]  # v2, systemd driver
     defaults = said["defaults"]
     assert run.steps["defaults"].rc == 1 and "docker" in defaults, defaults
@@ -320,10 +317,7 @@ def test_a_user_without_root_gets_what_their_systemd_delegates(tmp_path: Path) -
         vmtools.step("record", record, ANY),
     ])  # fmt: skip
     run = vmtools.run_in_vm(folder, script, vmtools.VENV_IMAGE, timeout_s=2400)
-    print(run.timings())
-    assert run.rc == 0, run.tail()
-    _is_the_real_thing(run)
-    said = {name: s.output for name, s in run.steps.items()}
+    said = _ran_on_the_real_thing(run)
     assert said["user"].splitlines()[0] == STUDENT, said["user"]
     stock = _line(said["stock"], "cgroups")
     assert stock.startswith("MISS") and "cpuset" in stock, said["stock"]
